@@ -1,0 +1,17 @@
+//! The `model!` procedural macro.
+//!
+//! A thin shim: all parsing, symbolic work and emission live in the plain library
+//! `dpc-codegen`, where they are unit-, snapshot- and property-tested. Users depend on the
+//! facade crate `dpc`, which re-exports this macro as `dpc::model!`.
+
+use proc_macro::TokenStream;
+
+/// Declare a DAE plant; see the `dpc` README for the DSL reference.
+///
+/// Expands to a parameter struct, a model type implementing `dpc::core::DaeModel` with
+/// residual and analytic Jacobians, and (with a `tracking` block) the tracking DAE type.
+/// Malformed models are reported as compile errors on the offending tokens.
+#[proc_macro]
+pub fn model(input: TokenStream) -> TokenStream {
+    dpc_codegen::expand(input.into()).into()
+}

@@ -1,0 +1,1 @@
+//! Plants declared with `dpc::model!`.
