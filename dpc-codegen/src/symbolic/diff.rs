@@ -1,0 +1,172 @@
+//! Partial derivatives: forward symbolic differentiation over the DAG.
+//!
+//! The reachable nodes are visited in id order (children first); the derivative of each node is
+//! built from its children's derivatives by the chain rule and memoised per `(node, var)` for
+//! the lifetime of the graph, so one call costs time linear in the DAG size and repeated calls
+//! (a whole Jacobian, higher derivatives) reuse earlier work. A node whose operands all have a
+//! zero derivative gets zero without building anything, so derivatives do not litter the graph.
+//! The rules reuse the node itself where it appears in its derivative (`exp`, `sqrt`, `tan`,
+//! `tanh`, `hypot`, `powf`, `/`), which CSE then shares with the residual.
+
+use std::collections::HashMap;
+
+use super::graph::{ExprId, Graph, Node, Var};
+
+impl Graph {
+    /// Partial derivative `∂e/∂wrt`, folded and hash-consed like any other expression.
+    /// Memoised across calls. Conventions: `d|a|/da = signum(a)` (so `±1` at `a = ±0`), and
+    /// `d signum(a)/da = 0`.
+    pub fn diff(&mut self, e: ExprId, wrt: Var) -> ExprId {
+        if let Some(&d) = self.diff_memo.get(&(e, wrt)) {
+            return d;
+        }
+        let order = self.reachable(&[e]);
+        let zero = self.constant(0.0);
+        let mut local: HashMap<ExprId, ExprId> = HashMap::with_capacity(order.len());
+        for n in order {
+            let d = match self.diff_memo.get(&(n, wrt)) {
+                Some(&d) => d,
+                None => {
+                    let node = *self.node(n);
+                    let dc = |c: ExprId| local[&c];
+                    let all_zero = node.children().all(|c| dc(c) == zero);
+                    let d = match node {
+                        Node::Const(_) => zero,
+                        Node::Var(v) => self.constant(if v == wrt { 1.0 } else { 0.0 }),
+                        _ if all_zero => zero,
+                        _ => self.diff_rule(n, node, &dc),
+                    };
+                    self.diff_memo.insert((n, wrt), d);
+                    d
+                }
+            };
+            local.insert(n, d);
+        }
+        local[&e]
+    }
+
+    /// The chain rule for node `e = node`, given the derivatives `d(child)` of its operands
+    /// (not all zero).
+    fn diff_rule(&mut self, e: ExprId, node: Node, d: &dyn Fn(ExprId) -> ExprId) -> ExprId {
+        match node {
+            Node::Const(_) | Node::Var(_) => unreachable!("handled by diff"),
+            Node::Add(a, b) => self.add(d(a), d(b)),
+            // a' b + a b'
+            Node::Mul(a, b) => {
+                let l = self.mul(d(a), b);
+                let r = self.mul(a, d(b));
+                self.add(l, r)
+            }
+            // (a' - (a/b) b') / b, reusing e = a/b
+            Node::Div(a, b) => {
+                let (da, db) = (d(a), d(b));
+                let eb = self.mul(e, db);
+                let num = self.sub(da, eb);
+                self.div(num, b)
+            }
+            // n a^(n-1) a'
+            Node::Powi(a, n) => {
+                let p = self.powi(a, n - 1);
+                let k = self.constant(f64::from(n));
+                let kp = self.mul(k, p);
+                self.mul(kp, d(a))
+            }
+            Node::Powf(a, b) => {
+                let (da, db) = (d(a), d(b));
+                if self.is_zero(db) {
+                    // Constant exponent: b a^(b-1) a', valid for negative a where a^b is.
+                    let one = self.constant(1.0);
+                    let bm1 = self.sub(b, one);
+                    let p = self.powf(a, bm1);
+                    let bp = self.mul(b, p);
+                    self.mul(bp, da)
+                } else {
+                    // a^b (b' ln a + b a' / a)
+                    let la = self.func(super::Func::Ln, a);
+                    let t1 = self.mul(db, la);
+                    let ba = self.mul(b, da);
+                    let t2 = self.div(ba, a);
+                    let s = self.add(t1, t2);
+                    self.mul(e, s)
+                }
+            }
+            Node::Func(f, a) => {
+                let fp = f.derivative(self, a, e);
+                self.mul(fp, d(a))
+            }
+            // (x y' - y x') / (x^2 + y^2)
+            Node::Atan2(y, x) => {
+                let l = self.mul(x, d(y));
+                let r = self.mul(y, d(x));
+                let num = self.sub(l, r);
+                let x2 = self.powi(x, 2);
+                let y2 = self.powi(y, 2);
+                let den = self.add(x2, y2);
+                self.div(num, den)
+            }
+            // (a a' + b b') / hypot(a, b)
+            Node::Hypot(a, b) => {
+                let l = self.mul(a, d(a));
+                let r = self.mul(b, d(b));
+                let num = self.add(l, r);
+                self.div(num, e)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Func;
+    use super::*;
+
+    fn show(g: &Graph, e: ExprId) -> String {
+        g.display(e, &|v| ["x", "y", "z"][v.0 as usize].to_string())
+    }
+
+    #[test]
+    fn simple_rules_read_well() {
+        let mut g = Graph::new();
+        let x = g.var(Var(0));
+        let y = g.var(Var(1));
+        let s = g.func(Func::Sin, x);
+        let e = g.mul(s, y);
+        let dx = g.diff(e, Var(0));
+        assert_eq!(show(&g, dx), "y * cos(x)");
+        let dy = g.diff(e, Var(1));
+        assert_eq!(dy, s);
+        let dz = g.diff(e, Var(2));
+        assert!(g.is_zero(dz));
+        let x3 = g.powi(x, 3);
+        let d3 = g.diff(x3, Var(0));
+        assert_eq!(show(&g, d3), "3 * x^2");
+        let c = g.func(Func::Cos, x);
+        let dc = g.diff(c, Var(0));
+        assert_eq!(show(&g, dc), "-sin(x)");
+        let l = g.func(Func::Ln, x);
+        let dl = g.diff(l, Var(0));
+        assert_eq!(show(&g, dl), "1 / x");
+    }
+
+    #[test]
+    fn deep_shared_dag_is_linear() {
+        let mut g = Graph::new();
+        let a = g.var(Var(0));
+        let mut e = a;
+        for _ in 0..200 {
+            let sq = g.mul(e, e);
+            e = g.func(Func::Sin, sq);
+        }
+        let before = g.len();
+        let d = g.diff(e, Var(0));
+        // A handful of new nodes per level, not 2^200.
+        assert!(g.len() - before < 200 * 8, "{} nodes", g.len() - before);
+        assert!(g.size(&[d]) < 200 * 8);
+        let d2 = g.diff(d, Var(0));
+        assert!(g.size(&[d2]) < 200 * 30);
+        // memoised: same answer, no new nodes
+        let n = g.len();
+        assert_eq!(g.diff(e, Var(0)), d);
+        assert_eq!(g.len(), n);
+    }
+}

@@ -1,0 +1,242 @@
+//! Readable infix printing for listings and error messages.
+//!
+//! Parentheses are inserted by precedence only where the mathematical meaning needs them
+//! (`a + (b + c)` prints as `a + b + c`, unlike the emitted Rust, which must keep the
+//! evaluation order). Stored forms are turned back into conventional ones: `a + (-1) * b`
+//! prints as `a - b`, `(-1) * a` as `-a`, `a^n` for integer powers. Shared subexpressions are
+//! printed in full at every use, so the text of a heavily shared DAG can be long.
+
+use super::graph::{ExprId, Graph, Node, Var};
+
+/// Precedence of a printed form; an operand printed at a lower level gets parentheses.
+const SUM: u8 = 1;
+/// A product with a leading minus (`-x * y`, `-2`): fine at the start of a sum or product.
+const NEG: u8 = 2;
+const PROD: u8 = 3;
+const POW: u8 = 4;
+const ATOM: u8 = 5;
+
+struct Printer<'a> {
+    g: &'a Graph,
+    name_of: &'a dyn Fn(Var) -> String,
+}
+
+impl Graph {
+    /// Readable infix text, variables named by `name_of`, minimal parentheses, e.g.
+    /// `m * r^2 * sin(theta)`.
+    pub fn display(&self, e: ExprId, name_of: &dyn Fn(Var) -> String) -> String {
+        Printer { g: self, name_of }.expr(e).0
+    }
+
+    /// `e = -k * t` with a constant `k > 0`: `Some((k, t))`, where `t` is `None` for a
+    /// negative constant `e = -k`.
+    pub(super) fn negative_term(&self, e: ExprId) -> Option<(f64, Option<ExprId>)> {
+        match *self.node(e) {
+            Node::Const(c) if c < 0.0 => Some((-c, None)),
+            Node::Mul(c, t) => match self.as_constant(c) {
+                Some(c) if c < 0.0 => Some((-c, Some(t))),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+}
+
+fn number(v: f64) -> String {
+    format!("{v}")
+}
+
+impl Printer<'_> {
+    /// `e` printed in a context that needs at least precedence `min`; `lead` says whether the
+    /// operand comes first (where a leading minus reads fine).
+    fn operand(&self, e: ExprId, min: u8, lead: bool) -> String {
+        let (s, p) = self.expr(e);
+        if p < min || (!lead && s.starts_with('-')) {
+            format!("({s})")
+        } else {
+            s
+        }
+    }
+
+    /// `k * t` (the magnitude of a negative term), at product level.
+    fn magnitude(&self, k: f64, t: Option<ExprId>) -> (String, u8) {
+        match t {
+            None => (number(k), ATOM),
+            Some(t) if k == 1.0 => self.expr(t),
+            Some(t) => (
+                format!("{} * {}", number(k), self.operand(t, PROD, false)),
+                PROD,
+            ),
+        }
+    }
+
+    /// Operands of a chain of associative nodes of one kind (`is_op`), left to right.
+    fn flatten(&self, e: ExprId, is_op: &dyn Fn(&Node) -> bool, out: &mut Vec<ExprId>) {
+        let node = self.g.node(e);
+        if is_op(node) {
+            for c in node.children() {
+                self.flatten(c, is_op, out);
+            }
+        } else {
+            out.push(e);
+        }
+    }
+
+    /// Reading order of a factor in a product.
+    fn rank(&self, f: ExprId) -> u8 {
+        match *self.g.node(f) {
+            Node::Const(_) => 0,
+            Node::Var(_) => 1,
+            Node::Powi(a, _) if matches!(self.g.node(a), Node::Var(_)) => 2,
+            Node::Func(..) | Node::Atan2(..) | Node::Hypot(..) | Node::Powi(..) => 3,
+            _ => 4,
+        }
+    }
+
+    fn expr(&self, e: ExprId) -> (String, u8) {
+        let g = self.g;
+        match *g.node(e) {
+            Node::Const(c) if c < 0.0 => (number(c), NEG),
+            Node::Const(c) => (number(c), ATOM),
+            Node::Var(v) => ((self.name_of)(v), ATOM),
+            Node::Add(..) => {
+                // Terms in stored order, positive ones first; `-` for negative ones.
+                let mut terms = Vec::new();
+                self.flatten(e, &|n| matches!(n, Node::Add(..)), &mut terms);
+                terms.sort_by_key(|&t| g.negative_term(t).is_some());
+                let mut out = String::new();
+                for (i, &t) in terms.iter().enumerate() {
+                    match (i, g.negative_term(t)) {
+                        (0, _) => out += &self.operand(t, SUM, true),
+                        (_, Some((k, t))) => {
+                            let (m, p) = self.magnitude(k, t);
+                            out += " - ";
+                            out += &if p < PROD { format!("({m})") } else { m };
+                        }
+                        (_, None) => {
+                            out += " + ";
+                            out += &self.operand(t, SUM, false);
+                        }
+                    }
+                }
+                (out, SUM)
+            }
+            Node::Mul(..) => match g.negative_term(e) {
+                Some((k, t)) => {
+                    let (m, p) = self.magnitude(k, t);
+                    let m = if p < PROD { format!("({m})") } else { m };
+                    (format!("-{m}"), NEG)
+                }
+                None => {
+                    // Factors ordered for reading: constants, variables, powers, calls, rest.
+                    let mut factors = Vec::new();
+                    self.flatten(e, &|n| matches!(n, Node::Mul(..)), &mut factors);
+                    factors.sort_by_key(|&f| self.rank(f));
+                    let parts: Vec<String> = factors
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &f)| self.operand(f, if i == 0 { NEG } else { PROD }, i == 0))
+                        .collect();
+                    (parts.join(" * "), PROD)
+                }
+            },
+            Node::Div(a, b) => (
+                format!(
+                    "{} / {}",
+                    self.operand(a, NEG, true),
+                    self.operand(b, POW, false)
+                ),
+                PROD,
+            ),
+            Node::Powi(a, n) => (format!("{}^{n}", self.operand(a, ATOM, false)), POW),
+            Node::Powf(a, b) => (
+                format!(
+                    "{}^{}",
+                    self.operand(a, ATOM, false),
+                    self.operand(b, ATOM, false)
+                ),
+                POW,
+            ),
+            Node::Func(f, a) => {
+                let name = match f {
+                    super::Func::Sign => "sign",
+                    f => f.name(),
+                };
+                (format!("{name}({})", self.expr(a).0), ATOM)
+            }
+            Node::Atan2(y, x) => (
+                format!("atan2({}, {})", self.expr(y).0, self.expr(x).0),
+                ATOM,
+            ),
+            Node::Hypot(a, b) => (
+                format!("hypot({}, {})", self.expr(a).0, self.expr(b).0),
+                ATOM,
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Func;
+    use super::*;
+
+    fn names(v: Var) -> String {
+        ["m", "r", "theta", "x", "y"][v.0 as usize].to_string()
+    }
+
+    #[test]
+    fn readable_output() {
+        let mut g = Graph::new();
+        let (m, r, th, x, y) = (
+            g.var(Var(0)),
+            g.var(Var(1)),
+            g.var(Var(2)),
+            g.var(Var(3)),
+            g.var(Var(4)),
+        );
+        let show = |g: &Graph, e| g.display(e, &names);
+        let r2 = g.powi(r, 2);
+        let s = g.func(Func::Sin, th);
+        let mr2 = g.mul(m, r2);
+        let e = g.mul(mr2, s);
+        assert_eq!(show(&g, e), "m * r^2 * sin(theta)");
+        let d = g.sub(x, y);
+        assert_eq!(show(&g, d), "x - y");
+        let d2 = g.sub(y, x);
+        assert_eq!(show(&g, d2), "y - x");
+        let nx = g.neg(x);
+        assert_eq!(show(&g, nx), "-x");
+        let two = g.constant(2.0);
+        let ty = g.mul(two, y);
+        let e = g.sub(x, ty);
+        assert_eq!(show(&g, e), "x - 2 * y");
+        let one = g.constant(1.0);
+        let e = g.sub(x, one);
+        assert_eq!(show(&g, e), "x - 1");
+        let s = g.add(x, y);
+        let e = g.sub(m, s);
+        assert_eq!(show(&g, e), "m - (x + y)");
+        let e = g.mul(s, m);
+        assert_eq!(show(&g, e), "m * (x + y)");
+        let e = g.neg(s);
+        assert_eq!(show(&g, e), "-(x + y)");
+        let e = g.div(x, mr2);
+        assert_eq!(show(&g, e), "x / (m * r^2)");
+        let e = g.powi(s, -1);
+        assert_eq!(show(&g, e), "(x + y)^-1");
+        let e = g.powi(nx, 3);
+        assert_eq!(show(&g, e), "-x^3");
+        let e = g.atan2(y, nx);
+        assert_eq!(show(&g, e), "atan2(y, -x)");
+        let half = g.constant(0.5);
+        let e = g.powf(s, half);
+        assert_eq!(show(&g, e), "(x + y)^0.5");
+        let ax = g.func(Func::Abs, x);
+        let e = g.diff(ax, Var(3));
+        assert_eq!(show(&g, e), "sign(x)");
+        let nxy = g.mul(nx, y);
+        let e = g.mul(nxy, th);
+        assert_eq!(show(&g, e), "-theta * x * y");
+    }
+}

@@ -1,0 +1,63 @@
+//! Simultaneous substitution of variables by expressions.
+//!
+//! One pass over the reachable nodes in id order (children first), rebuilding a node through
+//! the folding constructors only when one of its operands changed; linear in the DAG size.
+//! Simultaneous means the replacements are not themselves substituted again: with
+//! `{x -> y, y -> x}`, `x - y` becomes `y - x`.
+
+use std::collections::HashMap;
+
+use super::graph::{ExprId, Graph, Node, Var};
+
+impl Graph {
+    /// Replace variables by expressions (simultaneous substitution); the result is folded
+    /// again, so substituting constants evaluates what becomes constant.
+    pub fn substitute(&mut self, e: ExprId, map: &HashMap<Var, ExprId>) -> ExprId {
+        self.substitute_many(&[e], map)[0]
+    }
+
+    /// [`Graph::substitute`] for several roots at once, sharing the work on common nodes.
+    pub fn substitute_many(&mut self, roots: &[ExprId], map: &HashMap<Var, ExprId>) -> Vec<ExprId> {
+        if map.is_empty() {
+            return roots.to_vec();
+        }
+        let mut new: HashMap<ExprId, ExprId> = HashMap::new();
+        for n in self.reachable(roots) {
+            let node = *self.node(n);
+            let r = match node {
+                Node::Var(v) => map.get(&v).copied().unwrap_or(n),
+                Node::Const(_) => n,
+                _ if node.children().all(|c| new[&c] == c) => n,
+                _ => self.rebuild(node, |c| new[&c]),
+            };
+            new.insert(n, r);
+        }
+        roots.iter().map(|r| new[r]).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Func;
+    use super::*;
+
+    #[test]
+    fn simultaneous_and_folding() {
+        let mut g = Graph::new();
+        let (x, y) = (g.var(Var(0)), g.var(Var(1)));
+        let d = g.sub(x, y);
+        let swapped = g.substitute(d, &HashMap::from([(Var(0), y), (Var(1), x)]));
+        assert_eq!(swapped, g.sub(y, x));
+        // x - y with y := x is 0
+        let z = g.substitute(d, &HashMap::from([(Var(1), x)]));
+        assert!(g.is_zero(z));
+        let s = g.func(Func::Sin, x);
+        let e = g.mul(s, y);
+        let zero = g.constant(0.0);
+        let two = g.constant(2.0);
+        let r = g.substitute(e, &HashMap::from([(Var(0), zero), (Var(1), two)]));
+        assert_eq!(g.as_constant(r), Some(0.0));
+        // untouched expression keeps its id
+        assert_eq!(g.substitute(e, &HashMap::from([(Var(5), two)])), e);
+    }
+}
