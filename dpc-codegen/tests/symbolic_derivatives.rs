@@ -1,0 +1,375 @@
+//! Property tests of the symbolic engine against independent oracles: random expression trees
+//! over three variables using every function, evaluated at random points.
+//!
+//! - `diff` against forward-mode dual numbers written here (independent of `diff.rs`), and
+//!   against central finite differences where those are well-conditioned;
+//! - the constructors' folding against direct evaluation of the tree;
+//! - the CSE schedule against `eval_many` (bit for bit) and for completeness of sharing;
+//! - `substitute` against evaluation with the substituted value, and `vars`/`depends_on`.
+//!
+//! Points where any intermediate value of the tree is not finite are skipped: there the
+//! graph's identities (`0 * a = 0`, `a / a = 1`) deliberately differ from IEEE evaluation.
+
+use std::collections::HashMap;
+
+use dpc_codegen::symbolic::{ExprId, Func, Graph, Var};
+use proptest::prelude::*;
+
+const NVARS: u32 = 3;
+
+/// A random expression, built into a graph through the public constructors.
+#[derive(Clone, Debug)]
+enum T {
+    V(u32),
+    C(f64),
+    Add(Box<T>, Box<T>),
+    Sub(Box<T>, Box<T>),
+    Mul(Box<T>, Box<T>),
+    Div(Box<T>, Box<T>),
+    Neg(Box<T>),
+    Powi(Box<T>, i32),
+    Powf(Box<T>, Box<T>),
+    F(Func, Box<T>),
+    Atan2(Box<T>, Box<T>),
+    Hypot(Box<T>, Box<T>),
+}
+
+fn bx(t: T) -> Box<T> {
+    Box::new(t)
+}
+
+/// `t^2 + 1/2`: keeps arguments of sqrt, ln and powf bases positive.
+fn positive(t: T) -> T {
+    T::Add(bx(T::Powi(bx(t), 2)), bx(T::C(0.5)))
+}
+
+/// `0.9 tanh(t)`: keeps arguments of asin and acos inside (-1, 1).
+fn unit(t: T) -> T {
+    T::Mul(bx(T::C(0.9)), bx(T::F(Func::Tanh, bx(t))))
+}
+
+fn tree() -> impl Strategy<Value = T> {
+    let leaf = prop_oneof![
+        (0..NVARS).prop_map(T::V),
+        (-6i32..=6).prop_map(|k| T::C(f64::from(k) * 0.5)),
+    ];
+    leaf.prop_recursive(4, 32, 2, |inner| {
+        let pair = (inner.clone(), inner.clone());
+        prop_oneof![
+            pair.clone().prop_map(|(a, b)| T::Add(bx(a), bx(b))),
+            pair.clone().prop_map(|(a, b)| T::Sub(bx(a), bx(b))),
+            pair.clone().prop_map(|(a, b)| T::Mul(bx(a), bx(b))),
+            pair.clone().prop_map(|(a, b)| T::Div(bx(a), bx(b))),
+            inner.clone().prop_map(|a| T::Neg(bx(a))),
+            (inner.clone(), -3i32..=4).prop_map(|(a, n)| T::Powi(bx(a), n)),
+            pair.clone()
+                .prop_map(|(a, b)| T::Powf(bx(positive(a)), bx(b))),
+            // constant exponents on any base (negative bases are fine for integral ones)
+            (inner.clone(), -4i32..=6)
+                .prop_map(|(a, k)| T::Powf(bx(a), bx(T::C(f64::from(k) * 0.5)))),
+            (inner.clone(), 0..Func::ALL.len()).prop_map(|(a, k)| {
+                let f = Func::ALL[k];
+                let a = match f {
+                    Func::Sqrt | Func::Ln => positive(a),
+                    Func::Asin | Func::Acos => unit(a),
+                    _ => a,
+                };
+                T::F(f, bx(a))
+            }),
+            pair.clone().prop_map(|(a, b)| T::Atan2(bx(a), bx(b))),
+            pair.prop_map(|(a, b)| T::Hypot(bx(a), bx(b))),
+        ]
+    })
+}
+
+fn build(g: &mut Graph, t: &T) -> ExprId {
+    match t {
+        T::V(k) => g.var(Var(*k)),
+        T::C(c) => g.constant(*c),
+        T::Add(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.add(a, b)
+        }
+        T::Sub(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.sub(a, b)
+        }
+        T::Mul(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.mul(a, b)
+        }
+        T::Div(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.div(a, b)
+        }
+        T::Neg(a) => {
+            let a = build(g, a);
+            g.neg(a)
+        }
+        T::Powi(a, n) => {
+            let a = build(g, a);
+            g.powi(a, *n)
+        }
+        T::Powf(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.powf(a, b)
+        }
+        T::F(f, a) => {
+            let a = build(g, a);
+            g.func(*f, a)
+        }
+        T::Atan2(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.atan2(a, b)
+        }
+        T::Hypot(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.hypot(a, b)
+        }
+    }
+}
+
+/// Forward-mode dual number `v + d ε`, written from the textbook rules.
+#[derive(Copy, Clone, Debug)]
+struct Dual {
+    v: f64,
+    d: f64,
+}
+
+fn finite(x: Dual) -> Option<Dual> {
+    (x.v.is_finite() && x.d.is_finite() && x.v.abs() < 1e8 && x.d.abs() < 1e8).then_some(x)
+}
+
+/// Value and derivative of the tree with respect to `wrt` at `x`; `None` if any intermediate
+/// is not finite (or huge).
+fn dual(t: &T, x: &[f64], wrt: u32) -> Option<Dual> {
+    let d = |v: f64, d: f64| finite(Dual { v, d });
+    match t {
+        T::V(k) => d(x[*k as usize], if *k == wrt { 1.0 } else { 0.0 }),
+        T::C(c) => d(*c, 0.0),
+        T::Add(a, b) => {
+            let (a, b) = (dual(a, x, wrt)?, dual(b, x, wrt)?);
+            d(a.v + b.v, a.d + b.d)
+        }
+        T::Sub(a, b) => {
+            let (a, b) = (dual(a, x, wrt)?, dual(b, x, wrt)?);
+            d(a.v - b.v, a.d - b.d)
+        }
+        T::Mul(a, b) => {
+            let (a, b) = (dual(a, x, wrt)?, dual(b, x, wrt)?);
+            d(a.v * b.v, a.d * b.v + a.v * b.d)
+        }
+        T::Div(a, b) => {
+            let (a, b) = (dual(a, x, wrt)?, dual(b, x, wrt)?);
+            d(a.v / b.v, (a.d * b.v - a.v * b.d) / (b.v * b.v))
+        }
+        T::Neg(a) => {
+            let a = dual(a, x, wrt)?;
+            d(-a.v, -a.d)
+        }
+        T::Powi(a, n) => {
+            let a = dual(a, x, wrt)?;
+            let dv = if *n == 0 {
+                0.0
+            } else {
+                f64::from(*n) * a.v.powi(n - 1) * a.d
+            };
+            d(a.v.powi(*n), dv)
+        }
+        T::Powf(a, b) => {
+            let (a, b) = (dual(a, x, wrt)?, dual(b, x, wrt)?);
+            let v = a.v.powf(b.v);
+            if b.d == 0.0 {
+                d(v, b.v * a.v.powf(b.v - 1.0) * a.d)
+            } else {
+                d(v, v * (b.d * a.v.ln() + b.v * a.d / a.v))
+            }
+        }
+        T::F(f, a) => {
+            let a = dual(a, x, wrt)?;
+            let (v, dv) = (a.v, a.d);
+            let (fv, fp) = match f {
+                Func::Sqrt => (v.sqrt(), 0.5 / v.sqrt()),
+                Func::Exp => (v.exp(), v.exp()),
+                Func::Ln => (v.ln(), 1.0 / v),
+                Func::Sin => (v.sin(), v.cos()),
+                Func::Cos => (v.cos(), -v.sin()),
+                Func::Tan => (v.tan(), 1.0 / (v.cos() * v.cos())),
+                Func::Asin => (v.asin(), 1.0 / (1.0 - v * v).sqrt()),
+                Func::Acos => (v.acos(), -1.0 / (1.0 - v * v).sqrt()),
+                Func::Atan => (v.atan(), 1.0 / (1.0 + v * v)),
+                Func::Sinh => (v.sinh(), v.cosh()),
+                Func::Cosh => (v.cosh(), v.sinh()),
+                Func::Tanh => (v.tanh(), 1.0 / (v.cosh() * v.cosh())),
+                Func::Abs => (v.abs(), v.signum()),
+                Func::Sign => (v.signum(), 0.0),
+            };
+            d(fv, fp * dv)
+        }
+        T::Atan2(y, xx) => {
+            let (y, xx) = (dual(y, x, wrt)?, dual(xx, x, wrt)?);
+            let r2 = xx.v * xx.v + y.v * y.v;
+            d(y.v.atan2(xx.v), (xx.v * y.d - y.v * xx.d) / r2)
+        }
+        T::Hypot(a, b) => {
+            let (a, b) = (dual(a, x, wrt)?, dual(b, x, wrt)?);
+            let h = a.v.hypot(b.v);
+            d(h, (a.v * a.d + b.v * b.d) / h)
+        }
+    }
+}
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * 1f64.max(a.abs()).max(b.abs())
+}
+
+fn point() -> impl Strategy<Value = Vec<f64>> {
+    proptest::collection::vec(-2.0f64..2.0, NVARS as usize)
+}
+
+/// Magnitude of the tree's intermediate values (sum of |value| over nodes): a cheap scale for
+/// rounding error in expressions with cancellation.
+fn scale(t: &T, x: &[f64]) -> f64 {
+    let own = dual(t, x, u32::MAX).map_or(0.0, |d| d.v.abs());
+    own + match t {
+        T::V(_) | T::C(_) => 0.0,
+        T::Neg(a) | T::Powi(a, _) | T::F(_, a) => scale(a, x),
+        T::Add(a, b)
+        | T::Sub(a, b)
+        | T::Mul(a, b)
+        | T::Div(a, b)
+        | T::Powf(a, b)
+        | T::Atan2(a, b)
+        | T::Hypot(a, b) => scale(a, x) + scale(b, x),
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+    /// Folding and identities at construction do not change the value.
+    #[test]
+    fn construction_preserves_value(t in tree(), x in point()) {
+        let mut g = Graph::new();
+        let e = build(&mut g, &t);
+        if let Some(want) = dual(&t, &x, u32::MAX) {
+            let got = g.eval(e, &|v| x[v.0 as usize]);
+            prop_assert!(close(got, want.v, 1e-10), "{got} vs {}: {}", want.v,
+                g.display(e, &|v| format!("x{}", v.0)));
+        }
+    }
+
+    /// Symbolic derivatives agree with dual numbers, for every variable.
+    #[test]
+    fn diff_matches_dual_numbers(t in tree(), x in point()) {
+        let mut g = Graph::new();
+        let e = build(&mut g, &t);
+        for k in 0..NVARS {
+            let Some(want) = dual(&t, &x, k) else { continue };
+            let de = g.diff(e, Var(k));
+            let got = g.eval(de, &|v| x[v.0 as usize]);
+            prop_assert!(
+                close(got, want.d, 1e-9) || (got - want.d).abs() <= 1e-12 * scale(&t, &x),
+                "d/dx{k}: {got} vs {}\n  e = {}\n  de = {}", want.d,
+                g.display(e, &|v| format!("x{}", v.0)),
+                g.display(de, &|v| format!("x{}", v.0)));
+        }
+    }
+
+    /// Symbolic derivatives agree with central differences where those are reliable
+    /// (two step sizes agree, so no kink or jump is straddled).
+    #[test]
+    fn diff_matches_finite_differences(t in tree(), x in point()) {
+        let mut g = Graph::new();
+        let e = build(&mut g, &t);
+        for k in 0..NVARS as usize {
+            if dual(&t, &x, k as u32).is_none() { continue }
+            let f = |dx: f64| {
+                let mut y = x.clone();
+                y[k] += dx;
+                dual(&t, &y, u32::MAX).map(|d| d.v)
+            };
+            let h = 1e-5;
+            let (Some(a), Some(b), Some(c), Some(d)) = (f(h), f(-h), f(2.0 * h), f(-2.0 * h))
+                else { continue };
+            let (fd1, fd2) = ((a - b) / (2.0 * h), (c - d) / (4.0 * h));
+            if !close(fd1, fd2, 1e-7) { continue }
+            let de = g.diff(e, Var(k as u32));
+            let got = g.eval(de, &|v| x[v.0 as usize]);
+            prop_assert!(close(got, fd1, 1e-6), "d/dx{k}: {got} vs fd {fd1}\n  e = {}",
+                g.display(e, &|v| format!("x{}", v.0)));
+        }
+    }
+
+    /// The CSE schedule computes exactly what eval computes, shares every repeated node, and
+    /// emission is deterministic.
+    #[test]
+    fn schedule_round_trip(t in tree(), x in point()) {
+        let mut g = Graph::new();
+        let e = build(&mut g, &t);
+        let mut roots = vec![e];
+        for k in 0..NVARS {
+            let d = g.diff(e, Var(k));
+            roots.push(d);
+            roots.push(g.diff(d, Var(0)));
+        }
+        let s = g.schedule(&roots);
+        let value_of = |v: Var| x[v.0 as usize];
+        let want = g.eval_many(&roots, &value_of);
+        let got = g.eval_schedule(&s, &value_of);
+        for (a, b) in got.iter().zip(&want) {
+            prop_assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{a} vs {b}");
+        }
+        let comps = s.computations(&g);
+        let mut uniq = comps.clone();
+        uniq.sort();
+        uniq.dedup();
+        prop_assert_eq!(comps.len(), uniq.len());
+        let names = |v: Var| { let i = v.0 as usize; quote::quote!(x[#i]) };
+        let text = |g: &Graph| {
+            let c = g.emit_rust(&roots, &names);
+            let mut s: Vec<String> = c.statements.iter().map(|t| t.to_string()).collect();
+            s.extend(c.roots.iter().map(|t| t.to_string()));
+            s
+        };
+        let first = text(&g);
+        prop_assert_eq!(first, text(&g.clone()));
+    }
+
+    /// Substituting an expression for a variable equals evaluating with its value.
+    #[test]
+    fn substitute_matches_eval(t in tree(), s in tree(), x in point()) {
+        let mut g = Graph::new();
+        let e = build(&mut g, &t);
+        let r = build(&mut g, &s);
+        let sub = g.substitute(e, &HashMap::from([(Var(0), r)]));
+        let Some(rv) = dual(&s, &x, u32::MAX) else { return Ok(()) };
+        let mut y = x.clone();
+        y[0] = rv.v;
+        let Some(want) = dual(&t, &y, u32::MAX) else { return Ok(()) };
+        let got = g.eval(sub, &|v| x[v.0 as usize]);
+        prop_assert!(close(got, want.v, 1e-9) || (got - want.v).abs() <= 1e-12 * scale(&t, &y),
+            "{got} vs {}", want.v);
+        // x0 survives only through the substituted expression
+        prop_assert_eq!(g.depends_on(sub, Var(0)), g.vars(sub).contains(&Var(0)));
+        if !g.depends_on(r, Var(0)) {
+            prop_assert!(!g.depends_on(sub, Var(0)));
+        }
+    }
+
+    /// `vars` is exactly the set `depends_on` accepts; a variable not in it has zero
+    /// derivative.
+    #[test]
+    fn vars_are_consistent(t in tree()) {
+        let mut g = Graph::new();
+        let e = build(&mut g, &t);
+        let vs = g.vars(e);
+        for k in 0..NVARS {
+            prop_assert_eq!(vs.contains(&Var(k)), g.depends_on(e, Var(k)));
+            if !vs.contains(&Var(k)) {
+                let d = g.diff(e, Var(k));
+                prop_assert!(g.is_zero(d));
+            }
+        }
+    }
+}
