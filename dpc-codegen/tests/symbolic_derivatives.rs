@@ -9,6 +9,8 @@
 //!
 //! Points where any intermediate value of the tree is not finite are skipped: there the
 //! graph's identities (`0 * a = 0`, `a / a = 1`) deliberately differ from IEEE evaluation.
+//! So are points on discontinuities (`abs`/`signum` at 0, the `atan2` branch cut), where
+//! `0 * a = +0` may differ from IEEE's `-0` and pick the other side.
 
 use std::collections::HashMap;
 
@@ -188,6 +190,9 @@ fn dual(t: &T, x: &[f64], wrt: u32) -> Option<Dual> {
         T::F(f, a) => {
             let a = dual(a, x, wrt)?;
             let (v, dv) = (a.v, a.d);
+            if matches!(f, Func::Abs | Func::Sign) && v == 0.0 {
+                return None; // kink/jump: one-sided by convention, and ±0 may differ
+            }
             let (fv, fp) = match f {
                 Func::Sqrt => (v.sqrt(), 0.5 / v.sqrt()),
                 Func::Exp => (v.exp(), v.exp()),
@@ -208,6 +213,9 @@ fn dual(t: &T, x: &[f64], wrt: u32) -> Option<Dual> {
         }
         T::Atan2(y, xx) => {
             let (y, xx) = (dual(y, x, wrt)?, dual(xx, x, wrt)?);
+            if y.v == 0.0 && xx.v <= 0.0 {
+                return None; // branch cut, where the sign of a folded zero decides ±pi
+            }
             let r2 = xx.v * xx.v + y.v * y.v;
             d(y.v.atan2(xx.v), (xx.v * y.d - y.v * xx.d) / r2)
         }
@@ -293,10 +301,13 @@ proptest! {
             let (Some(a), Some(b), Some(c), Some(d)) = (f(h), f(-h), f(2.0 * h), f(-2.0 * h))
                 else { continue };
             let (fd1, fd2) = ((a - b) / (2.0 * h), (c - d) / (4.0 * h));
-            if !close(fd1, fd2, 1e-7) { continue }
+            // rounding noise of the differences, large when |f| is large
+            let noise = 1e3 * f64::EPSILON * a.abs().max(b.abs()).max(c.abs()).max(d.abs()) / h;
+            if !close(fd1, fd2, 1e-7) && (fd1 - fd2).abs() > noise { continue }
             let de = g.diff(e, Var(k as u32));
             let got = g.eval(de, &|v| x[v.0 as usize]);
-            prop_assert!(close(got, fd1, 1e-6), "d/dx{k}: {got} vs fd {fd1}\n  e = {}",
+            prop_assert!(close(got, fd1, 1e-6) || (got - fd1).abs() <= noise,
+                "d/dx{k}: {got} vs fd {fd1}\n  e = {}",
                 g.display(e, &|v| format!("x{}", v.0)));
         }
     }

@@ -270,8 +270,8 @@ impl Graph {
 
     /// `a * b`. Folds constants, `0 * a = 0` (even for inf/NaN `a`), `1 * a = a`, gathers
     /// constant factors in front (`2 * (3 * a) = 6 * a`, `a * (2 * b) = 2 * (a * b)`), merges
-    /// integer powers of the same base (`x * x = x^2`) and moves division outwards
-    /// (`(a / b) * c = (a * c) / b`).
+    /// integer powers of the same base (`x * x = x^2`) and rewrites `(k / b) * c` with a
+    /// constant `k` as `k * (c / b)` (so `(1 / b) * c = c / b`).
     pub fn mul(&mut self, a: ExprId, b: ExprId) -> ExprId {
         let (ca, cb) = (self.as_constant(a), self.as_constant(b));
         if let (Some(x), Some(y)) = (ca, cb) {
@@ -312,10 +312,16 @@ impl Graph {
                     return self.mul(c, r);
                 }
             }
+            // (k / d) * q = k * (q / d): turns the `1 / a` of derivative rules into `q / a`.
+            // Only for constant numerators: `(a / b) * c` keeps `a / b`, which is often shared.
             for (p, q) in [(a, b), (b, a)] {
                 if let Node::Div(n, d) = self.nodes[p.index()] {
-                    let r = self.mul(n, q);
-                    return self.div(r, d);
+                    if let Some(k) = self.as_constant(n) {
+                        if k.is_finite() {
+                            let r = self.div(q, d);
+                            return self.mul(n, r);
+                        }
+                    }
                 }
             }
             let (xa, na) = self.split_pow(a);
@@ -323,6 +329,21 @@ impl Graph {
             if xa == xb {
                 if let Some(n) = na.checked_add(nb) {
                     return self.powi(xa, n);
+                }
+            }
+            // x^n * (x^m * y) = x^(n+m) * y, one level deep: `r * (m * r) = m * r^2`.
+            for (p, q) in [(a, b), (b, a)] {
+                if let Node::Mul(q1, q2) = self.nodes[q.index()] {
+                    let (xp, np) = self.split_pow(p);
+                    for (r, other) in [(q1, q2), (q2, q1)] {
+                        let (xr, nr) = self.split_pow(r);
+                        if xr == xp {
+                            if let Some(n) = np.checked_add(nr) {
+                                let pw = self.powi(xp, n);
+                                return self.mul(pw, other);
+                            }
+                        }
+                    }
                 }
             }
         }
@@ -599,6 +620,11 @@ mod tests {
         assert_eq!(g.mul(x, x), x2);
         let x3 = g.powi(x, 3);
         assert_eq!(g.mul(x2, x), x3);
+        let xy = g.mul(x, y);
+        let x3y = g.mul(x3, y);
+        assert_eq!(g.mul(x2, xy), x3y);
+        let xm1 = g.powi(x, -1);
+        assert_eq!(g.mul(xy, xm1), y);
         let xm2 = g.powi(x, -2);
         assert_eq!(g.mul(x2, xm2), one);
         // a - b - (a - b) = 0

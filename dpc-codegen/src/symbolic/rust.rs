@@ -4,7 +4,9 @@
 //! Only `f64` operators and inherent methods are used (`a.sin()`, `a.powi(3)`,
 //! `y.atan2(x)`, `a.hypot(b)`, `a.signum()`), so the code needs no imports and does not
 //! allocate. Parentheses follow Rust precedence exactly and keep the DAG's evaluation order
-//! (`a + (b + c)` stays), so the emitted code computes the same bits as [`Graph::eval`].
+//! (`a + (b + c)` stays), so the emitted code computes the same bits as [`Graph::eval`]
+//! (checked by compiling emitted code for random expressions: identical without
+//! optimisation; with optimisation LLVM may expand a constant `powi` differently, by an ulp).
 //! `a + (-k) * b` is written `a - k * b` and `(-1) * a` as `-a`, which is exact in IEEE
 //! arithmetic.
 
@@ -43,7 +45,7 @@ impl Graph {
     /// from a deep chain, see [`Graph::schedule`]), in topological order, followed by one
     /// expression per root. Variables become `var_tokens(v)`, which must be a single
     /// postfix-level expression (`x[3]`, `p.m`, `u`). Temporaries are `t0, t1, ...`.
-    /// Constants are `f64` literals (`2f64`, with `f64::INFINITY`/`f64::NAN` for non-finite
+    /// Constants are `f64` literals (`2.0_f64`, with `f64::INFINITY`/`f64::NAN` for non-finite
     /// ones). Deterministic: same graph and roots, same tokens.
     pub fn emit_rust(&self, roots: &[ExprId], var_tokens: &dyn Fn(Var) -> TokenStream) -> RustCode {
         self.emit_rust_prefixed(roots, var_tokens, "t")
@@ -95,7 +97,11 @@ fn literal(v: f64) -> TokenStream {
     } else if v.is_infinite() {
         quote!(f64::INFINITY)
     } else {
-        let lit = Literal::f64_suffixed(v);
+        // `{:?}` is the shortest text that round-trips and always reads as a float literal
+        // (`2.0`, `0.1`, `1e-7`), so `2.0_f64` carries the exact value.
+        let lit: Literal = format!("{v:?}_f64")
+            .parse()
+            .expect("a finite f64 prints as a float literal");
         quote!(#lit)
     }
 }
@@ -263,9 +269,9 @@ mod tests {
         assert_eq!(
             text(&code),
             "let t0 = x [0] . sin () ;\n\
-             => x [1] * t0 - 2f64 * x [1]\n\
+             => x [1] * t0 - 2.0_f64 * x [1]\n\
              => x [1] * x [0] . cos ()\n\
-             => t0 - 2f64\n"
+             => t0 - 2.0_f64\n"
         );
     }
 
@@ -292,6 +298,6 @@ mod tests {
         assert!(t.contains("=> x [0] / t1\n"), "{t}");
         assert!(t.contains("=> (- x [0]) . sin ()\n"), "{t}");
         assert!(t.contains("=> t0 . powi (3)\n"), "{t}");
-        assert!(t.contains("=> (- 2f64) . ln ()\n"), "{t}");
+        assert!(t.contains("=> (- 2.0_f64) . ln ()\n"), "{t}");
     }
 }
