@@ -171,3 +171,74 @@ fn wheel_residual_and_jacobians() {
     insta::assert_snapshot!("wheel_listing", listing.join("\n"));
     insta::assert_snapshot!("wheel_code", text);
 }
+
+/// A chain of `n` coupled pendulums, `x_i' = k (sin(x_{i-1} - x_i) + sin(x_{i+1} - x_i)) + u cos(x_i)`:
+/// the full Jacobian (3n nonzeros) stays a small multiple of the residual, and the whole
+/// pipeline is fast enough for a proc macro.
+#[test]
+fn chain_jacobian_swell_is_bounded() {
+    let n = 300;
+    let mut g = Graph::new();
+    let x: Vec<ExprId> = (0..n).map(|i| g.var(Var(i))).collect();
+    let dx: Vec<ExprId> = (0..n).map(|i| g.var(Var(n + i))).collect();
+    let u = g.var(Var(2 * n));
+    let k = g.var(Var(2 * n + 1));
+    let started = std::time::Instant::now();
+    let mut f = Vec::new();
+    for i in 0..n as usize {
+        let mut s = g.constant(0.0);
+        for j in [i.wrapping_sub(1), i + 1] {
+            if j < n as usize {
+                let d = g.sub(x[j], x[i]);
+                let sd = g.func(Func::Sin, d);
+                s = g.add(s, sd);
+            }
+        }
+        let ks = g.mul(k, s);
+        let c = g.func(Func::Cos, x[i]);
+        let uc = g.mul(u, c);
+        let rhs = g.add(ks, uc);
+        f.push(g.sub(dx[i], rhs));
+    }
+    let t_build = started.elapsed();
+    let mut roots = f.clone();
+    for &fi in &f {
+        // sparsity first, as a caller would: only differentiate by variables that occur
+        for v in g.vars(fi) {
+            if v.0 < n {
+                let d = g.diff(fi, v);
+                if !g.is_zero(d) {
+                    roots.push(d);
+                }
+            }
+        }
+    }
+    let t_diff = started.elapsed();
+    // A dense sweep over all (equation, variable) pairs must be cheap too.
+    let mut nonzero = 0;
+    for &fi in &f {
+        for j in 0..n {
+            let d = g.diff(fi, Var(j));
+            nonzero += usize::from(!g.is_zero(d));
+        }
+    }
+    assert_eq!(nonzero, 3 * n as usize - 2);
+    let t_dense = started.elapsed();
+    assert_eq!(roots.len(), n as usize + 3 * n as usize - 2);
+    let (f_size, all_size) = (g.size(&f), g.size(&roots));
+    assert!(
+        all_size < 3 * f_size,
+        "{all_size} nodes vs residual {f_size}"
+    );
+    let t_size = started.elapsed();
+    let code = g.emit_rust(&roots, &|v| {
+        let i = v.0 as usize;
+        quote!(v[#i])
+    });
+    let comps = g.schedule(&roots).computations(&g).len();
+    assert!(comps < 3 * f_size, "{comps} operations");
+    assert_eq!(code.roots.len(), roots.len());
+    let took = started.elapsed();
+    eprintln!("chain n={n}: residual {f_size} nodes, with Jacobian {all_size}, {comps} ops, {took:?} (build {t_build:?}, diff {t_diff:?}, dense {t_dense:?}, size {t_size:?})");
+    assert!(took.as_secs_f64() < 5.0, "{took:?}");
+}

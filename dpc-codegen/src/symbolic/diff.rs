@@ -8,7 +8,7 @@
 //! The rules reuse the node itself where it appears in its derivative (`exp`, `sqrt`, `tan`,
 //! `tanh`, `hypot`, `powf`, `/`), which CSE then shares with the residual.
 
-use std::collections::HashMap;
+use std::collections::HashSet;
 
 use super::graph::{ExprId, Graph, Node, Var};
 
@@ -20,29 +20,51 @@ impl Graph {
         if let Some(&d) = self.diff_memo.get(&(e, wrt)) {
             return d;
         }
-        let order = self.reachable(&[e]);
         let zero = self.constant(0.0);
-        let mut local: HashMap<ExprId, ExprId> = HashMap::with_capacity(order.len());
-        for n in order {
-            let d = match self.diff_memo.get(&(n, wrt)) {
-                Some(&d) => d,
-                None => {
-                    let node = *self.node(n);
-                    let dc = |c: ExprId| local[&c];
-                    let all_zero = node.children().all(|c| dc(c) == zero);
-                    let d = match node {
-                        Node::Const(_) => zero,
-                        Node::Var(v) => self.constant(if v == wrt { 1.0 } else { 0.0 }),
-                        _ if all_zero => zero,
-                        _ => self.diff_rule(n, node, &dc),
-                    };
-                    self.diff_memo.insert((n, wrt), d);
-                    d
+        if !self.may_depend_on(e, wrt) {
+            return zero;
+        }
+        // Nodes below `e` whose derivative is not memoised yet; the walk stops at memoised
+        // ones, so differentiating every entry of a Jacobian row costs one pass in total.
+        let mut todo = vec![e];
+        let mut seen: HashSet<ExprId> = HashSet::from([e]);
+        let mut stack = vec![e];
+        while let Some(n) = stack.pop() {
+            for c in self.node(n).children() {
+                if self.may_depend_on(c, wrt)
+                    && !self.diff_memo.contains_key(&(c, wrt))
+                    && seen.insert(c)
+                {
+                    todo.push(c);
+                    stack.push(c);
+                }
+            }
+        }
+        todo.sort_unstable();
+        for n in todo {
+            let node = *self.node(n);
+            let memo = &self.diff_memo;
+            let g = &*self;
+            let dc = |c: ExprId| {
+                if g.may_depend_on(c, wrt) {
+                    memo[&(c, wrt)]
+                } else {
+                    zero
                 }
             };
-            local.insert(n, d);
+            let d = match node {
+                Node::Const(_) => zero,
+                Node::Var(v) => self.constant(if v == wrt { 1.0 } else { 0.0 }),
+                _ if node.children().all(|c| dc(c) == zero) => zero,
+                _ => {
+                    let dcs: Vec<(ExprId, ExprId)> = node.children().map(|c| (c, dc(c))).collect();
+                    let d = |c: ExprId| dcs.iter().find(|p| p.0 == c).expect("operand").1;
+                    self.diff_rule(n, node, &d)
+                }
+            };
+            self.diff_memo.insert((n, wrt), d);
         }
-        local[&e]
+        self.diff_memo[&(e, wrt)]
     }
 
     /// The chain rule for node `e = node`, given the derivatives `d(child)` of its operands

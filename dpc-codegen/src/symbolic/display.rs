@@ -3,10 +3,13 @@
 //! Parentheses are inserted by precedence only where the mathematical meaning needs them
 //! (`a + (b + c)` prints as `a + b + c`, unlike the emitted Rust, which must keep the
 //! evaluation order). Stored forms are turned back into conventional ones: `a + (-1) * b`
-//! prints as `a - b`, `(-1) * a` as `-a`, `a^n` for integer powers. Shared subexpressions are
-//! printed in full at every use, so the text of a heavily shared DAG can be long.
+//! prints as `a - b`, `(-1) * a` as `-a`, `a^n` for integer powers. [`Graph::display`] prints
+//! shared subexpressions in full at every use, so the text of a heavily shared DAG can be
+//! exponentially long; [`Graph::display_shared`] names them instead, following the CSE
+//! [`Schedule`].
 
 use super::graph::{ExprId, Graph, Node, Var};
+use super::schedule::Schedule;
 
 /// Precedence of a printed form; an operand printed at a lower level gets parentheses.
 const SUM: u8 = 1;
@@ -19,13 +22,45 @@ const ATOM: u8 = 5;
 struct Printer<'a> {
     g: &'a Graph,
     name_of: &'a dyn Fn(Var) -> String,
+    /// Named subexpressions (schedule temporaries) and the prefix of their names.
+    named: Option<(&'a Schedule, &'a str)>,
 }
 
 impl Graph {
     /// Readable infix text, variables named by `name_of`, minimal parentheses, e.g.
     /// `m * r^2 * sin(theta)`.
     pub fn display(&self, e: ExprId, name_of: &dyn Fn(Var) -> String) -> String {
-        Printer { g: self, name_of }.expr(e).0
+        let p = Printer {
+            g: self,
+            name_of,
+            named: None,
+        };
+        p.expr(e).0
+    }
+
+    /// Readable listing of several roots in which every subexpression the CSE schedule binds
+    /// to a temporary is printed once, as `{prefix}k = ...`. Returns those definitions (in
+    /// order, each line `"{prefix}k = expr"`) and one text per root. Linear in the DAG size.
+    pub fn display_shared(
+        &self,
+        roots: &[ExprId],
+        name_of: &dyn Fn(Var) -> String,
+        prefix: &str,
+    ) -> (Vec<String>, Vec<String>) {
+        let s = self.schedule(roots);
+        let p = Printer {
+            g: self,
+            name_of,
+            named: Some((&s, prefix)),
+        };
+        let defs = s
+            .temps
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| format!("{prefix}{k} = {}", p.node_text(t).0))
+            .collect();
+        let texts = roots.iter().map(|&r| p.expr(r).0).collect();
+        (defs, texts)
     }
 
     /// `e = -k * t` with a constant `k > 0`: `Some((k, t))`, where `t` is `None` for a
@@ -47,6 +82,20 @@ fn number(v: f64) -> String {
 }
 
 impl Printer<'_> {
+    /// The name of `e` if it is a named subexpression.
+    fn name(&self, e: ExprId) -> Option<String> {
+        let (s, prefix) = self.named?;
+        s.temp_of(e).map(|k| format!("{prefix}{k}"))
+    }
+
+    /// [`Graph::negative_term`], except that a named subexpression is opaque.
+    fn negative_term(&self, e: ExprId) -> Option<(f64, Option<ExprId>)> {
+        match self.name(e) {
+            Some(_) => None,
+            None => self.g.negative_term(e),
+        }
+    }
+
     /// `e` printed in a context that needs at least precedence `min`; `lead` says whether the
     /// operand comes first (where a leading minus reads fine).
     fn operand(&self, e: ExprId, min: u8, lead: bool) -> String {
@@ -75,7 +124,11 @@ impl Printer<'_> {
         let node = self.g.node(e);
         if is_op(node) {
             for c in node.children() {
-                self.flatten(c, is_op, out);
+                if self.name(c).is_some() {
+                    out.push(c);
+                } else {
+                    self.flatten(c, is_op, out);
+                }
             }
         } else {
             out.push(e);
@@ -84,6 +137,9 @@ impl Printer<'_> {
 
     /// Reading order of a factor in a product.
     fn rank(&self, f: ExprId) -> u8 {
+        if self.name(f).is_some() {
+            return 3;
+        }
         match *self.g.node(f) {
             Node::Const(_) => 0,
             Node::Var(_) => 1,
@@ -93,7 +149,16 @@ impl Printer<'_> {
         }
     }
 
+    /// `e` at a use site: its name if it has one, else its text.
     fn expr(&self, e: ExprId) -> (String, u8) {
+        match self.name(e) {
+            Some(n) => (n, ATOM),
+            None => self.node_text(e),
+        }
+    }
+
+    /// The text of node `e` itself.
+    fn node_text(&self, e: ExprId) -> (String, u8) {
         let g = self.g;
         match *g.node(e) {
             Node::Const(c) if c < 0.0 => (number(c), NEG),
@@ -103,10 +168,10 @@ impl Printer<'_> {
                 // Terms in stored order, positive ones first; `-` for negative ones.
                 let mut terms = Vec::new();
                 self.flatten(e, &|n| matches!(n, Node::Add(..)), &mut terms);
-                terms.sort_by_key(|&t| g.negative_term(t).is_some());
+                terms.sort_by_key(|&t| self.negative_term(t).is_some());
                 let mut out = String::new();
                 for (i, &t) in terms.iter().enumerate() {
-                    match (i, g.negative_term(t)) {
+                    match (i, self.negative_term(t)) {
                         (0, _) => out += &self.operand(t, SUM, true),
                         (_, Some((k, t))) => {
                             let (m, p) = self.magnitude(k, t);
@@ -238,5 +303,30 @@ mod tests {
         let nxy = g.mul(nx, y);
         let e = g.mul(nxy, th);
         assert_eq!(show(&g, e), "-theta * x * y");
+    }
+
+    #[test]
+    fn shared_listing_names_repeated_subexpressions() {
+        let mut g = Graph::new();
+        let (x, y) = (g.var(Var(3)), g.var(Var(4)));
+        let s = g.add(x, y);
+        let c = g.func(Func::Cos, s);
+        let two = g.constant(2.0);
+        let c2 = g.mul(two, c);
+        let e1 = g.sub(x, c2);
+        let e2 = g.mul(c, y);
+        let (defs, texts) = g.display_shared(&[e1, e2], &names, "s");
+        assert_eq!(defs, vec!["s0 = cos(x + y)".to_string()]);
+        assert_eq!(texts, vec!["x - 2 * s0".to_string(), "y * s0".to_string()]);
+        // 60 levels of e -> sin(e) * e + e would print 2^60 copies in full.
+        let mut e = x;
+        for _ in 0..60 {
+            let si = g.func(Func::Sin, e);
+            let p = g.mul(si, e);
+            e = g.add(p, e);
+        }
+        let (defs, texts) = g.display_shared(&[e], &names, "s");
+        assert_eq!(defs.len(), 59); // every level but the root itself
+        assert!(texts[0].len() < 40, "{}", texts[0]);
     }
 }

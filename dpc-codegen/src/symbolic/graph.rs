@@ -61,6 +61,11 @@ pub enum Node {
     Hypot(ExprId, ExprId),
 }
 
+/// The bit standing for `v` in dependency masks (variables share bits modulo 64).
+fn var_bit(v: Var) -> u64 {
+    1 << (v.0 % 64)
+}
+
 /// Interning key: a node with its constant as bits, so it can be hashed.
 type Key = (u8, u64, u64);
 
@@ -101,6 +106,9 @@ impl Node {
 #[derive(Clone, Debug, Default)]
 pub struct Graph {
     nodes: Vec<Node>,
+    /// Per node, the OR of `var_bit(v)` over the variables below it: a one-word filter that
+    /// proves most "does not depend on v" questions without a traversal.
+    masks: Vec<u64>,
     intern: HashMap<Key, ExprId>,
     pub(super) diff_memo: HashMap<(ExprId, Var), ExprId>,
 }
@@ -133,6 +141,11 @@ impl Graph {
         }
         let id = u32::try_from(self.nodes.len()).expect("symbolic graph exceeds u32 nodes");
         let e = ExprId(id);
+        let mask = match n {
+            Node::Var(v) => var_bit(v),
+            _ => n.children().fold(0, |m, c| m | self.masks[c.index()]),
+        };
+        self.masks.push(mask);
         self.nodes.push(n);
         self.intern.insert(key, e);
         e
@@ -550,8 +563,16 @@ impl Graph {
             .collect()
     }
 
+    /// False if `v` certainly does not occur in `e` (constant time); true means "maybe".
+    pub(super) fn may_depend_on(&self, e: ExprId, v: Var) -> bool {
+        self.masks[e.index()] & var_bit(v) != 0
+    }
+
     /// True if `v` occurs in `e`.
     pub fn depends_on(&self, e: ExprId, v: Var) -> bool {
+        if !self.may_depend_on(e, v) {
+            return false;
+        }
         let mut seen: HashSet<ExprId> = HashSet::new();
         let mut stack = vec![e];
         seen.insert(e);
@@ -561,7 +582,7 @@ impl Graph {
                 return true;
             }
             for c in node.children() {
-                if seen.insert(c) {
+                if self.may_depend_on(c, v) && seen.insert(c) {
                     stack.push(c);
                 }
             }
