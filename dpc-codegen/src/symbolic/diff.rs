@@ -67,6 +67,19 @@ impl Graph {
         self.diff_memo[&(e, wrt)]
     }
 
+    /// Directional derivative `Σ_v ∂e/∂v · dir_v`, e.g. the total time derivative
+    /// `d/dt h = Σ_j ∂h/∂x_j · x_j' + ∂h/∂t` with `dirs = [(x_j, x_j'), ..., (t, 1)]`.
+    /// Variables listed twice contribute twice.
+    pub fn directional_derivative(&mut self, e: ExprId, dirs: &[(Var, ExprId)]) -> ExprId {
+        let mut sum = self.constant(0.0);
+        for &(v, dv) in dirs {
+            let d = self.diff(e, v);
+            let term = self.mul(d, dv);
+            sum = self.add(sum, term);
+        }
+        sum
+    }
+
     /// The chain rule for node `e = node`, given the derivatives `d(child)` of its operands
     /// (not all zero).
     fn diff_rule(&mut self, e: ExprId, node: Node, d: &dyn Fn(ExprId) -> ExprId) -> ExprId {
@@ -168,6 +181,20 @@ mod tests {
         let l = g.func(Func::Ln, x);
         let dl = g.diff(l, Var(0));
         assert_eq!(show(&g, dl), "1 / x");
+    }
+
+    #[test]
+    fn total_time_derivative() {
+        let mut g = Graph::new();
+        let (x, xd, t) = (Var(0), Var(1), Var(2));
+        let (xe, xde, te) = (g.var(x), g.var(xd), g.var(t));
+        // h = x * sin(t): dh/dt = x' sin(t) + x cos(t)
+        let s = g.func(Func::Sin, te);
+        let h = g.mul(xe, s);
+        let one = g.constant(1.0);
+        let dh = g.directional_derivative(h, &[(x, xde), (t, one)]);
+        let name = |v: Var| ["x", "der(x)", "t"][v.0 as usize].to_string();
+        assert_eq!(g.display(dh, &name), "der(x) * sin(t) + x * cos(t)");
     }
 
     #[test]

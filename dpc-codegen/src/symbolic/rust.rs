@@ -203,7 +203,10 @@ impl Emitter<'_> {
             }
             Node::Powi(a, n) => {
                 let a = self.operand(a, POSTFIX);
-                let n = Literal::i32_unsuffixed(n);
+                // A negative literal token is not portable across proc-macro back ends:
+                // emit `-` and the magnitude.
+                let m = Literal::u32_unsuffixed(n.unsigned_abs());
+                let n = if n < 0 { quote!(-#m) } else { quote!(#m) };
                 (quote!(#a.powi(#n)), POSTFIX)
             }
             Node::Powf(a, b) => {
@@ -298,6 +301,9 @@ mod tests {
         assert!(t.contains("=> x [0] / t1\n"), "{t}");
         assert!(t.contains("=> (- x [0]) . sin ()\n"), "{t}");
         assert!(t.contains("=> t0 . powi (3)\n"), "{t}");
+        let inv = g.powi(x, -2);
+        let code = g.emit_rust(&[inv], &xv);
+        assert_eq!(code.roots[0].to_string(), "x [0] . powi (- 2)");
         assert!(t.contains("=> (- 2.0_f64) . ln ()\n"), "{t}");
     }
 }
