@@ -6,6 +6,8 @@ use std::collections::{BTreeSet, HashMap};
 use dpc_codegen::symbolic::{ExprId, Func, Graph, RustCode, Var};
 use proc_macro2::TokenStream;
 
+type VarTokens<'a> = &'a dyn Fn(Var) -> TokenStream;
+
 #[test]
 fn contract_signatures() {
     let _: fn() -> Graph = Graph::new;
@@ -30,7 +32,7 @@ fn contract_signatures() {
     let _: fn(&Graph, ExprId, &dyn Fn(Var) -> f64) -> f64 = Graph::eval;
     let _: fn(&Graph, &[ExprId]) -> usize = Graph::size;
     let _: fn(&Graph, ExprId, &dyn Fn(Var) -> String) -> String = Graph::display;
-    let _: fn(&Graph, &[ExprId], &dyn Fn(Var) -> TokenStream) -> RustCode = Graph::emit_rust;
+    let _: fn(&Graph, &[ExprId], VarTokens) -> RustCode = Graph::emit_rust;
     let _: fn(&str) -> Option<Func> = Func::from_name;
     let _: fn(Func) -> &'static str = Func::name;
     let code = RustCode {
