@@ -101,7 +101,13 @@ impl Graph {
             }
             // n a^(n-1) a'
             Node::Powi(a, n) => {
-                let p = self.powi(a, n - 1);
+                let p = match n.checked_sub(1) {
+                    Some(m) => self.powi(a, m),
+                    None => {
+                        let m = self.constant(f64::from(n) - 1.0);
+                        self.powf(a, m)
+                    }
+                };
                 let k = self.constant(f64::from(n));
                 let kp = self.mul(k, p);
                 self.mul(kp, d(a))
@@ -181,6 +187,18 @@ mod tests {
         let l = g.func(Func::Ln, x);
         let dl = g.diff(l, Var(0));
         assert_eq!(show(&g, dl), "1 / x");
+    }
+
+    #[test]
+    fn extreme_powi_exponents_do_not_overflow() {
+        let mut g = Graph::new();
+        let x = g.var(Var(0));
+        let p = g.powi(x, i32::MIN);
+        let d = g.diff(p, Var(0));
+        let v = g.eval(d, &|_| 1.0);
+        assert_eq!(v, f64::from(i32::MIN));
+        let q = g.powi(p, 2); // (x^MIN)^2 cannot merge exponents
+        assert!(matches!(g.node(q), Node::Powi(_, 2)));
     }
 
     #[test]
