@@ -67,6 +67,22 @@ impl Graph {
         self.diff_memo[&(e, wrt)]
     }
 
+    /// Structurally nonzero entries `(i, j, ∂fs[i]/∂wrt[j])` of the Jacobian, row-major.
+    /// Entries that are identically zero after folding are left out, so the index pairs are
+    /// the sparsity pattern.
+    pub fn jacobian(&mut self, fs: &[ExprId], wrt: &[Var]) -> Vec<(usize, usize, ExprId)> {
+        let mut out = Vec::new();
+        for (i, &f) in fs.iter().enumerate() {
+            for (j, &v) in wrt.iter().enumerate() {
+                let d = self.diff(f, v);
+                if !self.is_zero(d) {
+                    out.push((i, j, d));
+                }
+            }
+        }
+        out
+    }
+
     /// Directional derivative `Σ_v ∂e/∂v · dir_v`, e.g. the total time derivative
     /// `d/dt h = Σ_j ∂h/∂x_j · x_j' + ∂h/∂t` with `dirs = [(x_j, x_j'), ..., (t, 1)]`.
     /// Variables listed twice contribute twice.
@@ -213,6 +229,20 @@ mod tests {
         let dh = g.directional_derivative(h, &[(x, xde), (t, one)]);
         let name = |v: Var| ["x", "der(x)", "t"][v.0 as usize].to_string();
         assert_eq!(g.display(dh, &name), "der(x) * sin(t) + x * cos(t)");
+    }
+
+    #[test]
+    fn jacobian_lists_structural_nonzeros() {
+        let mut g = Graph::new();
+        let (x, y) = (g.var(Var(0)), g.var(Var(1)));
+        let s = g.func(Func::Sin, x);
+        let f0 = g.mul(s, y);
+        let f1 = g.sub(y, y);
+        let f2 = g.add(x, s);
+        let jac = g.jacobian(&[f0, f1, f2], &[Var(0), Var(1)]);
+        let pattern: Vec<(usize, usize)> = jac.iter().map(|&(i, j, _)| (i, j)).collect();
+        assert_eq!(pattern, vec![(0, 0), (0, 1), (2, 0)]);
+        assert_eq!(jac[1].2, s);
     }
 
     #[test]

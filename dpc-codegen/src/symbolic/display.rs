@@ -222,13 +222,7 @@ impl Printer<'_> {
                 ),
                 POW,
             ),
-            Node::Func(f, a) => {
-                let name = match f {
-                    super::Func::Sign => "sign",
-                    f => f.name(),
-                };
-                (format!("{name}({})", self.expr(a).0), ATOM)
-            }
+            Node::Func(f, a) => (format!("{}({})", f.name(), self.expr(a).0), ATOM),
             Node::Atan2(y, x) => (
                 format!("atan2({}, {})", self.expr(y).0, self.expr(x).0),
                 ATOM,
@@ -299,7 +293,7 @@ mod tests {
         assert_eq!(show(&g, e), "(x + y)^0.5");
         let ax = g.func(Func::Abs, x);
         let e = g.diff(ax, Var(3));
-        assert_eq!(show(&g, e), "sign(x)");
+        assert_eq!(show(&g, e), "signum(x)");
         let nxy = g.mul(nx, y);
         let e = g.mul(nxy, th);
         assert_eq!(show(&g, e), "-theta * x * y");
