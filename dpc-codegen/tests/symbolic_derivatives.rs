@@ -368,6 +368,35 @@ proptest! {
         }
     }
 
+    /// Canonical forms: commutative constructors ignore operand order, and the identities
+    /// hold on arbitrary subexpressions, not just leaves.
+    #[test]
+    fn algebraic_laws_hold_structurally(a in tree(), b in tree()) {
+        let mut g = Graph::new();
+        let (ea, eb) = (build(&mut g, &a), build(&mut g, &b));
+        prop_assert_eq!(g.add(ea, eb), g.add(eb, ea));
+        prop_assert_eq!(g.mul(ea, eb), g.mul(eb, ea));
+        prop_assert_eq!(g.hypot(ea, eb), g.hypot(eb, ea));
+        let d = g.sub(ea, ea);
+        prop_assert!(g.is_zero(d));
+        let n = g.neg(ea);
+        prop_assert_eq!(g.neg(n), ea);
+        let (zero, one) = (g.constant(0.0), g.constant(1.0));
+        prop_assert_eq!(g.add(ea, zero), ea);
+        prop_assert_eq!(g.mul(one, ea), ea);
+        prop_assert_eq!(g.mul(ea, zero), zero);
+        if !g.is_zero(ea) {
+            let q = g.div(ea, ea);
+            prop_assert_eq!(q, one);
+        }
+        prop_assert_eq!(g.powi(ea, 1), ea);
+        // rebuilding the same tree in a fresh graph gives the same printed form
+        let mut h = Graph::new();
+        let ha = build(&mut h, &a);
+        let name = |v: Var| format!("x{}", v.0);
+        prop_assert_eq!(g.display(ea, &name), h.display(ha, &name));
+    }
+
     /// `vars` is exactly the set `depends_on` accepts; a variable not in it has zero
     /// derivative.
     #[test]

@@ -249,6 +249,16 @@ impl Graph {
             return self.intern(Node::Add(a, b));
         }
         if !self.is_const(b) {
+            // Rules below try operands in order; sort first so `a + b` and `b + a` agree.
+            let (a, b) = if a <= b { (a, b) } else { (b, a) };
+            // Like terms first: `s - s` must cancel even when `s` has a constant term.
+            let (ka, ta) = self.split_coeff(a);
+            let (kb, tb) = self.split_coeff(b);
+            if ta == tb {
+                if let Some(k) = self.folded(ka + kb) {
+                    return self.mul(k, ta);
+                }
+            }
             if let Some((x, c)) = self.split_add_const(a) {
                 let s = self.add(x, b);
                 return self.add(s, c);
@@ -256,13 +266,6 @@ impl Graph {
             if let Some((x, c)) = self.split_add_const(b) {
                 let s = self.add(a, x);
                 return self.add(s, c);
-            }
-            let (ka, ta) = self.split_coeff(a);
-            let (kb, tb) = self.split_coeff(b);
-            if ta == tb {
-                if let Some(k) = self.folded(ka + kb) {
-                    return self.mul(k, ta);
-                }
             }
         }
         let (a, b) = if a <= b { (a, b) } else { (b, a) };
@@ -317,6 +320,8 @@ impl Graph {
             return self.intern(Node::Mul(a, b));
         }
         if !self.is_const(a) && !self.is_const(b) {
+            // Rules below try operands in order; sort first so `a * b` and `b * a` agree.
+            let (a, b) = if a <= b { (a, b) } else { (b, a) };
             for (p, q) in [(a, b), (b, a)] {
                 let (k, x) = self.split_coeff(p);
                 if x != p {
@@ -648,9 +653,13 @@ mod tests {
         assert_eq!(g.mul(xy, xm1), y);
         let xm2 = g.powi(x, -2);
         assert_eq!(g.mul(x2, xm2), one);
-        // a - b - (a - b) = 0
+        // a - b - (a - b) = 0, also with a constant term
         let d = g.sub(x, y);
         assert_eq!(g.sub(d, d), zero);
+        let half = g.constant(0.5);
+        let xh = g.add(x, half);
+        let s = g.add(x, xh);
+        assert_eq!(g.sub(s, s), zero);
         // 2x + 3x = 5x
         let (two, three, five) = (g.constant(2.0), g.constant(3.0), g.constant(5.0));
         let tx = g.mul(two, x);
