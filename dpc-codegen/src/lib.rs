@@ -1,11 +1,63 @@
-//! Compiler behind `dpc::model!`: parse -> model IR -> symbolic DAG -> transforms -> emit.
+//! Compiler behind `dpc::model!`.
+//!
+//! A plain library so that every pass can be unit-, snapshot- and property-tested without a
+//! compiler invocation; `dpc-macros` is a thin shim over [`expand`]. The passes follow the
+//! data flow:
+//!
+//! ```text
+//! parse (syn, spans) -> lower (names, checks, symbolic graph) -> derivatives -> emit (quote)
+//! ```
+//!
+//! * [`parse`]: the DSL's syntax;
+//! * [`lower`]: name resolution, structural checks, lowering into [`ir::Model`];
+//! * [`symbolic`]: the hash-consed expression graph, derivatives, CSE and Rust emission;
+//! * [`emit`]: the generated parameter struct, model type and `DaeModel` implementation.
 
+pub mod ctxt;
+pub mod emit;
+pub mod ir;
+pub mod lower;
+pub mod parse;
 pub mod symbolic;
+pub mod text;
 
 use proc_macro2::TokenStream;
 
-/// Expand the body of a `model!` invocation into Rust items, or into `compile_error!`s.
+/// Expand the body of a `model!` invocation into Rust items, or into `compile_error!`s that
+/// span the offending tokens.
 pub fn expand(input: TokenStream) -> TokenStream {
-    let _ = input;
-    quote::quote!(compile_error!("dpc::model! is not implemented yet");)
+    match try_expand(input) {
+        Ok(tokens) => tokens,
+        Err(err) => err.to_compile_error(),
+    }
+}
+
+/// Like [`expand`], but returns the errors instead of turning them into tokens.
+pub fn try_expand(input: TokenStream) -> syn::Result<TokenStream> {
+    let def: parse::ModelDef = syn::parse2(input)?;
+    let mut cx = ctxt::Ctxt::new();
+    let model = lower::lower(def, &mut cx);
+    cx.check()?;
+    let Some(mut model) = model else {
+        // `lower` returns `None` only after recording an error.
+        return Err(syn::Error::new(
+            proc_macro2::Span::call_site(),
+            "internal error: model lowering failed without a diagnostic",
+        ));
+    };
+    Ok(emit::emit_model(&mut model))
+}
+
+/// Lower a model without emitting code, for inspection and tests.
+pub fn lower_model(input: TokenStream) -> syn::Result<ir::Model> {
+    let def: parse::ModelDef = syn::parse2(input)?;
+    let mut cx = ctxt::Ctxt::new();
+    let model = lower::lower(def, &mut cx);
+    cx.check()?;
+    model.ok_or_else(|| {
+        syn::Error::new(
+            proc_macro2::Span::call_site(),
+            "internal error: model lowering failed without a diagnostic",
+        )
+    })
 }

@@ -51,6 +51,8 @@ pub trait DaeModel {
     const OUTPUT_NAMES: &'static [&'static str];
     /// Names of the parameters, in order.
     const PARAM_NAMES: &'static [&'static str];
+    /// Kind of each unknown of `[x; z]`: states are differential, the rest algebraic.
+    const UNKNOWN_KINDS: &'static [UnknownKind];
     /// The equations as readable text, normalised to `lhs == rhs` form, one per residual row.
     const EQUATIONS: &'static [&'static str];
     /// Structural pattern of `dF/dx'` (`N_EQUATIONS x N_STATES`).
@@ -216,5 +218,37 @@ impl<M: DaeModel, U: Fn(f64, &mut [f64])> ImplicitDae for ModelDae<M, U> {
             .chain(M::ALGEBRAIC_NAMES)
             .nth(i)
             .map_or_else(|| format!("y[{i}]"), |s| (*s).to_string())
+    }
+}
+
+/// Residual and Jacobian blocks of a model in fixed-size nalgebra types, as returned by the
+/// generated `jacobians_fixed` method. `NE` equations, `NX` states, `NZ` algebraic unknowns,
+/// `NU` inputs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FixedJacobians<const NE: usize, const NX: usize, const NZ: usize, const NU: usize> {
+    /// `F(t, x, x', z, u)`.
+    pub residual: nalgebra::SVector<f64, NE>,
+    /// `dF/dx'`.
+    pub f_xdot: nalgebra::SMatrix<f64, NE, NX>,
+    /// `dF/dx`.
+    pub f_x: nalgebra::SMatrix<f64, NE, NX>,
+    /// `dF/dz`.
+    pub f_z: nalgebra::SMatrix<f64, NE, NZ>,
+    /// `dF/du`.
+    pub f_u: nalgebra::SMatrix<f64, NE, NU>,
+}
+
+impl<const NE: usize, const NX: usize, const NZ: usize, const NU: usize>
+    FixedJacobians<NE, NX, NZ, NU>
+{
+    /// All blocks zero.
+    pub fn zeros() -> Self {
+        Self {
+            residual: nalgebra::SVector::zeros(),
+            f_xdot: nalgebra::SMatrix::zeros(),
+            f_x: nalgebra::SMatrix::zeros(),
+            f_z: nalgebra::SMatrix::zeros(),
+            f_u: nalgebra::SMatrix::zeros(),
+        }
     }
 }

@@ -1,1 +1,15 @@
 //! Plants declared with `dpc::model!`.
+//!
+//! * [`Wheel`]: the paper's nonlinear wheel (Appendix), and [`WheelLinear`], its
+//!   linearisation (4.1);
+//! * [`Pendulum`]: the planar pendulum in Cartesian coordinates with a Lagrange multiplier
+//!   (index 3).
+//!
+//! The source files are also read by the snapshot tests of `dpc-codegen`, which store the
+//! code the macro generates for each of them.
+
+mod pendulum;
+mod wheel;
+
+pub use pendulum::{Pendulum, PendulumParams};
+pub use wheel::{Wheel, WheelLinear, WheelLinearParams, WheelParams};

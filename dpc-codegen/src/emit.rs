@@ -1,0 +1,646 @@
+//! Emission: the checked model IR to Rust items.
+//!
+//! For a model `Name` this emits
+//!
+//! * `NameParams`, the parameter struct with `Default` from the declared defaults;
+//! * `Name`, the model type, with inherent fixed-size conveniences (nalgebra `SVector` /
+//!   `SMatrix`) and an implementation of `dpc::core::DaeModel` whose routines take slices
+//!   and write Jacobian entries into `MatrixSink`s.
+//!
+//! Each routine is one straight-line block: every root it needs (residual rows and Jacobian
+//! entries) is scheduled together, so subexpressions are shared across the residual and all
+//! Jacobians; structurally zero entries are never emitted, and the non-zero positions are
+//! exported as pattern constants. Function parameters use `__`-prefixed names, which the DSL
+//! forbids in user names, so user names can be bound as plain locals without shadowing.
+
+use crate::ir::{Model, Symbol};
+use crate::symbolic::{ExprId, Var};
+use proc_macro2::{Ident, Span, TokenStream};
+use quote::{format_ident, quote};
+use std::collections::{BTreeMap, BTreeSet};
+
+/// A Jacobian block: the structurally non-zero entries `(row, col, expr)`.
+pub struct Block {
+    /// Non-zero entries in row-major order.
+    pub entries: Vec<(usize, usize, ExprId)>,
+}
+
+impl Block {
+    fn pattern(&self) -> TokenStream {
+        let items = self.entries.iter().map(|(i, j, _)| quote!((#i, #j)));
+        quote!(&[#(#items),*])
+    }
+}
+
+/// Jacobian of `rows` with respect to the variables of `symbols`, skipping structural zeros.
+pub fn jacobian(model: &mut Model, rows: &[ExprId], symbols: &[Symbol]) -> Block {
+    let mut entries = Vec::new();
+    for (i, &r) in rows.iter().enumerate() {
+        let deps = model.graph.vars(r);
+        for (j, &s) in symbols.iter().enumerate() {
+            let Some(v) = model.symbols.lookup(s) else {
+                continue;
+            };
+            if !deps.contains(&v) {
+                continue;
+            }
+            let d = model.graph.diff(r, v);
+            if !model.graph.is_zero(d) {
+                entries.push((i, j, d));
+            }
+        }
+    }
+    Block { entries }
+}
+
+/// Straight-line code for a set of roots, with the locals it needs bound from the
+/// `__`-prefixed function parameters.
+struct Routine {
+    prelude: TokenStream,
+    statements: Vec<TokenStream>,
+    roots: Vec<TokenStream>,
+}
+
+fn local_ident(model: &Model, symbol: Symbol) -> Ident {
+    let span = Span::call_site();
+    match symbol {
+        Symbol::Time => Ident::new("t", span),
+        Symbol::State(i) => model.states[i].name.clone(),
+        Symbol::StateDot(i) => format_ident!("der__{}", model.states[i].name),
+        Symbol::Algebraic(i) => model.algebraic[i].name.clone(),
+        Symbol::AlgebraicDot(i) => format_ident!("der__{}", model.algebraic[i].name),
+        Symbol::Input(i) => model.inputs[i].name.clone(),
+        Symbol::InputDot(i) => format_ident!("der__{}", model.inputs[i].name),
+        Symbol::Param(i) => model.params[i].name.clone(),
+        Symbol::IterationCoefficient => Ident::new("__c", span),
+        Symbol::TrackingInput(i) => format_ident!("w__{}", model.outputs[i].name),
+    }
+}
+
+/// How the unknowns and inputs of one generated type map to the slices its routines take.
+///
+/// A plant and its tracking DAE share one graph and one set of symbols; they differ only in
+/// which symbols are states, algebraic unknowns and inputs (in the tracking DAE the plant's
+/// inputs are algebraic unknowns and the reference combinations `w_i` are the inputs).
+pub struct Layout {
+    /// Symbols read from `__x` (and whose derivatives are read from `__xdot`).
+    pub states: Vec<Symbol>,
+    /// Symbols read from `__z`.
+    pub algebraic: Vec<Symbol>,
+    /// Symbols read from `__u`.
+    pub inputs: Vec<Symbol>,
+}
+
+impl Layout {
+    /// The layout of the plant itself.
+    pub fn plant(model: &Model) -> Self {
+        Layout {
+            states: (0..model.states.len()).map(Symbol::State).collect(),
+            algebraic: (0..model.algebraic.len()).map(Symbol::Algebraic).collect(),
+            inputs: (0..model.inputs.len()).map(Symbol::Input).collect(),
+        }
+    }
+
+    /// The derivative symbols of the states.
+    pub fn state_dots(&self) -> Vec<Symbol> {
+        self.states
+            .iter()
+            .map(|s| match s {
+                Symbol::State(i) => Symbol::StateDot(*i),
+                other => unreachable!("layout state {other:?} is not a state"),
+            })
+            .collect()
+    }
+
+    /// Where the value of `symbol` comes from inside a generated routine.
+    fn source_of(&self, symbol: Symbol) -> TokenStream {
+        let find = |list: &[Symbol], s: Symbol| list.iter().position(|x| *x == s);
+        if symbol == Symbol::Time {
+            return quote!(__t);
+        }
+        if let Symbol::StateDot(i) = symbol {
+            if let Some(k) = find(&self.states, Symbol::State(i)) {
+                return quote!(__xdot[#k]);
+            }
+        }
+        if let Some(k) = find(&self.states, symbol) {
+            return quote!(__x[#k]);
+        }
+        if let Some(k) = find(&self.algebraic, symbol) {
+            return quote!(__z[#k]);
+        }
+        if let Some(k) = find(&self.inputs, symbol) {
+            return quote!(__u[#k]);
+        }
+        unreachable!("symbol {symbol:?} has no place in this layout; the checks exclude it")
+    }
+}
+
+fn routine(model: &Model, layout: &Layout, roots: &[ExprId]) -> Routine {
+    let mut used: BTreeSet<Var> = BTreeSet::new();
+    for &r in roots {
+        used.extend(model.graph.vars(r));
+    }
+    let mut prelude = TokenStream::new();
+    let mut symbols: Vec<Symbol> = used.iter().map(|v| model.symbols.symbol(*v)).collect();
+    symbols.sort();
+    for s in symbols {
+        let local = local_ident(model, s);
+        match s {
+            Symbol::Param(_) => prelude.extend(quote!(let #local: f64 = self.params.#local;)),
+            Symbol::IterationCoefficient => {}
+            _ => {
+                let src = layout.source_of(s);
+                prelude.extend(quote!(let #local: f64 = #src;));
+            }
+        }
+    }
+    let code = model.graph.emit_rust_prefixed(
+        roots,
+        &|v| {
+            let local = local_ident(model, model.symbols.symbol(v));
+            quote!(#local)
+        },
+        "__s",
+    );
+    Routine {
+        prelude,
+        statements: code.statements,
+        roots: code.roots,
+    }
+}
+
+fn doc_lines(text: &str) -> TokenStream {
+    let lines = text.lines().map(|l| {
+        let l = format!(" {l}");
+        quote!(#[doc = #l])
+    });
+    quote!(#(#lines)*)
+}
+
+fn str_list(items: impl IntoIterator<Item = String>) -> TokenStream {
+    let items: Vec<String> = items.into_iter().collect();
+    quote!(&[#(#items),*])
+}
+
+/// Human-readable listing of a model: declarations, intermediates, equations, outputs.
+pub fn listing(model: &Model) -> String {
+    let mut s = format!("model {}\n", model.name);
+    if !model.params.is_empty() {
+        let ps: Vec<String> = model
+            .params
+            .iter()
+            .map(|p| format!("{} = {:?}", p.name, p.default))
+            .collect();
+        s += &format!("  params     {}\n", ps.join(", "));
+    }
+    let names = |d: &[crate::ir::Decl]| {
+        d.iter()
+            .map(|x| x.name.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    s += &format!("  states     {}\n", names(&model.states));
+    if !model.algebraic.is_empty() {
+        s += &format!("  algebraic  {}\n", names(&model.algebraic));
+    }
+    if !model.inputs.is_empty() {
+        s += &format!("  inputs     {}\n", names(&model.inputs));
+    }
+    for l in &model.intermediates {
+        s += &format!("  let {} = {}\n", l.name, l.text);
+    }
+    s += "  equations\n";
+    for (i, e) in model.equations.iter().enumerate() {
+        s += &format!("    [{i}] {}\n", e.text);
+    }
+    if !model.outputs.is_empty() {
+        s += "  outputs\n";
+        for o in &model.outputs {
+            s += &format!("    {} = {}\n", o.name, o.text);
+        }
+    }
+    s
+}
+
+/// One generated type implementing `dpc::core::DaeModel`: the plant, or its tracking DAE.
+pub struct DaeType {
+    /// Name of the generated type.
+    pub name: Ident,
+    /// Doc attributes for the type.
+    pub docs: Vec<syn::Attribute>,
+    /// Which symbols are states, algebraic unknowns and inputs.
+    pub layout: Layout,
+    /// Residual rows.
+    pub residuals: Vec<ExprId>,
+    /// Text of each residual row.
+    pub equation_texts: Vec<String>,
+    /// Output expressions and names.
+    pub outputs: Vec<(String, ExprId)>,
+    /// Readable listing of the type's equations.
+    pub listing: String,
+}
+
+/// Emit all items for a lowered model: the parameter struct and the plant type.
+pub fn emit_model(model: &mut Model) -> TokenStream {
+    let params = emit_params(model);
+    let plant = DaeType {
+        name: model.name.clone(),
+        docs: model.attrs.clone(),
+        layout: Layout::plant(model),
+        residuals: model.equations.iter().map(|e| e.residual).collect(),
+        equation_texts: model.equations.iter().map(|e| e.text.clone()).collect(),
+        outputs: model
+            .outputs
+            .iter()
+            .map(|o| (o.name.to_string(), o.expr))
+            .collect(),
+        listing: listing(model),
+    };
+    let plant = emit_dae_type(model, &plant);
+    quote!(#params #plant)
+}
+
+/// The parameter struct `NameParams` with `Default` from the declared values.
+fn emit_params(model: &Model) -> TokenStream {
+    let name = &model.name;
+    let vis = &model.vis;
+    let params_name = format_ident!("{}Params", name);
+    let param_fields = model.params.iter().map(|p| {
+        let n = &p.name;
+        let docs = &p.docs;
+        let default_doc = format!(" Default: `{:?}`.", p.default);
+        quote!(#(#docs)* #[doc = #default_doc] pub #n: f64,)
+    });
+    let param_defaults = model.params.iter().map(|p| {
+        let n = &p.name;
+        let v = p.default;
+        quote!(#n: #v,)
+    });
+    let params_doc = format!(" Parameters of [`{name}`], with `Default` from the declared values.");
+    quote! {
+        #[doc = #params_doc]
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        #vis struct #params_name {
+            #(#param_fields)*
+        }
+
+        impl ::core::default::Default for #params_name {
+            fn default() -> Self {
+                Self { #(#param_defaults)* }
+            }
+        }
+    }
+}
+
+/// Writes of the roots of a routine into sinks: `(sink tokens, block)` in root order.
+fn sink_writes(
+    roots: &mut impl Iterator<Item = TokenStream>,
+    blocks: &[(TokenStream, &Block)],
+) -> Vec<TokenStream> {
+    let mut writes = Vec::new();
+    for (sink, b) in blocks {
+        for &(i, j, _) in &b.entries {
+            let v = roots.next().expect("one root per Jacobian entry");
+            writes.push(quote!(#sink.set(#i, #j, #v);));
+        }
+    }
+    writes
+}
+
+/// Emit one type implementing `DaeModel` with its fixed-size conveniences.
+pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
+    let name = ty.name.clone();
+    let vis = model.vis.clone();
+    let attrs = ty.docs.clone();
+    let params_name = format_ident!("{}Params", model.name);
+    let layout = &ty.layout;
+
+    let nx = layout.states.len();
+    let nz = layout.algebraic.len();
+    let nu = layout.inputs.len();
+    let ny = ty.outputs.len();
+    let neq = ty.residuals.len();
+
+    let residuals = ty.residuals.clone();
+    let f_xdot = jacobian(model, &residuals, &layout.state_dots());
+    let f_x = jacobian(model, &residuals, &layout.states);
+    let f_z = jacobian(model, &residuals, &layout.algebraic);
+    let f_u = jacobian(model, &residuals, &layout.inputs);
+    let outputs: Vec<ExprId> = ty.outputs.iter().map(|o| o.1).collect();
+    let h_x = jacobian(model, &outputs, &layout.states);
+    let h_z = jacobian(model, &outputs, &layout.algebraic);
+    let h_u = jacobian(model, &outputs, &layout.inputs);
+
+    // Iteration matrix [dF/dx + c dF/dx' | dF/dz], assembled symbolically so the sum of the
+    // two blocks is one expression per entry.
+    let c_var = model.var(Symbol::IterationCoefficient);
+    let c = model.graph.var(c_var);
+    let mut iteration: BTreeMap<(usize, usize), ExprId> = BTreeMap::new();
+    for &(i, j, e) in &f_x.entries {
+        iteration.insert((i, j), e);
+    }
+    for &(i, j, e) in &f_xdot.entries {
+        let scaled = model.graph.mul(c, e);
+        let entry = match iteration.get(&(i, j)) {
+            Some(&prev) => model.graph.add(prev, scaled),
+            None => scaled,
+        };
+        iteration.insert((i, j), entry);
+    }
+    for &(i, j, e) in &f_z.entries {
+        iteration.insert((i, nx + j), e);
+    }
+    let model = &*model;
+
+    // Routines: each schedules all of its roots together (CSE across them).
+    let residual_code = {
+        let r = routine(model, layout, &residuals);
+        let (prelude, stmts) = (r.prelude, r.statements);
+        let writes = r
+            .roots
+            .iter()
+            .enumerate()
+            .map(|(i, v)| quote!(__out[#i] = #v;));
+        quote!(#prelude #(#stmts)* #(#writes)*)
+    };
+    let evaluate_code = {
+        let blocks = [
+            (quote!(__f_xdot), &f_xdot),
+            (quote!(__f_x), &f_x),
+            (quote!(__f_z), &f_z),
+            (quote!(__f_u), &f_u),
+        ];
+        let mut roots = residuals.clone();
+        for (_, b) in &blocks {
+            roots.extend(b.entries.iter().map(|e| e.2));
+        }
+        let r = routine(model, layout, &roots);
+        let (prelude, stmts) = (r.prelude, r.statements);
+        let mut it = r.roots.into_iter();
+        let mut writes: Vec<TokenStream> = (0..neq)
+            .map(|i| {
+                let v = it.next().expect("one root per residual row");
+                quote!(__residual[#i] = #v;)
+            })
+            .collect();
+        writes.extend(sink_writes(&mut it, &blocks));
+        quote!(#prelude #(#stmts)* #(#writes)*)
+    };
+    let iteration_code = {
+        let roots: Vec<ExprId> = iteration.values().copied().collect();
+        let r = routine(model, layout, &roots);
+        let (prelude, stmts) = (r.prelude, r.statements);
+        let writes = iteration
+            .keys()
+            .zip(r.roots)
+            .map(|((i, j), v)| quote!(__out.set(#i, #j, #v);));
+        quote!(#prelude #(#stmts)* #(#writes)*)
+    };
+    let outputs_code = {
+        let r = routine(model, layout, &outputs);
+        let (prelude, stmts) = (r.prelude, r.statements);
+        let writes = r
+            .roots
+            .iter()
+            .enumerate()
+            .map(|(i, v)| quote!(__out[#i] = #v;));
+        quote!(#prelude #(#stmts)* #(#writes)*)
+    };
+    let output_jac_code = {
+        let blocks = [
+            (quote!(__h_x), &h_x),
+            (quote!(__h_z), &h_z),
+            (quote!(__h_u), &h_u),
+        ];
+        let roots: Vec<ExprId> = blocks
+            .iter()
+            .flat_map(|(_, b)| b.entries.iter().map(|e| e.2))
+            .collect();
+        let r = routine(model, layout, &roots);
+        let (prelude, stmts) = (r.prelude, r.statements);
+        let writes = sink_writes(&mut r.roots.into_iter(), &blocks);
+        quote!(#prelude #(#stmts)* #(#writes)*)
+    };
+
+    // Constants.
+    let sym_names = |list: &[Symbol]| str_list(list.iter().map(|s| model.symbol_name(*s)));
+    let state_names = sym_names(&layout.states);
+    let alg_names = sym_names(&layout.algebraic);
+    let input_names = sym_names(&layout.inputs);
+    let output_names = str_list(ty.outputs.iter().map(|o| o.0.clone()));
+    let param_names = str_list(model.params.iter().map(|p| p.name.to_string()));
+    let equations = str_list(ty.equation_texts.iter().cloned());
+    let kinds = (0..nx)
+        .map(|_| quote!(::dpc::core::model::UnknownKind::Differential))
+        .chain((0..nz).map(|_| quote!(::dpc::core::model::UnknownKind::Algebraic)));
+    let (p_xdot, p_x, p_z, p_u, p_hx) = (
+        f_xdot.pattern(),
+        f_x.pattern(),
+        f_z.pattern(),
+        f_u.pattern(),
+        h_x.pattern(),
+    );
+    let model_name = name.to_string();
+    let listing_text = ty.listing.clone();
+    let listing_doc = doc_lines(&format!("```text\n{listing_text}```"));
+    let na = quote!(::dpc::nalgebra);
+
+    quote! {
+        #(#attrs)*
+        ///
+        /// Generated by `dpc::model!` from:
+        ///
+        #listing_doc
+        #[derive(Debug, Clone, Copy, PartialEq, Default)]
+        #vis struct #name {
+            /// The model's parameters.
+            pub params: #params_name,
+        }
+
+        #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens, non_snake_case)]
+        impl #name {
+            /// Number of states.
+            pub const N_STATES: usize = #nx;
+            /// Number of algebraic unknowns.
+            pub const N_ALGEBRAIC: usize = #nz;
+            /// Number of inputs.
+            pub const N_INPUTS: usize = #nu;
+            /// Number of outputs.
+            pub const N_OUTPUTS: usize = #ny;
+            /// Number of equations (= states + algebraic unknowns).
+            pub const N_EQUATIONS: usize = #neq;
+            /// The declared model, equations and outputs as readable text.
+            pub const LISTING: &'static str = #listing_text;
+
+            /// The model with the given parameters.
+            pub const fn new(params: #params_name) -> Self {
+                Self { params }
+            }
+
+            /// Residual `F(t, x, x', z, u)` in fixed-size types.
+            pub fn residual_fixed(
+                &self,
+                t: f64,
+                x: &#na::SVector<f64, #nx>,
+                xdot: &#na::SVector<f64, #nx>,
+                z: &#na::SVector<f64, #nz>,
+                u: &#na::SVector<f64, #nu>,
+            ) -> #na::SVector<f64, #neq> {
+                let mut out = #na::SVector::<f64, #neq>::zeros();
+                ::dpc::core::DaeModel::residual(self, t, x.as_slice(), xdot.as_slice(), z.as_slice(), u.as_slice(), out.as_mut_slice());
+                out
+            }
+
+            /// Residual and the Jacobians `dF/dx'`, `dF/dx`, `dF/dz`, `dF/du` in fixed-size types.
+            pub fn jacobians_fixed(
+                &self,
+                t: f64,
+                x: &#na::SVector<f64, #nx>,
+                xdot: &#na::SVector<f64, #nx>,
+                z: &#na::SVector<f64, #nz>,
+                u: &#na::SVector<f64, #nu>,
+            ) -> ::dpc::core::model::FixedJacobians<#neq, #nx, #nz, #nu> {
+                let mut j = ::dpc::core::model::FixedJacobians::<#neq, #nx, #nz, #nu>::zeros();
+                ::dpc::core::DaeModel::evaluate(
+                    self, t, x.as_slice(), xdot.as_slice(), z.as_slice(), u.as_slice(),
+                    j.residual.as_mut_slice(), &mut j.f_xdot, &mut j.f_x, &mut j.f_z, &mut j.f_u,
+                );
+                j
+            }
+
+            /// The iteration matrix `[dF/dx + c dF/dx' | dF/dz]` in fixed-size types.
+            pub fn iteration_matrix_fixed(
+                &self,
+                t: f64,
+                x: &#na::SVector<f64, #nx>,
+                xdot: &#na::SVector<f64, #nx>,
+                z: &#na::SVector<f64, #nz>,
+                u: &#na::SVector<f64, #nu>,
+                c: f64,
+            ) -> #na::SMatrix<f64, #neq, #neq> {
+                let mut m = #na::SMatrix::<f64, #neq, #neq>::zeros();
+                ::dpc::core::DaeModel::iteration_matrix(self, t, x.as_slice(), xdot.as_slice(), z.as_slice(), u.as_slice(), c, &mut m);
+                m
+            }
+
+            /// Outputs `y = h(t, x, z, u)` in fixed-size types.
+            pub fn outputs_fixed(
+                &self,
+                t: f64,
+                x: &#na::SVector<f64, #nx>,
+                z: &#na::SVector<f64, #nz>,
+                u: &#na::SVector<f64, #nu>,
+            ) -> #na::SVector<f64, #ny> {
+                let mut y = #na::SVector::<f64, #ny>::zeros();
+                ::dpc::core::DaeModel::outputs(self, t, x.as_slice(), z.as_slice(), u.as_slice(), y.as_mut_slice());
+                y
+            }
+
+            /// Output Jacobian `dh/dx` in fixed-size types.
+            pub fn output_jacobian_fixed(
+                &self,
+                t: f64,
+                x: &#na::SVector<f64, #nx>,
+                z: &#na::SVector<f64, #nz>,
+                u: &#na::SVector<f64, #nu>,
+            ) -> #na::SMatrix<f64, #ny, #nx> {
+                let mut h_x = #na::SMatrix::<f64, #ny, #nx>::zeros();
+                let mut h_z = #na::SMatrix::<f64, #ny, #nz>::zeros();
+                let mut h_u = #na::SMatrix::<f64, #ny, #nu>::zeros();
+                ::dpc::core::DaeModel::output_jacobians(self, t, x.as_slice(), z.as_slice(), u.as_slice(), &mut h_x, &mut h_z, &mut h_u);
+                h_x
+            }
+        }
+
+        #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens, non_snake_case)]
+        impl ::dpc::core::DaeModel for #name {
+            type Params = #params_name;
+            const NAME: &'static str = #model_name;
+            const N_STATES: usize = #nx;
+            const N_ALGEBRAIC: usize = #nz;
+            const N_INPUTS: usize = #nu;
+            const N_OUTPUTS: usize = #ny;
+            const N_EQUATIONS: usize = #neq;
+            const STATE_NAMES: &'static [&'static str] = #state_names;
+            const ALGEBRAIC_NAMES: &'static [&'static str] = #alg_names;
+            const INPUT_NAMES: &'static [&'static str] = #input_names;
+            const OUTPUT_NAMES: &'static [&'static str] = #output_names;
+            const PARAM_NAMES: &'static [&'static str] = #param_names;
+            const UNKNOWN_KINDS: &'static [::dpc::core::model::UnknownKind] = &[#(#kinds),*];
+            const EQUATIONS: &'static [&'static str] = #equations;
+            const PATTERN_F_XDOT: ::dpc::core::model::Pattern = #p_xdot;
+            const PATTERN_F_X: ::dpc::core::model::Pattern = #p_x;
+            const PATTERN_F_Z: ::dpc::core::model::Pattern = #p_z;
+            const PATTERN_F_U: ::dpc::core::model::Pattern = #p_u;
+            const PATTERN_H_X: ::dpc::core::model::Pattern = #p_hx;
+
+            fn from_params(params: Self::Params) -> Self {
+                Self { params }
+            }
+
+            fn params(&self) -> &Self::Params {
+                &self.params
+            }
+
+            fn residual(&self, __t: f64, __x: &[f64], __xdot: &[f64], __z: &[f64], __u: &[f64], __out: &mut [f64]) {
+                #residual_code
+            }
+
+            fn evaluate<__A, __B, __C, __D>(
+                &self,
+                __t: f64,
+                __x: &[f64],
+                __xdot: &[f64],
+                __z: &[f64],
+                __u: &[f64],
+                __residual: &mut [f64],
+                __f_xdot: &mut __A,
+                __f_x: &mut __B,
+                __f_z: &mut __C,
+                __f_u: &mut __D,
+            ) where
+                __A: ::dpc::core::MatrixSink + ?Sized,
+                __B: ::dpc::core::MatrixSink + ?Sized,
+                __C: ::dpc::core::MatrixSink + ?Sized,
+                __D: ::dpc::core::MatrixSink + ?Sized,
+            {
+                #evaluate_code
+            }
+
+            fn iteration_matrix<__S: ::dpc::core::MatrixSink + ?Sized>(
+                &self,
+                __t: f64,
+                __x: &[f64],
+                __xdot: &[f64],
+                __z: &[f64],
+                __u: &[f64],
+                __c: f64,
+                __out: &mut __S,
+            ) {
+                #iteration_code
+            }
+
+            fn outputs(&self, __t: f64, __x: &[f64], __z: &[f64], __u: &[f64], __out: &mut [f64]) {
+                #outputs_code
+            }
+
+            fn output_jacobians<__A, __B, __C>(
+                &self,
+                __t: f64,
+                __x: &[f64],
+                __z: &[f64],
+                __u: &[f64],
+                __h_x: &mut __A,
+                __h_z: &mut __B,
+                __h_u: &mut __C,
+            ) where
+                __A: ::dpc::core::MatrixSink + ?Sized,
+                __B: ::dpc::core::MatrixSink + ?Sized,
+                __C: ::dpc::core::MatrixSink + ?Sized,
+            {
+                #output_jac_code
+            }
+        }
+    }
+}

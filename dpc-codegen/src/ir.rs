@@ -1,0 +1,213 @@
+//! The model IR: declared names resolved, expressions lowered into one symbolic graph.
+//!
+//! Everything downstream (derivatives, the Hirschorn steps, emission) works on this
+//! representation; spans are kept only where later passes can still report errors.
+
+use crate::symbolic::{ExprId, Graph, Var};
+use proc_macro2::Span;
+use std::collections::HashMap;
+use syn::{Attribute, Ident, Visibility};
+
+/// What a symbolic variable stands for.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Symbol {
+    /// Time `t`.
+    Time,
+    /// State `x_i`.
+    State(usize),
+    /// Its derivative `x_i'`.
+    StateDot(usize),
+    /// Algebraic unknown `z_i`.
+    Algebraic(usize),
+    /// The derivative of an algebraic unknown (appears only after total time derivatives).
+    AlgebraicDot(usize),
+    /// Input `u_i`.
+    Input(usize),
+    /// The derivative of an input (appears only after total time derivatives).
+    InputDot(usize),
+    /// Parameter `p_i`.
+    Param(usize),
+    /// The coefficient `c` of the iteration matrix `dF/dy + c dF/dy'`.
+    IterationCoefficient,
+    /// Run-time input of a tracking DAE: `w_i = W_i(d/dt) xi_i` for output `i`.
+    TrackingInput(usize),
+}
+
+/// The bijection between [`Symbol`]s and graph [`Var`]s.
+#[derive(Default, Debug, Clone)]
+pub struct Symbols {
+    by_var: Vec<Symbol>,
+    by_symbol: HashMap<Symbol, Var>,
+}
+
+impl Symbols {
+    /// The variable standing for `symbol`, created on first use.
+    pub fn var(&mut self, symbol: Symbol) -> Var {
+        if let Some(v) = self.by_symbol.get(&symbol) {
+            return *v;
+        }
+        let v = Var(self.by_var.len() as u32);
+        self.by_var.push(symbol);
+        self.by_symbol.insert(symbol, v);
+        v
+    }
+
+    /// The variable of `symbol` if it was ever created.
+    pub fn lookup(&self, symbol: Symbol) -> Option<Var> {
+        self.by_symbol.get(&symbol).copied()
+    }
+
+    /// What `var` stands for.
+    pub fn symbol(&self, var: Var) -> Symbol {
+        self.by_var[var.0 as usize]
+    }
+}
+
+/// A declared name (state, algebraic unknown, input) with its doc attributes.
+#[derive(Clone)]
+pub struct Decl {
+    /// The name as declared.
+    pub name: Ident,
+    /// Doc comments attached to it.
+    pub docs: Vec<Attribute>,
+}
+
+/// A parameter with its default.
+#[derive(Clone)]
+pub struct Param {
+    /// The name as declared.
+    pub name: Ident,
+    /// Its default value.
+    pub default: f64,
+    /// Doc comments attached to it.
+    pub docs: Vec<Attribute>,
+}
+
+/// One equation, lowered to a residual `lhs - rhs`.
+#[derive(Clone)]
+pub struct Equation {
+    /// `lhs - rhs` in the graph.
+    pub residual: ExprId,
+    /// The equation as written, normalised (`der(x) = f` or `lhs == rhs`).
+    pub text: String,
+    /// For an explicit equation `der(x_j) = f_j` with `f_j` free of derivatives: `(j, f_j)`.
+    pub explicit: Option<(usize, ExprId)>,
+    /// Span of the whole equation.
+    pub span: Span,
+}
+
+/// An output `y_i = h_i(t, x, z, u)`.
+#[derive(Clone)]
+pub struct Output {
+    /// The output's name.
+    pub name: Ident,
+    /// Its expression.
+    pub expr: ExprId,
+    /// Its expression as written.
+    pub text: String,
+    /// Doc comments attached to it.
+    pub docs: Vec<Attribute>,
+}
+
+/// A `let` intermediate, kept for the equation listing.
+#[derive(Clone)]
+pub struct Intermediate {
+    /// The name.
+    pub name: Ident,
+    /// The expression as written.
+    pub text: String,
+}
+
+/// A reference `xi_i(t)` written in the DSL.
+#[derive(Clone)]
+pub struct Reference {
+    /// Index of the output it belongs to.
+    pub output: usize,
+    /// The expression of `t` and parameters.
+    pub expr: ExprId,
+    /// The expression as written.
+    pub text: String,
+}
+
+/// One entry of the `tracking` section: `W_i(s) = prod_k (s + roots_k)`.
+#[derive(Clone)]
+pub struct TrackingEntry {
+    /// Index of the output.
+    pub output: usize,
+    /// Negated roots of `W_i`.
+    pub roots: Vec<f64>,
+    /// Span of the entry, for diagnostics.
+    pub span: Span,
+}
+
+/// The `tracking` section.
+#[derive(Clone)]
+pub struct Tracking {
+    /// Name of the generated tracking type.
+    pub type_name: Ident,
+    /// Entries, in the order of the outputs they name.
+    pub entries: Vec<TrackingEntry>,
+    /// Span of the `tracking` keyword.
+    pub span: Span,
+}
+
+/// A lowered, checked model.
+pub struct Model {
+    /// Outer attributes (doc comment).
+    pub attrs: Vec<Attribute>,
+    /// Visibility of the generated items.
+    pub vis: Visibility,
+    /// The model's name.
+    pub name: Ident,
+    /// Parameters in declaration order.
+    pub params: Vec<Param>,
+    /// States in declaration order.
+    pub states: Vec<Decl>,
+    /// Algebraic unknowns in declaration order.
+    pub algebraic: Vec<Decl>,
+    /// Inputs in declaration order.
+    pub inputs: Vec<Decl>,
+    /// `let` intermediates in declaration order.
+    pub intermediates: Vec<Intermediate>,
+    /// Equations in declaration order.
+    pub equations: Vec<Equation>,
+    /// Outputs in declaration order.
+    pub outputs: Vec<Output>,
+    /// References written in the DSL.
+    pub references: Vec<Reference>,
+    /// The `tracking` section, if any.
+    pub tracking: Option<Tracking>,
+    /// The symbolic graph holding every expression.
+    pub graph: Graph,
+    /// What each graph variable stands for.
+    pub symbols: Symbols,
+}
+
+impl Model {
+    /// The graph variable of `symbol` (created if needed).
+    pub fn var(&mut self, symbol: Symbol) -> Var {
+        self.symbols.var(symbol)
+    }
+
+    /// The readable name of a symbol, as used in equation listings.
+    pub fn symbol_name(&self, symbol: Symbol) -> String {
+        match symbol {
+            Symbol::Time => "t".into(),
+            Symbol::State(i) => self.states[i].name.to_string(),
+            Symbol::StateDot(i) => format!("der({})", self.states[i].name),
+            Symbol::Algebraic(i) => self.algebraic[i].name.to_string(),
+            Symbol::AlgebraicDot(i) => format!("der({})", self.algebraic[i].name),
+            Symbol::Input(i) => self.inputs[i].name.to_string(),
+            Symbol::InputDot(i) => format!("der({})", self.inputs[i].name),
+            Symbol::Param(i) => self.params[i].name.to_string(),
+            Symbol::IterationCoefficient => "c".into(),
+            Symbol::TrackingInput(i) => format!("w_{}", self.outputs[i].name),
+        }
+    }
+
+    /// Readable text of an expression of the graph.
+    pub fn display(&self, e: ExprId) -> String {
+        self.graph
+            .display(e, &|v| self.symbol_name(self.symbols.symbol(v)))
+    }
+}

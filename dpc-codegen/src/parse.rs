@@ -1,0 +1,346 @@
+//! Syntax of the `model!` DSL, parsed with `syn`.
+//!
+//! This layer only recognises the shape of a model: sections, declared names and the
+//! expressions inside them, all with their spans. It does not resolve names or check
+//! counts; [`crate::lower`] does that and reports every problem it finds at once.
+//!
+//! ```text
+//! model      := attr* vis Ident '{' item* '}'
+//! item       := section | 'let' Ident '=' expr ';'
+//! section    := 'params' '{' (attr* Ident '=' expr),* '}'
+//!             | ('states' | 'algebraic' | 'inputs') '{' (attr* Ident),* '}'
+//!             | 'equations' '{' (expr ';')* '}'
+//!             | 'outputs' '{' (attr* Ident ('=' expr)?),* '}'
+//!             | 'references' '{' (Ident '=' expr),* '}'
+//!             | 'tracking' Ident '{' (Ident ':' '[' expr,* ']'),* '}'
+//! ```
+
+use proc_macro2::Span;
+use syn::parse::{Parse, ParseStream};
+use syn::punctuated::Punctuated;
+use syn::{braced, bracketed, Attribute, Expr, Ident, Token, Visibility};
+
+/// The sections a model may contain, in the order they must appear.
+pub const SECTION_ORDER: &[&str] = &[
+    "params",
+    "states",
+    "algebraic",
+    "inputs",
+    "equations",
+    "outputs",
+    "references",
+    "tracking",
+];
+
+/// A whole `model!` invocation.
+pub struct ModelDef {
+    /// Outer attributes, in particular the doc comment.
+    pub attrs: Vec<Attribute>,
+    /// Visibility of the generated types.
+    pub vis: Visibility,
+    /// The model's name (and of the generated type).
+    pub name: Ident,
+    /// Sections and `let` intermediates in source order.
+    pub items: Vec<Item>,
+    /// Span of the model body's braces, for errors about missing sections.
+    pub body_span: Span,
+}
+
+/// One item of a model body.
+pub enum Item {
+    /// A section such as `states { ... }`.
+    Section(Section),
+    /// `let name = expr;`, an intermediate shared by all equations and outputs.
+    Let(LetDef),
+}
+
+/// A `let` intermediate.
+pub struct LetDef {
+    /// The `let` keyword (for spans).
+    pub let_token: Token![let],
+    /// The defined name.
+    pub name: Ident,
+    /// Its defining expression.
+    pub expr: Expr,
+}
+
+/// A named section with its keyword.
+pub struct Section {
+    /// The section keyword (`params`, `states`, ...), for spans and messages.
+    pub keyword: Ident,
+    /// Its contents.
+    pub body: SectionBody,
+    /// Span of the braces, for "empty section" errors.
+    pub brace_span: Span,
+}
+
+/// The contents of a section, by kind.
+pub enum SectionBody {
+    /// `params { m = 1.0, ... }`.
+    Params(Vec<ParamDef>),
+    /// `states { ... }`.
+    States(Vec<NameDef>),
+    /// `algebraic { ... }`.
+    Algebraic(Vec<NameDef>),
+    /// `inputs { ... }`.
+    Inputs(Vec<NameDef>),
+    /// `equations { ...; ... }`.
+    Equations(Vec<Expr>),
+    /// `outputs { y, z = expr }`.
+    Outputs(Vec<OutputDef>),
+    /// `references { theta = expr_of_t }`.
+    References(Vec<ReferenceDef>),
+    /// `tracking Name { output: [roots...] }`.
+    Tracking(TrackingDef),
+}
+
+/// A declared name with its attributes (doc comments).
+pub struct NameDef {
+    /// Outer attributes; only doc comments are accepted.
+    pub attrs: Vec<Attribute>,
+    /// The name.
+    pub name: Ident,
+}
+
+/// `name = default` in `params`.
+pub struct ParamDef {
+    /// Outer attributes; only doc comments are accepted.
+    pub attrs: Vec<Attribute>,
+    /// Parameter name.
+    pub name: Ident,
+    /// Default value as written (checked to be numeric by the lowering).
+    pub default: Expr,
+}
+
+/// An output: a bare name (`theta`, the state of that name) or `name = expr`.
+pub struct OutputDef {
+    /// Outer attributes; only doc comments are accepted.
+    pub attrs: Vec<Attribute>,
+    /// Output name.
+    pub name: Ident,
+    /// Its expression; `None` means the declared variable of the same name.
+    pub expr: Option<Expr>,
+}
+
+/// A reference trajectory written as an expression of `t`.
+pub struct ReferenceDef {
+    /// The output it is a reference for.
+    pub output: Ident,
+    /// Its expression in `t` and parameters.
+    pub expr: Expr,
+}
+
+/// The `tracking` section: the name of the generated tracking type and `W_i` per output.
+pub struct TrackingDef {
+    /// Name of the generated tracking-DAE type.
+    pub type_name: Ident,
+    /// Per output, the negated roots of `W_i(s)`.
+    pub entries: Vec<TrackingEntry>,
+}
+
+/// `output: [a1, a2, ...]`, meaning `W(s) = (s + a1)(s + a2)...`.
+pub struct TrackingEntry {
+    /// The output's name.
+    pub output: Ident,
+    /// The bracket, for spans of the whole list.
+    pub bracket_span: Span,
+    /// The negated roots as written.
+    pub roots: Vec<Expr>,
+}
+
+impl Parse for ModelDef {
+    fn parse(input: ParseStream) -> syn::Result<Self> {
+        let attrs = input.call(Attribute::parse_outer)?;
+        let vis: Visibility = input.parse()?;
+        let name: Ident = input.parse().map_err(|e| {
+            syn::Error::new(
+                e.span(),
+                "expected the model's name, e.g. `pub Wheel { ... }`",
+            )
+        })?;
+        let body;
+        let brace = braced!(body in input);
+        let mut items = Vec::new();
+        while !body.is_empty() {
+            items.push(body.parse()?);
+        }
+        if !input.is_empty() {
+            return Err(
+                input.error("unexpected tokens after the model body; one model per `model!`")
+            );
+        }
+        Ok(ModelDef {
+            attrs,
+            vis,
+            name,
+            items,
+            body_span: brace.span.join(),
+        })
+    }
+}
+
+impl Parse for Item {
+    fn parse(input: ParseStream) -> syn::Result<Self> {
+        if input.peek(Token![let]) {
+            let let_token: Token![let] = input.parse()?;
+            let name: Ident = input.parse()?;
+            input.parse::<Token![=]>()?;
+            let expr: Expr = input.parse()?;
+            input.parse::<Token![;]>().map_err(|e| {
+                syn::Error::new(e.span(), "expected `;` after the `let` intermediate")
+            })?;
+            return Ok(Item::Let(LetDef {
+                let_token,
+                name,
+                expr,
+            }));
+        }
+        let keyword: Ident = input.call(syn::ext::IdentExt::parse_any).map_err(|e| {
+            syn::Error::new(
+                e.span(),
+                format!(
+                    "expected a section ({}) or a `let` intermediate",
+                    SECTION_ORDER.join(", ")
+                ),
+            )
+        })?;
+        let kw = keyword.to_string();
+        let body_span;
+        let body = match kw.as_str() {
+            "params" => {
+                let content;
+                body_span = braced!(content in input).span.join();
+                SectionBody::Params(comma_list(&content, parse_param)?)
+            }
+            "states" | "algebraic" | "inputs" => {
+                let content;
+                body_span = braced!(content in input).span.join();
+                let names = comma_list(&content, parse_name)?;
+                match kw.as_str() {
+                    "states" => SectionBody::States(names),
+                    "algebraic" => SectionBody::Algebraic(names),
+                    _ => SectionBody::Inputs(names),
+                }
+            }
+            "equations" => {
+                let content;
+                body_span = braced!(content in input).span.join();
+                let mut eqs = Vec::new();
+                while !content.is_empty() {
+                    eqs.push(content.parse::<Expr>()?);
+                    if content.is_empty() {
+                        break;
+                    }
+                    content
+                        .parse::<Token![;]>()
+                        .map_err(|e| syn::Error::new(e.span(), "expected `;` after an equation"))?;
+                }
+                SectionBody::Equations(eqs)
+            }
+            "outputs" => {
+                let content;
+                body_span = braced!(content in input).span.join();
+                SectionBody::Outputs(comma_list(&content, parse_output)?)
+            }
+            "references" => {
+                let content;
+                body_span = braced!(content in input).span.join();
+                SectionBody::References(comma_list(&content, |c| {
+                    let output: Ident = c.parse()?;
+                    c.parse::<Token![=]>()?;
+                    Ok(ReferenceDef {
+                        output,
+                        expr: c.parse()?,
+                    })
+                })?)
+            }
+            "tracking" => {
+                let type_name: Ident = input.parse().map_err(|e| {
+                    syn::Error::new(
+                        e.span(),
+                        "expected the name of the generated tracking type, e.g. `tracking WheelTracking { theta: [5.0] }`",
+                    )
+                })?;
+                let content;
+                body_span = braced!(content in input).span.join();
+                let entries = comma_list(&content, |c| {
+                    let output: Ident = c.parse()?;
+                    c.parse::<Token![:]>()?;
+                    let list;
+                    let bracket = bracketed!(list in c);
+                    let roots = Punctuated::<Expr, Token![,]>::parse_terminated(&list)?;
+                    Ok(TrackingEntry {
+                        output,
+                        bracket_span: bracket.span.join(),
+                        roots: roots.into_iter().collect(),
+                    })
+                })?;
+                SectionBody::Tracking(TrackingDef { type_name, entries })
+            }
+            _ => {
+                return Err(syn::Error::new(
+                    keyword.span(),
+                    format!(
+                        "unknown section `{kw}`; expected one of: {}, or `let name = expr;`",
+                        SECTION_ORDER.join(", ")
+                    ),
+                ))
+            }
+        };
+        Ok(Item::Section(Section {
+            keyword,
+            body,
+            brace_span: body_span,
+        }))
+    }
+}
+
+fn comma_list<T>(
+    input: ParseStream,
+    f: impl Fn(ParseStream) -> syn::Result<T>,
+) -> syn::Result<Vec<T>> {
+    let mut out = Vec::new();
+    while !input.is_empty() {
+        out.push(f(input)?);
+        if input.is_empty() {
+            break;
+        }
+        input.parse::<Token![,]>()?;
+    }
+    Ok(out)
+}
+
+fn parse_name(input: ParseStream) -> syn::Result<NameDef> {
+    Ok(NameDef {
+        attrs: input.call(Attribute::parse_outer)?,
+        name: input.parse()?,
+    })
+}
+
+fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
+    let attrs = input.call(Attribute::parse_outer)?;
+    let name: Ident = input.parse()?;
+    input.parse::<Token![=]>().map_err(|e| {
+        syn::Error::new(
+            e.span(),
+            format!("expected `= <default>` after parameter `{name}`, e.g. `{name} = 1.0`"),
+        )
+    })?;
+    Ok(ParamDef {
+        attrs,
+        name,
+        default: input.parse()?,
+    })
+}
+
+fn parse_output(input: ParseStream) -> syn::Result<OutputDef> {
+    let attrs = input.call(Attribute::parse_outer)?;
+    let name: Ident = input.parse()?;
+    let expr = if input.peek(Token![=]) {
+        input.parse::<Token![=]>()?;
+        Some(input.parse()?)
+    } else {
+        None
+    };
+    Ok(OutputDef { attrs, name, expr })
+}

@@ -1,0 +1,12 @@
+dpc::model! {
+    pub Plant {
+        states { x }
+        algebraic { z }
+        equations {
+            der(x) = z;
+            der(z) == x;
+        }
+    }
+}
+
+fn main() {}

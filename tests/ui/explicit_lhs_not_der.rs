@@ -1,0 +1,10 @@
+dpc::model! {
+    pub Plant {
+        states { x }
+        equations {
+            x = der(x);
+        }
+    }
+}
+
+fn main() {}

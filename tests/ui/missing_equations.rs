@@ -1,0 +1,7 @@
+dpc::model! {
+    pub Plant {
+        states { x }
+    }
+}
+
+fn main() {}

@@ -1,0 +1,10 @@
+dpc::model! {
+    pub Plant {
+        states { x }
+        equations {
+            der(x) + x;
+        }
+    }
+}
+
+fn main() {}

@@ -1,0 +1,11 @@
+dpc::model! {
+    pub Plant {
+        states { x, v }
+        equations {
+            der(x) = v;
+            der(x) = -v;
+        }
+    }
+}
+
+fn main() {}

@@ -1,0 +1,10 @@
+dpc::model! {
+    pub Plant {
+        states { x }
+        equations {
+            der(x) = -sigmoid(x);
+        }
+    }
+}
+
+fn main() {}
