@@ -390,6 +390,35 @@ proptest! {
             prop_assert_eq!(q, one);
         }
         prop_assert_eq!(g.powi(ea, 1), ea);
+        // constants gather, powers merge
+        let (c1, c2, c3, c6) = (g.constant(1.0), g.constant(2.0), g.constant(3.0), g.constant(6.0));
+        // Folded constants may round differently ((c + 1) + 2 vs c + 3): same shape, and the
+        // same value up to rounding.
+        let same = |g: &Graph, l: ExprId, r: ExprId| {
+            let at = |v: Var| [0.3, -0.7, 1.1][v.0 as usize];
+            let (vl, vr) = (g.eval(l, &at), g.eval(r, &at));
+            l == r
+                || (g.size(&[l]) == g.size(&[r])
+                    && (vl == vr || (vl - vr).abs() <= 1e-14 * vl.abs().max(vr.abs())
+                        || (vl.is_nan() && vr.is_nan())))
+        };
+        let a1 = g.add(ea, c1);
+        let lhs = g.add(a1, c2);
+        let rhs = g.add(ea, c3);
+        prop_assert!(same(&g, lhs, rhs));
+        let a3 = g.mul(c3, ea);
+        let lhs = g.mul(c2, a3);
+        let rhs = g.mul(c6, ea);
+        prop_assert!(same(&g, lhs, rhs));
+        let p2 = g.powi(ea, 2);
+        let lhs = g.powi(p2, 3);
+        prop_assert_eq!(lhs, g.powi(ea, 6));
+        let sq = g.mul(ea, ea);
+        prop_assert_eq!(sq, g.powi(ea, 2));
+        // identity substitution keeps the node
+        let x0 = g.var(Var(0));
+        let same = g.substitute(ea, &HashMap::from([(Var(0), x0)]));
+        prop_assert_eq!(same, ea);
         // rebuilding the same tree in a fresh graph gives the same printed form
         let mut h = Graph::new();
         let ha = build(&mut h, &a);
