@@ -79,7 +79,19 @@ fn tree() -> impl Strategy<Value = T> {
                 T::F(f, bx(a))
             }),
             pair.clone().prop_map(|(a, b)| T::Atan2(bx(a), bx(b))),
-            pair.prop_map(|(a, b)| T::Hypot(bx(a), bx(b))),
+            pair.clone().prop_map(|(a, b)| T::Hypot(bx(a), bx(b))),
+            // the same subtree used twice: a shared node in the DAG
+            inner
+                .clone()
+                .prop_map(|a| T::Mul(bx(T::F(Func::Sin, bx(a.clone()))), bx(a))),
+            inner.clone().prop_map(|a| T::Div(
+                bx(a.clone()),
+                bx(T::Add(bx(T::C(1.0)), bx(T::Powi(bx(a), 2))))
+            )),
+            pair.prop_map(|(a, b)| T::Sub(
+                bx(T::Mul(bx(a.clone()), bx(b.clone()))),
+                bx(T::Hypot(bx(a), bx(b)))
+            )),
         ]
     })
 }
@@ -410,9 +422,12 @@ proptest! {
         let lhs = g.mul(c2, a3);
         let rhs = g.mul(c6, ea);
         prop_assert!(same(&g, lhs, rhs));
-        let p2 = g.powi(ea, 2);
-        let lhs = g.powi(p2, 3);
-        prop_assert_eq!(lhs, g.powi(ea, 6));
+        // (for constants, folding of c^2 but not of an overflowing c^6 may differ)
+        if g.as_constant(ea).is_none() {
+            let p2 = g.powi(ea, 2);
+            let lhs = g.powi(p2, 3);
+            prop_assert_eq!(lhs, g.powi(ea, 6));
+        }
         let sq = g.mul(ea, ea);
         prop_assert_eq!(sq, g.powi(ea, 2));
         // identity substitution keeps the node
