@@ -60,4 +60,29 @@ mod tests {
         // untouched expression keeps its id
         assert_eq!(g.substitute(e, &HashMap::from([(Var(5), two)])), e);
     }
+
+    #[test]
+    fn deep_shared_dag_is_linear() {
+        // e <- sin(e) * e + e, 200 times: a tree of 3^200 leaves, a DAG of ~600 nodes.
+        let mut g = Graph::new();
+        let (x, y) = (g.var(Var(0)), g.var(Var(1)));
+        let mut e = x;
+        for _ in 0..200 {
+            let s = g.func(Func::Sin, e);
+            let p = g.mul(s, e);
+            e = g.add(p, e);
+        }
+        let one = g.constant(1.0);
+        let y1 = g.add(y, one);
+        let before = g.len();
+        let r = g.substitute(e, &HashMap::from([(Var(0), y1)]));
+        assert!(
+            g.len() - before <= 3 * 200 + 1,
+            "{} new nodes",
+            g.len() - before
+        );
+        assert_eq!(g.size(&[r]), g.size(&[e]) + 2);
+        let v = g.eval(r, &|_| 0.25);
+        assert_eq!(v, g.eval(e, &|_| 1.25));
+    }
 }
