@@ -14,122 +14,11 @@
 
 use std::collections::HashMap;
 
+mod symbolic_common;
+
 use dpc_codegen::symbolic::{ExprId, Func, Graph, Var};
 use proptest::prelude::*;
-
-const NVARS: u32 = 3;
-
-/// A random expression, built into a graph through the public constructors.
-#[derive(Clone, Debug)]
-enum T {
-    V(u32),
-    C(f64),
-    Add(Box<T>, Box<T>),
-    Sub(Box<T>, Box<T>),
-    Mul(Box<T>, Box<T>),
-    Div(Box<T>, Box<T>),
-    Neg(Box<T>),
-    Powi(Box<T>, i32),
-    Powf(Box<T>, Box<T>),
-    F(Func, Box<T>),
-    Atan2(Box<T>, Box<T>),
-    Hypot(Box<T>, Box<T>),
-}
-
-fn bx(t: T) -> Box<T> {
-    Box::new(t)
-}
-
-/// `t^2 + 1/2`: keeps arguments of sqrt, ln and powf bases positive.
-fn positive(t: T) -> T {
-    T::Add(bx(T::Powi(bx(t), 2)), bx(T::C(0.5)))
-}
-
-/// `0.9 tanh(t)`: keeps arguments of asin and acos inside (-1, 1).
-fn unit(t: T) -> T {
-    T::Mul(bx(T::C(0.9)), bx(T::F(Func::Tanh, bx(t))))
-}
-
-fn tree() -> impl Strategy<Value = T> {
-    let leaf = prop_oneof![
-        (0..NVARS).prop_map(T::V),
-        (-6i32..=6).prop_map(|k| T::C(f64::from(k) * 0.5)),
-    ];
-    leaf.prop_recursive(4, 32, 2, |inner| {
-        let pair = (inner.clone(), inner.clone());
-        prop_oneof![
-            pair.clone().prop_map(|(a, b)| T::Add(bx(a), bx(b))),
-            pair.clone().prop_map(|(a, b)| T::Sub(bx(a), bx(b))),
-            pair.clone().prop_map(|(a, b)| T::Mul(bx(a), bx(b))),
-            pair.clone().prop_map(|(a, b)| T::Div(bx(a), bx(b))),
-            inner.clone().prop_map(|a| T::Neg(bx(a))),
-            (inner.clone(), -3i32..=4).prop_map(|(a, n)| T::Powi(bx(a), n)),
-            pair.clone()
-                .prop_map(|(a, b)| T::Powf(bx(positive(a)), bx(b))),
-            // constant exponents on any base (negative bases are fine for integral ones)
-            (inner.clone(), -4i32..=6)
-                .prop_map(|(a, k)| T::Powf(bx(a), bx(T::C(f64::from(k) * 0.5)))),
-            (inner.clone(), 0..Func::ALL.len()).prop_map(|(a, k)| {
-                let f = Func::ALL[k];
-                let a = match f {
-                    Func::Sqrt | Func::Ln => positive(a),
-                    Func::Asin | Func::Acos => unit(a),
-                    _ => a,
-                };
-                T::F(f, bx(a))
-            }),
-            pair.clone().prop_map(|(a, b)| T::Atan2(bx(a), bx(b))),
-            pair.prop_map(|(a, b)| T::Hypot(bx(a), bx(b))),
-        ]
-    })
-}
-
-fn build(g: &mut Graph, t: &T) -> ExprId {
-    match t {
-        T::V(k) => g.var(Var(*k)),
-        T::C(c) => g.constant(*c),
-        T::Add(a, b) => {
-            let (a, b) = (build(g, a), build(g, b));
-            g.add(a, b)
-        }
-        T::Sub(a, b) => {
-            let (a, b) = (build(g, a), build(g, b));
-            g.sub(a, b)
-        }
-        T::Mul(a, b) => {
-            let (a, b) = (build(g, a), build(g, b));
-            g.mul(a, b)
-        }
-        T::Div(a, b) => {
-            let (a, b) = (build(g, a), build(g, b));
-            g.div(a, b)
-        }
-        T::Neg(a) => {
-            let a = build(g, a);
-            g.neg(a)
-        }
-        T::Powi(a, n) => {
-            let a = build(g, a);
-            g.powi(a, *n)
-        }
-        T::Powf(a, b) => {
-            let (a, b) = (build(g, a), build(g, b));
-            g.powf(a, b)
-        }
-        T::F(f, a) => {
-            let a = build(g, a);
-            g.func(*f, a)
-        }
-        T::Atan2(a, b) => {
-            let (a, b) = (build(g, a), build(g, b));
-            g.atan2(a, b)
-        }
-        T::Hypot(a, b) => {
-            let (a, b) = (build(g, a), build(g, b));
-            g.hypot(a, b)
-        }
-    }
-}
+use symbolic_common::{build, point, tree, NVARS, T};
 
 /// Forward-mode dual number `v + d ε`, written from the textbook rules.
 #[derive(Copy, Clone, Debug)]
@@ -229,10 +118,6 @@ fn dual(t: &T, x: &[f64], wrt: u32) -> Option<Dual> {
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * 1f64.max(a.abs()).max(b.abs())
-}
-
-fn point() -> impl Strategy<Value = Vec<f64>> {
-    proptest::collection::vec(-2.0f64..2.0, NVARS as usize)
 }
 
 /// Magnitude of the tree's intermediate values (sum of |value| over nodes): a cheap scale for
@@ -390,6 +275,38 @@ proptest! {
             prop_assert_eq!(q, one);
         }
         prop_assert_eq!(g.powi(ea, 1), ea);
+        // constants gather, powers merge
+        let (c1, c2, c3, c6) = (g.constant(1.0), g.constant(2.0), g.constant(3.0), g.constant(6.0));
+        // Folded constants may round differently ((c + 1) + 2 vs c + 3): same shape, and the
+        // same value up to rounding.
+        let same = |g: &Graph, l: ExprId, r: ExprId| {
+            let at = |v: Var| [0.3, -0.7, 1.1][v.0 as usize];
+            let (vl, vr) = (g.eval(l, &at), g.eval(r, &at));
+            l == r
+                || (g.size(&[l]) == g.size(&[r])
+                    && (vl == vr || (vl - vr).abs() <= 1e-14 * vl.abs().max(vr.abs())
+                        || (vl.is_nan() && vr.is_nan())))
+        };
+        let a1 = g.add(ea, c1);
+        let lhs = g.add(a1, c2);
+        let rhs = g.add(ea, c3);
+        prop_assert!(same(&g, lhs, rhs));
+        let a3 = g.mul(c3, ea);
+        let lhs = g.mul(c2, a3);
+        let rhs = g.mul(c6, ea);
+        prop_assert!(same(&g, lhs, rhs));
+        // (for constants, folding of c^2 but not of an overflowing c^6 may differ)
+        if g.as_constant(ea).is_none() {
+            let p2 = g.powi(ea, 2);
+            let lhs = g.powi(p2, 3);
+            prop_assert_eq!(lhs, g.powi(ea, 6));
+        }
+        let sq = g.mul(ea, ea);
+        prop_assert_eq!(sq, g.powi(ea, 2));
+        // identity substitution keeps the node
+        let x0 = g.var(Var(0));
+        let same = g.substitute(ea, &HashMap::from([(Var(0), x0)]));
+        prop_assert_eq!(same, ea);
         // rebuilding the same tree in a fresh graph gives the same printed form
         let mut h = Graph::new();
         let ha = build(&mut h, &a);

@@ -330,6 +330,13 @@ impl Graph {
                     return self.mul(c, r);
                 }
             }
+            let (xa, na) = self.split_pow(a);
+            let (xb, nb) = self.split_pow(b);
+            if xa == xb {
+                if let Some(n) = na.checked_add(nb) {
+                    return self.powi(xa, n);
+                }
+            }
             // (k / d) * q = k * (q / d): turns the `1 / a` of derivative rules into `q / a`.
             // Only for constant numerators: `(a / b) * c` keeps `a / b`, which is often shared.
             for (p, q) in [(a, b), (b, a)] {
@@ -340,13 +347,6 @@ impl Graph {
                             return self.mul(n, r);
                         }
                     }
-                }
-            }
-            let (xa, na) = self.split_pow(a);
-            let (xb, nb) = self.split_pow(b);
-            if xa == xb {
-                if let Some(n) = na.checked_add(nb) {
-                    return self.powi(xa, n);
                 }
             }
             // x^n * (x^m * y) = x^(n+m) * y, one level deep: `r * (m * r) = m * r^2`.

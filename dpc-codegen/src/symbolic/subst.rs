@@ -60,4 +60,31 @@ mod tests {
         // untouched expression keeps its id
         assert_eq!(g.substitute(e, &HashMap::from([(Var(5), two)])), e);
     }
+
+    #[test]
+    fn deep_shared_dag_is_linear() {
+        // e <- sin(e) * e + e, 200 times: a tree of 3^200 leaves, a DAG of ~600 nodes.
+        let mut g = Graph::new();
+        let (x, y) = (g.var(Var(0)), g.var(Var(1)));
+        let mut e = x;
+        for _ in 0..200 {
+            let s = g.func(Func::Sin, e);
+            let p = g.mul(s, e);
+            e = g.add(p, e);
+        }
+        let one = g.constant(1.0);
+        let y1 = g.add(y, one);
+        let before = g.len();
+        let r = g.substitute(e, &HashMap::from([(Var(0), y1)]));
+        // ~3 rebuilt nodes per level, +1 because the `+ 1` of y + 1 floats outward through
+        // every sum: linear, nowhere near the tree size.
+        let added = g.len() - before;
+        assert!(added <= 4 * 200 + 1, "{added} new nodes");
+        assert!(g.size(&[r]) <= 4 * 200 + 4, "{}", g.size(&[r]));
+        // Compare near 0, where the iteration e(1 + sin e) is tame (far from 0 it amplifies
+        // rounding chaotically over 200 levels).
+        let v = g.eval(r, &|_| -0.999);
+        let w = g.eval(e, &|_| 0.001);
+        assert!((v - w).abs() <= 1e-12 * w.abs(), "{v} vs {w}");
+    }
 }
