@@ -13,6 +13,7 @@
 //! exported as pattern constants. Function parameters use `__`-prefixed names, which the DSL
 //! forbids in user names, so user names can be bound as plain locals without shadowing.
 
+use crate::hirschorn::TrackingRow;
 use crate::ir::{Model, Symbol};
 use crate::symbolic::{ExprId, Var};
 use proc_macro2::{Ident, Span, TokenStream};
@@ -34,23 +35,10 @@ impl Block {
 
 /// Jacobian of `rows` with respect to the variables of `symbols`, skipping structural zeros.
 pub fn jacobian(model: &mut Model, rows: &[ExprId], symbols: &[Symbol]) -> Block {
-    let mut entries = Vec::new();
-    for (i, &r) in rows.iter().enumerate() {
-        let deps = model.graph.vars(r);
-        for (j, &s) in symbols.iter().enumerate() {
-            let Some(v) = model.symbols.lookup(s) else {
-                continue;
-            };
-            if !deps.contains(&v) {
-                continue;
-            }
-            let d = model.graph.diff(r, v);
-            if !model.graph.is_zero(d) {
-                entries.push((i, j, d));
-            }
-        }
+    let vars: Vec<Var> = symbols.iter().map(|s| model.var(*s)).collect();
+    Block {
+        entries: model.graph.jacobian(rows, &vars),
     }
-    Block { entries }
 }
 
 /// Straight-line code for a set of roots, with the locals it needs bound from the
@@ -241,8 +229,10 @@ pub struct DaeType {
     pub listing: String,
 }
 
-/// Emit all items for a lowered model: the parameter struct and the plant type.
-pub fn emit_model(model: &mut Model) -> TokenStream {
+/// Emit all items for a lowered model: the parameter struct, the plant type, and, with a
+/// `tracking` section, the tracking DAE (`rows` from [`crate::hirschorn::tracking_rows`]);
+/// with a `references` section, the reference type.
+pub fn emit_model(model: &mut Model, rows: Option<&[TrackingRow]>) -> TokenStream {
     let params = emit_params(model);
     let plant = DaeType {
         name: model.name.clone(),
@@ -257,8 +247,238 @@ pub fn emit_model(model: &mut Model) -> TokenStream {
             .collect(),
         listing: listing(model),
     };
-    let plant = emit_dae_type(model, &plant);
-    quote!(#params #plant)
+    let plant_tokens = emit_dae_type(model, &plant);
+    let relative_degrees = crate::hirschorn::relative_degrees(model);
+    let degrees = option_list(&relative_degrees);
+    let name = &model.name;
+    let diagnostics = quote! {
+        impl #name {
+            /// Per output, the relative degree: the number of total time derivatives after
+            /// which an input appears (`None` where it is not defined). Computed at compile
+            /// time, exactly along explicit equations and structurally through implicit ones.
+            pub const RELATIVE_DEGREES: &'static [::core::option::Option<usize>] = #degrees;
+        }
+    };
+    let tracking = match rows {
+        Some(rows) => emit_tracking(model, rows, &relative_degrees),
+        None => TokenStream::new(),
+    };
+    let references = emit_references(model, rows);
+    quote!(#params #plant_tokens #diagnostics #tracking #references)
+}
+
+fn option_list(values: &[Option<usize>]) -> TokenStream {
+    let items = values.iter().map(|v| match v {
+        Some(r) => quote!(::core::option::Option::Some(#r)),
+        None => quote!(::core::option::Option::None),
+    });
+    quote!(&[#(#items),*])
+}
+
+/// The tracking DAE type: the plant equations plus one constraint row per output, in the
+/// unknowns `(X, [Z; U])` with the inputs `w`.
+fn emit_tracking(
+    model: &mut Model,
+    rows: &[TrackingRow],
+    relative_degrees: &[Option<usize>],
+) -> TokenStream {
+    let Some(tracking) = model.tracking.clone() else {
+        return TokenStream::new();
+    };
+    let mut layout = Layout::plant(model);
+    let inputs = std::mem::take(&mut layout.inputs);
+    layout.algebraic.extend(inputs);
+    layout.inputs = (0..model.outputs.len())
+        .map(Symbol::TrackingInput)
+        .collect();
+
+    let mut residuals: Vec<ExprId> = model.equations.iter().map(|e| e.residual).collect();
+    let mut texts: Vec<String> = model.equations.iter().map(|e| e.text.clone()).collect();
+    let mut listing_text = listing(model);
+    let input_names: Vec<String> = model.inputs.iter().map(|d| d.name.to_string()).collect();
+    let w_names: Vec<String> = model
+        .outputs
+        .iter()
+        .map(|o| format!("w_{}", o.name))
+        .collect();
+    listing_text += &format!(
+        "tracking {}: the equations above, with {} as algebraic unknowns and inputs {}, plus\n",
+        tracking.type_name,
+        input_names.join(", "),
+        w_names.join(", ")
+    );
+    for row in rows {
+        let out = model.outputs[row.output].name.to_string();
+        let roots: Vec<f64> = tracking
+            .entries
+            .iter()
+            .find(|e| e.output == row.output)
+            .map(|e| e.roots.clone())
+            .unwrap_or_default();
+        listing_text += &format!(
+            "  output {out}: W(s) = {}\n",
+            crate::hirschorn::polynomial_text(&roots)
+        );
+        for (k, d) in row.derivatives.iter().enumerate().skip(1) {
+            let order = match k {
+                1 => "d/dt".to_string(),
+                _ => format!("d^{k}/dt^{k}"),
+            };
+            listing_text += &format!("    {order} {out} = {}\n", model.display(*d));
+        }
+        let text = format!("{} == w_{out}", model.display(row.combination));
+        listing_text += &format!("    {text}\n");
+        residuals.push(row.row);
+        texts.push(text);
+    }
+    let plant_name = model.name.clone();
+    let doc = format!(
+        " The tracking DAE of [`{plant_name}`]: its equations plus `W_i(d/dt) h_i = w_i` per output, in the unknowns (states, algebraic unknowns and inputs of the plant); the inputs are `w_i = W_i(d/dt) xi_i` (see `dpc::core::TrackingDae`)."
+    );
+    let ty = DaeType {
+        name: tracking.type_name.clone(),
+        docs: vec![syn::parse_quote!(#[doc = #doc])],
+        layout,
+        residuals,
+        equation_texts: texts,
+        outputs: model
+            .outputs
+            .iter()
+            .map(|o| (o.name.to_string(), o.expr))
+            .collect(),
+        listing: listing_text,
+    };
+    let tokens = emit_dae_type(model, &ty);
+    let name = &tracking.type_name;
+    let coeffs = rows.iter().map(|r| {
+        let c = &r.coefficients;
+        quote!(&[#(#c),*])
+    });
+    let degrees = option_list(relative_degrees);
+    quote! {
+        #tokens
+
+        impl ::dpc::core::TrackingDae for #name {
+            type Plant = #plant_name;
+            const W_COEFFICIENTS: &'static [&'static [f64]] = &[#(#coeffs),*];
+            const RELATIVE_DEGREES: &'static [::core::option::Option<usize>] = #degrees;
+        }
+    }
+}
+
+/// The reference type `NameReference` for a `references` section: `xi_i(t)` and its exact
+/// derivatives up to one more than the tracking DAE needs.
+fn emit_references(model: &mut Model, rows: Option<&[TrackingRow]>) -> TokenStream {
+    if model.references.is_empty() {
+        return TokenStream::new();
+    }
+    let m = model.outputs.len();
+    let needed = rows
+        .map(|r| {
+            r.iter()
+                .map(|r| r.coefficients.len() - 1)
+                .max()
+                .unwrap_or(0)
+        })
+        .unwrap_or(0);
+    let max_order = needed + 1;
+    let time = model.var(Symbol::Time);
+    // roots[k * m + i] = d^k xi_i / dt^k.
+    let mut per_output: Vec<Vec<ExprId>> = Vec::new();
+    for i in 0..m {
+        let r = model
+            .references
+            .iter()
+            .find(|r| r.output == i)
+            .map(|r| r.expr)
+            .expect("lowering checks that every output has a reference");
+        let mut ds = vec![r];
+        for k in 0..max_order {
+            let d = model.graph.diff(ds[k], time);
+            ds.push(d);
+        }
+        per_output.push(ds);
+    }
+    let roots: Vec<ExprId> = (0..=max_order)
+        .flat_map(|k| per_output.iter().map(move |ds| ds[k]))
+        .collect();
+    let layout = Layout {
+        states: vec![],
+        algebraic: vec![],
+        inputs: vec![],
+    };
+    let r = routine(model, &layout, &roots);
+    let (prelude, stmts) = (r.prelude, r.statements);
+    let n = roots.len();
+    let values = r.roots;
+    let name = format_ident!("{}Reference", model.name);
+    let params_name = format_ident!("{}Params", model.name);
+    let vis = &model.vis;
+    let plant = &model.name;
+    let texts: Vec<String> = (0..m)
+        .map(|i| {
+            let r = model
+                .references
+                .iter()
+                .find(|r| r.output == i)
+                .expect("checked");
+            format!(" * `{} = {}`", model.outputs[i].name, r.text)
+        })
+        .collect();
+    let doc = format!(
+        " The references declared for [`{plant}`], with exact derivatives up to order {max_order} generated symbolically:"
+    );
+    quote! {
+        #[doc = #doc]
+        #[doc = ""]
+        #(#[doc = #texts])*
+        #[derive(Debug, Clone, Copy, PartialEq, Default)]
+        #vis struct #name {
+            /// The model's parameters (references may use them).
+            pub params: #params_name,
+        }
+
+        #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens, non_snake_case)]
+        impl #name {
+            /// The highest derivative order provided.
+            pub const MAX_ORDER: usize = #max_order;
+
+            fn all_derivatives(&self, __t: f64) -> [f64; #n] {
+                #prelude
+                #(#stmts)*
+                [#(#values),*]
+            }
+        }
+
+        impl ::dpc::core::Reference for #name {
+            fn dimension(&self) -> usize {
+                #m
+            }
+
+            fn max_order(&self) -> usize {
+                #max_order
+            }
+
+            fn derivatives(
+                &self,
+                t: f64,
+                order: usize,
+                out: &mut [f64],
+            ) -> ::core::result::Result<(), ::dpc::core::reference::ReferenceError> {
+                if order > #max_order {
+                    return ::core::result::Result::Err(::dpc::core::reference::ReferenceError::OrderTooHigh {
+                        name: ::core::stringify!(#name).into(),
+                        max: #max_order,
+                        requested: order,
+                    });
+                }
+                ::dpc::core::reference::check_buffer(#m, order, out)?;
+                let all = self.all_derivatives(t);
+                out.copy_from_slice(&all[..(order + 1) * #m]);
+                ::core::result::Result::Ok(())
+            }
+        }
+    }
 }
 
 /// The parameter struct `NameParams` with `Default` from the declared values.

@@ -15,6 +15,7 @@
 
 pub mod ctxt;
 pub mod emit;
+pub mod hirschorn;
 pub mod ir;
 pub mod lower;
 pub mod parse;
@@ -34,18 +35,14 @@ pub fn expand(input: TokenStream) -> TokenStream {
 
 /// Like [`expand`], but returns the errors instead of turning them into tokens.
 pub fn try_expand(input: TokenStream) -> syn::Result<TokenStream> {
-    let def: parse::ModelDef = syn::parse2(input)?;
+    let mut model = lower_model(input)?;
     let mut cx = ctxt::Ctxt::new();
-    let model = lower::lower(def, &mut cx);
-    cx.check()?;
-    let Some(mut model) = model else {
-        // `lower` returns `None` only after recording an error.
-        return Err(syn::Error::new(
-            proc_macro2::Span::call_site(),
-            "internal error: model lowering failed without a diagnostic",
-        ));
+    let tracking = match model.tracking {
+        Some(_) => hirschorn::tracking_rows(&mut model, &mut cx),
+        None => None,
     };
-    Ok(emit::emit_model(&mut model))
+    cx.check()?;
+    Ok(emit::emit_model(&mut model, tracking.as_deref()))
 }
 
 /// Lower a model without emitting code, for inspection and tests.

@@ -314,6 +314,21 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                 });
                             }
                         }
+                        let missing: Vec<String> = outputs
+                            .iter()
+                            .enumerate()
+                            .filter(|(i, _)| !seen.contains(i))
+                            .map(|(_, o)| format!("`{}`", o.name))
+                            .collect();
+                        if !missing.is_empty() && !list.is_empty() {
+                            lw.cx.error_spanned_by(
+                                &section.keyword,
+                                format!(
+                                    "`references` must give every output a reference; missing: {}",
+                                    missing.join(", ")
+                                ),
+                            );
+                        }
                     }
                     SectionBody::Tracking(t) => {
                         let mut entries: Vec<TrackingEntry> = Vec::new();

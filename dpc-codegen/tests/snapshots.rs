@@ -60,3 +60,8 @@ fn wheel_models() {
 fn pendulum_model() {
     snapshot_file("pendulum.rs", &["Pendulum"]);
 }
+
+#[test]
+fn flexible_joint_model() {
+    snapshot_file("flexible_joint.rs", &["FlexibleJoint"]);
+}

@@ -6,12 +6,18 @@
 //! * [`model`]: the trait that `dpc::model!` implements for every declared plant
 //!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`), and the adapter
 //!   that turns a model with given inputs into an [`dae::ImplicitDae`];
-//! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes.
+//! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
+//! * [`reference`]: reference trajectories with exact derivatives;
+//! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model.
 
 pub mod dae;
 pub mod model;
+pub mod reference;
 pub mod sink;
+pub mod tracking;
 
 pub use dae::ImplicitDae;
 pub use model::{DaeModel, ModelDae};
+pub use reference::Reference;
 pub use sink::MatrixSink;
+pub use tracking::TrackingDae;

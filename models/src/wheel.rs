@@ -46,6 +46,11 @@ dpc::model! {
                 == a4 * dphi * dtheta * sin(theta) + u2;
         }
         outputs { theta, psi }
+        references {
+            theta = FRAC_PI_2 + 0.1 * sin(t),
+            psi = -6.0 * t - 0.5 * (t * atan(t) - ln(1.0 + t.powi(2)) / 2.0),
+        }
+        tracking WheelTracking { theta: [5.0], psi: [5.0] }
     }
 }
 
@@ -65,5 +70,6 @@ dpc::model! {
             der(dpsi) = b2 * u2;
         }
         outputs { y1 = theta, y2 = psi }
+        tracking WheelLinearTracking { y1: [5.0], y2: [5.0] }
     }
 }

@@ -1,0 +1,475 @@
+//! Stabilised Hirschorn steps and relative degrees (paper, Section 2).
+//!
+//! A step replaces the output constraint `h_i - xi_i = 0` by `W_i(d/dt)(h_i - xi_i) = 0`
+//! with a stable `W_i(s) = prod_k (s + a_k)`. The total time derivative
+//! `d/dt h = sum_j dh/dx_j x_j' + dh/dt` is taken symbolically; where the model states
+//! `der(x_j) = f_j` explicitly, `x_j'` is replaced by `f_j`, so that chains of explicit
+//! equations are differentiated through. Each step lowers the index of the tracking DAE by one,
+//! so the integrator has to resolve less.
+//!
+//! The relative degree of an output (the number of differentiations after which an input
+//! appears) is computed exactly along explicit equations and, once implicit equations are
+//! reached, structurally: the derivatives of implicitly defined states and the algebraic
+//! unknowns are matched to the implicit equations (a maximum bipartite matching, as in
+//! Pantelides' algorithm), and each depends on everything its block of equations contains.
+//! The structural value is the generic one; it is exact unless coefficients cancel.
+
+use crate::ctxt::Ctxt;
+use crate::ir::{Model, Symbol};
+use crate::symbolic::{ExprId, Var};
+use std::collections::{BTreeSet, HashMap};
+
+/// Why a total time derivative cannot be taken symbolically.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Obstacle {
+    /// The expression depends on input `i`, whose derivative is not available.
+    Input(usize),
+    /// The expression depends on algebraic unknown `i`, whose derivative is not available.
+    Algebraic(usize),
+    /// The expression contains `x_j'` of a state without explicit equation, so its
+    /// derivative would need `x_j''`.
+    ImplicitDerivative(usize),
+}
+
+/// The total time derivative of `e` along the model, substituting explicit equations.
+pub fn total_derivative(model: &mut Model, e: ExprId) -> Result<ExprId, Obstacle> {
+    let explicit = explicit_rhs(model);
+    let mut dirs: Vec<(Var, ExprId)> = Vec::new();
+    let syms: Vec<(Var, Symbol)> = model
+        .graph
+        .vars(e)
+        .into_iter()
+        .map(|v| (v, model.symbols.symbol(v)))
+        .collect();
+    if let Some(o) = syms.iter().find_map(|(_, s)| match s {
+        Symbol::Input(i) => Some(Obstacle::Input(*i)),
+        _ => None,
+    }) {
+        return Err(o);
+    }
+    for (v, s) in syms {
+        match s {
+            Symbol::State(j) => {
+                let dx = match explicit.get(&j) {
+                    Some(&f) => f,
+                    None => {
+                        let dv = model.var(Symbol::StateDot(j));
+                        model.graph.var(dv)
+                    }
+                };
+                dirs.push((v, dx));
+            }
+            Symbol::Time => {
+                let one = model.graph.constant(1.0);
+                dirs.push((v, one));
+            }
+            Symbol::Param(_) | Symbol::IterationCoefficient | Symbol::TrackingInput(_) => {}
+            Symbol::StateDot(j) => return Err(Obstacle::ImplicitDerivative(j)),
+            Symbol::Algebraic(i) => return Err(Obstacle::Algebraic(i)),
+            Symbol::Input(i) | Symbol::InputDot(i) => return Err(Obstacle::Input(i)),
+            Symbol::AlgebraicDot(i) => return Err(Obstacle::Algebraic(i)),
+        }
+    }
+    Ok(model.graph.directional_derivative(e, &dirs))
+}
+
+/// `j -> f_j` for the explicit equations `der(x_j) = f_j`.
+fn explicit_rhs(model: &Model) -> HashMap<usize, ExprId> {
+    model.equations.iter().filter_map(|e| e.explicit).collect()
+}
+
+/// Symbols (states, inputs, time) each implicitly determined unknown depends on, or `None`
+/// if the implicit equations are structurally singular in the implicit unknowns (a plant of
+/// higher index, such as a mechanism with position constraints).
+fn implicit_dependencies(model: &Model) -> Option<HashMap<Symbol, BTreeSet<Symbol>>> {
+    let explicit = explicit_rhs(model);
+    let is_unknown = |s: &Symbol| match s {
+        Symbol::StateDot(j) => !explicit.contains_key(j),
+        Symbol::Algebraic(_) => true,
+        _ => false,
+    };
+    // Known symbols and unknowns of a set of variables, with explicit x_j' expanded.
+    let split = |vars: BTreeSet<Var>| -> (BTreeSet<Symbol>, BTreeSet<Symbol>) {
+        let mut known = BTreeSet::new();
+        let mut unknown = BTreeSet::new();
+        let mut stack: Vec<Var> = vars.into_iter().collect();
+        let mut seen = BTreeSet::new();
+        while let Some(v) = stack.pop() {
+            if !seen.insert(v) {
+                continue;
+            }
+            let s = model.symbols.symbol(v);
+            match s {
+                Symbol::State(_) | Symbol::Input(_) | Symbol::Time => {
+                    known.insert(s);
+                }
+                Symbol::StateDot(j) if !is_unknown(&s) => {
+                    stack.extend(model.graph.vars(explicit[&j]));
+                }
+                _ if is_unknown(&s) => {
+                    unknown.insert(s);
+                }
+                _ => {}
+            }
+        }
+        (known, unknown)
+    };
+    let mut unknowns: Vec<Symbol> = (0..model.states.len())
+        .filter(|j| !explicit.contains_key(j))
+        .map(Symbol::StateDot)
+        .collect();
+    unknowns.extend((0..model.algebraic.len()).map(Symbol::Algebraic));
+    let equations: Vec<(BTreeSet<Symbol>, BTreeSet<Symbol>)> = model
+        .equations
+        .iter()
+        .filter(|e| e.explicit.is_none())
+        .map(|e| split(model.graph.vars(e.residual)))
+        .collect();
+    if equations.len() != unknowns.len() {
+        return None;
+    }
+    // Maximum bipartite matching unknown -> equation by augmenting paths (Kuhn).
+    let mut owner: Vec<Option<usize>> = vec![None; equations.len()];
+    fn augment(
+        u: usize,
+        unknowns: &[Symbol],
+        equations: &[(BTreeSet<Symbol>, BTreeSet<Symbol>)],
+        owner: &mut [Option<usize>],
+        visited: &mut [bool],
+    ) -> bool {
+        for (e, (_, unk)) in equations.iter().enumerate() {
+            if visited[e] || !unk.contains(&unknowns[u]) {
+                continue;
+            }
+            visited[e] = true;
+            let free = match owner[e] {
+                None => true,
+                Some(o) => augment(o, unknowns, equations, owner, visited),
+            };
+            if free {
+                owner[e] = Some(u);
+                return true;
+            }
+        }
+        false
+    }
+    for u in 0..unknowns.len() {
+        let mut visited = vec![false; equations.len()];
+        if !augment(u, &unknowns, &equations, &mut owner, &mut visited) {
+            return None;
+        }
+    }
+    let mut eq_of = vec![0; unknowns.len()];
+    for (e, o) in owner.iter().enumerate() {
+        eq_of[o.expect("perfect matching")] = e;
+    }
+    // Fixpoint: an unknown depends on the known symbols of its equation and on whatever the
+    // other unknowns of that equation depend on.
+    let mut deps: Vec<BTreeSet<Symbol>> = eq_of.iter().map(|&e| equations[e].0.clone()).collect();
+    loop {
+        let mut changed = false;
+        for u in 0..unknowns.len() {
+            let others: Vec<usize> = equations[eq_of[u]]
+                .1
+                .iter()
+                .filter_map(|s| unknowns.iter().position(|x| x == s))
+                .filter(|&w| w != u)
+                .collect();
+            for w in others {
+                let add: Vec<Symbol> = deps[w].difference(&deps[u]).copied().collect();
+                if !add.is_empty() {
+                    changed = true;
+                    deps[u].extend(add);
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    Some(unknowns.into_iter().zip(deps).collect())
+}
+
+/// Per output, its relative degree, or `None` where it is not defined.
+pub fn relative_degrees(model: &mut Model) -> Vec<Option<usize>> {
+    let implicit = implicit_dependencies(model);
+    let outputs: Vec<ExprId> = model.outputs.iter().map(|o| o.expr).collect();
+    outputs
+        .into_iter()
+        .map(|h| relative_degree(model, h, implicit.as_ref()))
+        .collect()
+}
+
+fn relative_degree(
+    model: &mut Model,
+    h: ExprId,
+    implicit: Option<&HashMap<Symbol, BTreeSet<Symbol>>>,
+) -> Option<usize> {
+    let limit = model.states.len() + model.algebraic.len() + 1;
+    let mut e = h;
+    for r in 0..=limit {
+        match total_derivative(model, e) {
+            Ok(next) => e = next,
+            Err(Obstacle::Input(_)) => return Some(r),
+            Err(_) => {
+                // Continue structurally from the symbols of h^(r).
+                let implicit = implicit?;
+                let explicit = explicit_rhs(model);
+                let expand = |vars: BTreeSet<Var>| -> BTreeSet<Symbol> {
+                    let mut out = BTreeSet::new();
+                    for v in vars {
+                        let s = model.symbols.symbol(v);
+                        match s {
+                            Symbol::State(_) | Symbol::Input(_) | Symbol::Time => {
+                                out.insert(s);
+                            }
+                            _ => {
+                                if let Some(d) = implicit.get(&s) {
+                                    out.extend(d.iter().copied());
+                                }
+                            }
+                        }
+                    }
+                    out
+                };
+                let mut d = expand(model.graph.vars(e));
+                for r in r..=limit {
+                    if d.iter().any(|s| matches!(s, Symbol::Input(_))) {
+                        return Some(r);
+                    }
+                    let mut next = BTreeSet::new();
+                    for s in &d {
+                        if let Symbol::State(j) = s {
+                            match explicit.get(j) {
+                                Some(&f) => next.extend(expand(model.graph.vars(f))),
+                                None => {
+                                    if let Some(dep) = implicit.get(&Symbol::StateDot(*j)) {
+                                        next.extend(dep.iter().copied());
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    d = next;
+                }
+                return None;
+            }
+        }
+    }
+    None
+}
+
+/// `W(s)` as text, e.g. `(s + 2)(s + 3)`, `s`, or `1` for no step.
+pub fn polynomial_text(roots: &[f64]) -> String {
+    if roots.is_empty() {
+        return "1".into();
+    }
+    let factor = |a: f64| {
+        if a == 0.0 {
+            "s".to_string()
+        } else {
+            format!("(s + {a:?})")
+        }
+    };
+    if roots.len() == 1 {
+        return factor(roots[0])
+            .trim_start_matches('(')
+            .trim_end_matches(')')
+            .to_string();
+    }
+    roots.iter().map(|&a| factor(a)).collect()
+}
+
+/// Coefficients of `prod_k (s + a_k)`, lowest power first.
+pub fn polynomial_from_negated_roots(roots: &[f64]) -> Vec<f64> {
+    let mut c = vec![1.0];
+    for &a in roots {
+        let mut next = vec![0.0; c.len() + 1];
+        for (k, ck) in c.iter().enumerate() {
+            next[k] += a * ck;
+            next[k + 1] += ck;
+        }
+        c = next;
+    }
+    c
+}
+
+/// The constraint row of one output in the tracking DAE.
+pub struct TrackingRow {
+    /// Index of the output.
+    pub output: usize,
+    /// Coefficients of `W_i`, lowest power first.
+    pub coefficients: Vec<f64>,
+    /// `h_i, h_i', ..., h_i^(deg W_i)`.
+    pub derivatives: Vec<ExprId>,
+    /// `W_i(d/dt) h_i`.
+    pub combination: ExprId,
+    /// `W_i(d/dt) h_i - w_i`.
+    pub row: ExprId,
+}
+
+/// The constraint rows of the tracking DAE, one per output (outputs without an entry get
+/// `W_i = 1`), or `None` after recording errors for steps that cannot be taken.
+pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow>> {
+    let tracking = model.tracking.clone()?;
+    let (ny, nu) = (model.outputs.len(), model.inputs.len());
+    if ny != nu {
+        cx.error_at(
+            tracking.span,
+            format!(
+                "a tracking DAE needs as many outputs as inputs, but the model has {ny} output{} and {nu} input{}",
+                if ny == 1 { "" } else { "s" },
+                if nu == 1 { "" } else { "s" }
+            ),
+        );
+        return None;
+    }
+    let mut rows = Vec::new();
+    let mut ok = true;
+    for i in 0..ny {
+        let entry = tracking.entries.iter().find(|e| e.output == i);
+        let roots = entry.map(|e| e.roots.clone()).unwrap_or_default();
+        let coefficients = polynomial_from_negated_roots(&roots);
+        let mut derivatives = vec![model.outputs[i].expr];
+        for k in 0..roots.len() {
+            let last = derivatives[k];
+            match total_derivative(model, last) {
+                Ok(d) => derivatives.push(d),
+                Err(obstacle) => {
+                    let span = entry.map(|e| e.span).unwrap_or(tracking.span);
+                    let out = model.outputs[i].name.to_string();
+                    let n = roots.len();
+                    let steps = format!("{n} step{}", if n == 1 { "" } else { "s" });
+                    let limit = format!(
+                        "use at most {k} root{} for `{out}`",
+                        if k == 1 { "" } else { "s" }
+                    );
+                    let msg = match obstacle {
+                        Obstacle::Input(u) if k == 0 => format!(
+                            "cannot apply a Hirschorn step to output `{out}`: it depends on input `{}` directly (relative degree 0), so `W` must be empty; write `{out}: []` or remove the entry",
+                            model.inputs[u].name
+                        ),
+                        Obstacle::Input(u) => format!(
+                            "cannot apply {steps} to output `{out}`: its derivative of order {k} already depends on input `{}` (relative degree {k}), and a further step would need the input's derivative; {limit}",
+                            model.inputs[u].name
+                        ),
+                        Obstacle::Algebraic(z) => format!(
+                            "cannot apply {steps} to output `{out}`: its derivative of order {k} depends on the algebraic unknown `{}`, whose derivative is not available; {limit}",
+                            model.algebraic[z].name
+                        ),
+                        Obstacle::ImplicitDerivative(j) => {
+                            let x = &model.states[j].name;
+                            format!(
+                                "cannot apply {steps} to output `{out}`: its derivative of order {k} contains `der({x})`, so a further step would need the second derivative of `{x}`, which has no explicit equation `der({x}) = ...`; {limit}, or state `der({x})` explicitly"
+                            )
+                        }
+                    };
+                    cx.error_at(span, msg);
+                    ok = false;
+                    break;
+                }
+            }
+        }
+        if !ok {
+            continue;
+        }
+        let mut sum = model.graph.constant(0.0);
+        for (c, &d) in coefficients.iter().zip(&derivatives) {
+            let cc = model.graph.constant(*c);
+            let term = model.graph.mul(cc, d);
+            sum = model.graph.add(sum, term);
+        }
+        let wv = model.var(Symbol::TrackingInput(i));
+        let w = model.graph.var(wv);
+        let row = model.graph.sub(sum, w);
+        rows.push(TrackingRow {
+            output: i,
+            coefficients,
+            derivatives,
+            combination: sum,
+            row,
+        });
+    }
+    ok.then_some(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use quote::quote;
+
+    fn model(tokens: proc_macro2::TokenStream) -> Model {
+        crate::lower_model(tokens).expect("model lowers")
+    }
+
+    #[test]
+    fn polynomial_coefficients() {
+        assert_eq!(polynomial_from_negated_roots(&[]), vec![1.0]);
+        assert_eq!(polynomial_from_negated_roots(&[5.0]), vec![5.0, 1.0]);
+        assert_eq!(
+            polynomial_from_negated_roots(&[2.0, 3.0]),
+            vec![6.0, 5.0, 1.0]
+        );
+        assert_eq!(
+            polynomial_from_negated_roots(&[0.0, 0.0]),
+            vec![0.0, 0.0, 1.0]
+        );
+    }
+
+    #[test]
+    fn chain_of_integrators_has_its_length_as_relative_degree() {
+        let mut m = model(quote! {
+            Chain {
+                states { x1, x2, x3, x4 }
+                inputs { u, v }
+                equations {
+                    der(x1) = x2;
+                    der(x2) = x3;
+                    der(x3) = x4;
+                    der(x4) = u;
+                }
+                outputs { y = x1, z = x3 + x1, w = 2.0 * x4 + t, k = x2.sin() }
+            }
+        });
+        assert_eq!(
+            relative_degrees(&mut m),
+            vec![Some(4), Some(2), Some(1), Some(3)]
+        );
+    }
+
+    #[test]
+    fn implicit_equations_are_handled_structurally() {
+        // x2' is given implicitly together with an algebraic unknown; the input enters
+        // through the algebraic equation only.
+        let mut m = model(quote! {
+            Implicit {
+                states { x1, x2 }
+                algebraic { z }
+                inputs { u }
+                equations {
+                    der(x1) = x2;
+                    (1.0 + x1.powi(2)) * der(x2) == -x1 + z;
+                    0.0 == z - x2 * u;
+                }
+                outputs { y = x1 }
+            }
+        });
+        assert_eq!(relative_degrees(&mut m), vec![Some(2)]);
+    }
+
+    #[test]
+    fn outputs_unreached_by_inputs_have_no_relative_degree() {
+        let mut m = model(quote! {
+            Unreached {
+                states { x, v }
+                inputs { u }
+                equations {
+                    der(x) = -x;
+                    der(v) = u;
+                }
+                outputs { y = x }
+            }
+        });
+        assert_eq!(relative_degrees(&mut m), vec![None]);
+    }
+}
