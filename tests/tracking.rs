@@ -1,0 +1,276 @@
+//! The generated tracking DAEs (stabilised Hirschorn steps, paper Section 2) against
+//! independent computations: the paper's linear example, and trajectories of the wheel and
+//! of the flexible-joint arm integrated from hand-written equations, differentiated in time
+//! by high-order finite differences.
+
+use dpc::core::model::DaeModel;
+use dpc::core::reference::{AtanIntegral, ScalarReference, Sinusoid};
+use dpc::core::{Reference, TrackingDae};
+use dpc::nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
+use dpc_models::{
+    FlexibleJoint, FlexibleJointTracking, Pendulum, Wheel, WheelLinear, WheelLinearTracking,
+    WheelReference, WheelTracking,
+};
+
+/// Jacobian blocks of a tracking DAE at a point, as dense matrices.
+fn blocks<M: DaeModel + Default>(
+    x: &[f64],
+    xdot: &[f64],
+    z: &[f64],
+) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    let m = M::default();
+    let ne = M::N_EQUATIONS;
+    let (nx, nz, nu) = (M::N_STATES, M::N_ALGEBRAIC, M::N_INPUTS);
+    let mut r = vec![0.0; ne];
+    let (mut fxd, mut fx, mut fz, mut fu) = (
+        DMatrix::zeros(ne, nx),
+        DMatrix::zeros(ne, nx),
+        DMatrix::zeros(ne, nz),
+        DMatrix::zeros(ne, nu),
+    );
+    let w = vec![0.0; nu];
+    m.evaluate(
+        0.0, x, xdot, z, &w, &mut r, &mut fxd, &mut fx, &mut fz, &mut fu,
+    );
+    (fxd, fx, fz)
+}
+
+#[test]
+fn linear_example_constraint_rows_are_the_papers_yhat() {
+    // (4.1) with W = s + 5: yhat = [5 0 0 1 0; 0 5 0 0 1] x (paper, Section 4).
+    let x = [0.3, -1.2, 0.7, 0.1, -0.4];
+    let (fxd, fx, fz) = blocks::<WheelLinearTracking>(&x, &[0.0; 5], &[0.2, -0.1]);
+    let rows = fx.rows(5, 2).into_owned();
+    let expected =
+        DMatrix::from_row_slice(2, 5, &[5.0, 0.0, 0.0, 1.0, 0.0, 0.0, 5.0, 0.0, 0.0, 1.0]);
+    assert_eq!(rows, expected);
+    assert!(
+        fxd.rows(5, 2).iter().all(|v| *v == 0.0),
+        "no X' in the rows"
+    );
+    assert!(fz.rows(5, 2).iter().all(|v| *v == 0.0), "no U in the rows");
+    // The plant rows are the plant's own equations, with the inputs as unknowns.
+    assert_eq!(fz[(2, 0)], -1.0);
+    assert_eq!(fz[(4, 1)], -1.0);
+    assert_eq!(
+        WheelLinearTracking::W_COEFFICIENTS,
+        &[&[5.0, 1.0][..], &[5.0, 1.0][..]]
+    );
+}
+
+/// The wheel of the paper's Appendix, written out by hand: x' = f(x, u).
+fn wheel_rhs(x: &[f64; 5], u: [f64; 2]) -> [f64; 5] {
+    let (m, r, i_r, i_n, g) = (1.0, 1.0, 0.5, 0.25, 9.81);
+    let (a1, a2, a3, a4) = (
+        i_n + m * r * r,
+        i_r + m * r * r,
+        m * r * r + i_n - i_r,
+        2.0 * m * r * r + i_n,
+    );
+    let [th, _psi, dphi, dth, dpsi] = *x;
+    let (s, c) = th.sin_cos();
+    let mass = Matrix3::new(
+        i_r * s * s + a1 * c * c,
+        0.0,
+        a1 * c,
+        0.0,
+        a2,
+        0.0,
+        a1 * c,
+        0.0,
+        i_n + m * r * r,
+    );
+    let rhs = Vector3::new(
+        i_n * dth * dpsi * s + 2.0 * a3 * dphi * dth * c * s + u[0] * s,
+        -a1 * dphi * dpsi * s - a3 * dphi * dphi * c * s - m * g * r * c,
+        a4 * dphi * dth * s + u[1],
+    );
+    let acc = mass.lu().solve(&rhs).expect("mass matrix is regular");
+    [dth, dpsi, acc[0], acc[1], acc[2]]
+}
+
+/// Classical RK4 samples of an ODE on a uniform grid.
+fn rk4<const N: usize>(
+    f: impl Fn(f64, &[f64; N]) -> [f64; N],
+    x0: [f64; N],
+    h: f64,
+    steps: usize,
+) -> Vec<[f64; N]> {
+    let mut out = vec![x0];
+    let mut x = x0;
+    let add = |a: &[f64; N], b: &[f64; N], s: f64| -> [f64; N] {
+        let mut r = *a;
+        for i in 0..N {
+            r[i] += s * b[i];
+        }
+        r
+    };
+    for k in 0..steps {
+        let t = k as f64 * h;
+        let k1 = f(t, &x);
+        let k2 = f(t + h / 2.0, &add(&x, &k1, h / 2.0));
+        let k3 = f(t + h / 2.0, &add(&x, &k2, h / 2.0));
+        let k4 = f(t + h, &add(&x, &k3, h));
+        for i in 0..N {
+            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+        out.push(x);
+    }
+    out
+}
+
+/// First and second derivatives at sample `k` by 6th-order central differences.
+fn derivatives(samples: &[f64], k: usize, h: f64) -> (f64, f64) {
+    let s = |j: isize| samples[(k as isize + j) as usize];
+    let d1 = (-s(-3) + 9.0 * s(-2) - 45.0 * s(-1) + 45.0 * s(1) - 9.0 * s(2) + s(3)) / (60.0 * h);
+    let d2 = (2.0 * s(-3) - 27.0 * s(-2) + 270.0 * s(-1) - 490.0 * s(0) + 270.0 * s(1)
+        - 27.0 * s(2)
+        + 2.0 * s(3))
+        / (180.0 * h * h);
+    (d1, d2)
+}
+
+#[test]
+fn wheel_constraint_rows_equal_w_of_the_outputs_along_a_trajectory() {
+    let u = |t: f64| [0.3 * t.sin(), 0.2 * (0.5 * t).cos()];
+    let h = 1e-3;
+    let traj = rk4(
+        |t, x| wheel_rhs(x, u(t)),
+        [1.4, 0.0, 0.5, 0.2, -6.0],
+        h,
+        1000,
+    );
+    let theta: Vec<f64> = traj.iter().map(|x| x[0]).collect();
+    let psi: Vec<f64> = traj.iter().map(|x| x[1]).collect();
+    let tracking = WheelTracking::default();
+    for k in [100, 400, 777, 990] {
+        let t = k as f64 * h;
+        let x = traj[k];
+        let xdot = wheel_rhs(&x, u(t));
+        let z = u(t);
+        let mut g = [0.0; 7];
+        tracking.residual(t, &x, &xdot, &z, &[0.0, 0.0], &mut g);
+        // Plant rows vanish on a trajectory of the plant.
+        for (i, gi) in g.iter().enumerate().take(5) {
+            assert!(gi.abs() < 1e-10, "plant row {i} = {gi}");
+        }
+        let (dtheta, _) = derivatives(&theta, k, h);
+        let (dpsi, _) = derivatives(&psi, k, h);
+        assert!((g[5] - (5.0 * theta[k] + dtheta)).abs() < 1e-8, "theta row");
+        assert!((g[6] - (5.0 * psi[k] + dpsi)).abs() < 1e-8, "psi row");
+    }
+}
+
+#[test]
+fn two_steps_on_the_flexible_joint_match_finite_differences() {
+    let p = FlexibleJoint::default().params;
+    let u = |t: f64| 2.0 * (1.3 * t).sin();
+    let rhs = |t: f64, x: &[f64; 4]| {
+        let [q, w, qm, wm] = *x;
+        [
+            w,
+            (-p.m * p.g * p.l * q.sin() - p.k * (q - qm)) / p.i_link,
+            wm,
+            (p.k * (q - qm) + u(t)) / p.j_motor,
+        ]
+    };
+    let h = 1e-3;
+    let traj = rk4(rhs, [0.2, 0.0, -0.1, 0.5], h, 800);
+    let q: Vec<f64> = traj.iter().map(|x| x[0]).collect();
+    let tracking = FlexibleJointTracking::default();
+    for k in [50, 333, 790] {
+        let t = k as f64 * h;
+        let x = traj[k];
+        let mut g = [0.0; 5];
+        tracking.residual(t, &x, &rhs(t, &x), &[u(t)], &[0.0], &mut g);
+        let (d1, d2) = derivatives(&q, k, h);
+        let w_of_q = d2 + 5.0 * d1 + 6.0 * q[k];
+        assert!(
+            (g[4] - w_of_q).abs() < 1e-6 * (1.0 + w_of_q.abs()),
+            "row {} vs (s+2)(s+3) q = {w_of_q}",
+            g[4]
+        );
+    }
+    assert_eq!(
+        FlexibleJointTracking::W_COEFFICIENTS,
+        &[&[6.0, 5.0, 1.0][..]]
+    );
+}
+
+#[test]
+fn relative_degrees_are_reported() {
+    // Paper, Section 4: H(s) = diag(5/(s^3 + 8.46 s), 1/s^2).
+    assert_eq!(Wheel::RELATIVE_DEGREES, &[Some(3), Some(2)]);
+    assert_eq!(WheelLinear::RELATIVE_DEGREES, &[Some(3), Some(2)]);
+    assert_eq!(WheelTracking::RELATIVE_DEGREES, &[Some(3), Some(2)]);
+    assert_eq!(FlexibleJoint::RELATIVE_DEGREES, &[Some(4)]);
+    // A position constraint makes the pendulum structurally higher-index.
+    assert_eq!(Pendulum::RELATIVE_DEGREES, &[None]);
+    // After one step on each wheel output the largest relative degree left is 2 (the
+    // nilpotency index of N in the paper's example), after two steps on the arm also 2.
+    assert_eq!(WheelTracking::remaining_relative_degree(), Some(2));
+    assert_eq!(FlexibleJointTracking::remaining_relative_degree(), Some(2));
+}
+
+#[test]
+fn tracking_dae_layout() {
+    assert_eq!(WheelTracking::N_STATES, 5);
+    assert_eq!(WheelTracking::N_ALGEBRAIC, 2);
+    assert_eq!(WheelTracking::ALGEBRAIC_NAMES, &["u1", "u2"]);
+    assert_eq!(WheelTracking::INPUT_NAMES, &["w_theta", "w_psi"]);
+    assert_eq!(WheelTracking::N_EQUATIONS, 7);
+    assert_eq!(WheelTracking::EQUATIONS[5], "dtheta + 5 * theta == w_theta");
+    assert!(WheelTracking::LISTING.contains("W(s) = s + 5"));
+}
+
+#[test]
+fn dsl_references_match_closed_forms() {
+    // theta_ref = pi/2 + 0.1 sin t, psi_ref = -6 t - 0.5 (t atan t - ln(1 + t^2)/2).
+    let theta = Sinusoid {
+        offset: std::f64::consts::FRAC_PI_2,
+        amplitude: 0.1,
+        omega: 1.0,
+        phase: 0.0,
+    };
+    let psi_integral = AtanIntegral { scale: -0.5 };
+    let r = WheelReference::default();
+    assert_eq!(r.max_order(), 2);
+    let mut out = [0.0; 6];
+    for &t in &[0.0, 0.7, 3.0, 12.5] {
+        r.derivatives(t, 2, &mut out).unwrap();
+        for k in 0..3 {
+            let psi_lin = match k {
+                0 => -6.0 * t,
+                1 => -6.0,
+                _ => 0.0,
+            };
+            assert!((out[2 * k] - theta.derivative(t, k)).abs() < 1e-13);
+            assert!((out[2 * k + 1] - (psi_lin + psi_integral.derivative(t, k))).abs() < 1e-12);
+        }
+    }
+    assert!(r.derivatives(0.0, 3, &mut [0.0; 8]).is_err());
+
+    // w = W(d/dt) xi: 5 xi + xi'.
+    let mut scratch = [0.0; 4];
+    let mut w = [0.0; 2];
+    WheelTracking::tracking_inputs(&r, 1.0, &mut scratch, &mut w).unwrap();
+    let mut d = [0.0; 4];
+    r.derivatives(1.0, 1, &mut d).unwrap();
+    assert!((w[0] - (5.0 * d[0] + d[2])).abs() < 1e-14);
+    assert!((w[1] - (5.0 * d[1] + d[3])).abs() < 1e-14);
+}
+
+#[test]
+fn tracking_matrix_types_are_fixed_size() {
+    let t = WheelTracking::default();
+    let g: SMatrix<f64, 7, 7> = t.iteration_matrix_fixed(
+        0.0,
+        &[1.5, 0.0, 0.0, 0.0, -6.0].into(),
+        &Default::default(),
+        &Default::default(),
+        &Default::default(),
+        10.0,
+    );
+    // The iteration matrix of the tracking DAE is regular at the nominal point.
+    assert!(g.determinant().abs() > 1e-8);
+}

@@ -1,0 +1,15 @@
+dpc::model! {
+    pub Plant {
+        states { x, v, w }
+        inputs { u }
+        equations {
+            der(x) = v;
+            (2.0 + x.powi(2)) * der(v) == w;
+            der(w) = u;
+        }
+        outputs { x }
+        tracking PlantTracking { x: [1.0, 2.0, 3.0] }
+    }
+}
+
+fn main() {}
