@@ -6,9 +6,13 @@
 //! * [`model`]: the trait that `dpc::model!` implements for every declared plant
 //!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`), and the adapter
 //!   that turns a model with given inputs into an [`dae::ImplicitDae`];
-//! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes.
+//! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
+//! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
+//! * [`linalg`]: the linear solvers behind the integrator's Newton iteration.
 
+pub mod bdf;
 pub mod dae;
+pub mod linalg;
 pub mod model;
 pub mod sink;
 
