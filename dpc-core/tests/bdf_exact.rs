@@ -130,9 +130,12 @@ fn index1_variable_step_all_back_ends() {
     let mut c = Bdf::new(Index1, sparse, opts, 0.0, &y0, &yp0).unwrap();
     for k in 1..=10 {
         let t = f64::from(k);
-        a.solve_to(t, &mut out, None).unwrap();
+        let mut outp = [0.0; 2];
+        a.solve_to(t, &mut out, Some(&mut outp)).unwrap();
         let ea = max_err(&out, &Index1::exact(t));
         assert!(ea < 1e-6, "t = {t}: error {ea}");
+        let ep = max_err(&outp, &Index1::exact_p(t));
+        assert!(ep < 1e-4, "t = {t}: derivative error {ep}");
         let ya = out;
         b.solve_to(t, &mut out, None).unwrap();
         assert!(max_err(&out, &ya) < 1e-12);

@@ -199,6 +199,13 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             self.yp_pred[i] = s / h;
         }
         error_weights(&self.opts, &self.hist[0], &mut self.w)?;
+        let hs = h.min(1.0);
+        for (i, w) in self.w.iter_mut().enumerate() {
+            let m = self.opts.index_of(i);
+            if m > 1 {
+                *w *= hs.powi(i32::from(m) - 1);
+            }
+        }
         let problem = NewtonProblem {
             t: t_new,
             cj,

@@ -6,8 +6,9 @@
 //! This is the problem IDA's `IDACalcIC` solves with `IDA_YA_YDP_INIT` (Brown, Hindmarsh &
 //! Petzold, SIAM J. Sci. Comput. 19, 1998). The Jacobian with respect to the unknowns
 //! `(y'_d, y_a)` has columns `dF/dy'_i` (differential) and `dF/dy_i` (algebraic); it is taken
-//! from the model's iteration matrix `dF/dy + c dF/dy'` with a large `c` and the differential
-//! columns scaled by `1/c`, which leaves an `O(1/c)` perturbation that Newton absorbs.
+//! from two calls of the model's iteration matrix `dF/dy + c dF/dy'`, with `c = C` (scaled by
+//! `1/C`) and `c = 0` (subtracted), so that singularity of this Jacobian (the problem is not
+//! index 1 in the given split) is detected rather than hidden by an `O(1/C)` perturbation.
 //! Newton's method is damped by backtracking on the residual norm.
 
 use super::newton::{error_weights, first_non_finite, wrms};
@@ -15,15 +16,17 @@ use super::{BdfError, Options, Stats};
 use crate::linalg::{FactorError, LinearSolver};
 use crate::{ImplicitDae, MatrixSink};
 
-const C_BIG: f64 = 1e8;
+/// A power of two, so the scalings by `1/C_BIG` are exact.
+const C_BIG: f64 = 134_217_728.0;
 
-/// Forwards algebraic columns unchanged and scales differential columns by `1/C_BIG`.
-struct ColumnScale<'a, S: MatrixSink + ?Sized> {
+/// Pass 1 (the model called with `c = C_BIG`): algebraic columns `dF/dy_a` as they are,
+/// differential columns `(dF/dy_d + C dF/dy'_d) / C`.
+struct FirstPass<'a, S: MatrixSink + ?Sized> {
     inner: &'a mut S,
     differential: &'a [bool],
 }
 
-impl<S: MatrixSink + ?Sized> MatrixSink for ColumnScale<'_, S> {
+impl<S: MatrixSink + ?Sized> MatrixSink for FirstPass<'_, S> {
     fn rows(&self) -> usize {
         self.inner.rows()
     }
@@ -49,6 +52,32 @@ impl<S: MatrixSink + ?Sized> MatrixSink for ColumnScale<'_, S> {
     fn fill_zero(&mut self) {
         self.inner.fill_zero();
     }
+}
+
+/// Pass 2 (the model called with `c = 0`): subtract `dF/dy_d / C` from the differential
+/// columns, leaving exactly `dF/dy'_d` there. Every write is an addition into a logically
+/// zeroed matrix, so `set` and `add` both subtract.
+struct SecondPass<'a, S: MatrixSink + ?Sized> {
+    inner: &'a mut S,
+    differential: &'a [bool],
+}
+
+impl<S: MatrixSink + ?Sized> MatrixSink for SecondPass<'_, S> {
+    fn rows(&self) -> usize {
+        self.inner.rows()
+    }
+    fn cols(&self) -> usize {
+        self.inner.cols()
+    }
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        if self.differential[col] {
+            self.inner.add(row, col, -value / C_BIG);
+        }
+    }
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        self.set(row, col, value);
+    }
+    fn fill_zero(&mut self) {}
 }
 
 /// Make `(y, yp)` consistent at `t0`: keep the differential components of `y`, compute the
@@ -111,13 +140,18 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
         {
             let m = ls.matrix_mut();
             m.fill_zero();
-            let mut sink = ColumnScale {
+            let mut first = FirstPass {
+                inner: &mut *m,
+                differential: &differential,
+            };
+            dae.iteration_matrix(t0, y, yp, C_BIG, &mut first);
+            let mut second = SecondPass {
                 inner: m,
                 differential: &differential,
             };
-            dae.iteration_matrix(t0, y, yp, C_BIG, &mut sink);
+            dae.iteration_matrix(t0, y, yp, 0.0, &mut second);
         }
-        stats.jacobian_evaluations += 1;
+        stats.jacobian_evaluations += 2;
         stats.factorisations += 1;
         match ls.factor() {
             Ok(()) => {}

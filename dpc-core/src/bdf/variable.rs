@@ -348,17 +348,15 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 self.w_err[i] = w;
                 continue;
             }
-            match self.opts.higher_index {
-                HigherIndexControl::Exclude => {
-                    self.w_newton[i] = w;
-                    self.w_err[i] = 0.0;
-                }
-                HigherIndexControl::Scale => {
-                    let s = w * hs.powi(i32::from(m) - 1);
-                    self.w_newton[i] = s;
-                    self.w_err[i] = s;
-                }
-            }
+            // Newton's updates of an index-m component carry round-off amplified by
+            // h^-(m-1) (the iteration matrix has condition O(h^-m)), so its convergence test
+            // always uses the scaled weight, as RADAU5 does.
+            let s = w * hs.powi(i32::from(m) - 1);
+            self.w_newton[i] = s;
+            self.w_err[i] = match self.opts.higher_index {
+                HigherIndexControl::Exclude => 0.0,
+                HigherIndexControl::Scale => s,
+            };
         }
         Ok(())
     }

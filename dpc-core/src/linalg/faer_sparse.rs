@@ -164,6 +164,16 @@ impl LinearSolver for FaerSparseLu {
             }
             nonzero.iter().position(|&b| !b)
         };
+        if let Some(col) = (0..m.n).find(|&c| {
+            m.values[m.col_ptr[c]..m.col_ptr[c + 1]]
+                .iter()
+                .all(|v| *v == 0.0)
+        }) {
+            return Err(FactorError::Singular {
+                column: Some(col),
+                row: zero_row,
+            });
+        }
         let a = SparseColMatRef::new(self.symbolic_mat.as_ref(), &m.values);
         match Lu::try_new_with_symbolic(self.symbolic.clone(), a) {
             Ok(lu) => {
@@ -191,11 +201,9 @@ impl LinearSolver for FaerSparseLu {
         if let Some(lu) = &self.lu {
             let n = b.len();
             let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
+            // faer does not report numerically zero pivots; a non-finite solution is caught by
+            // the integrator's Newton iteration and reported as a failure.
             lu.solve_in_place_with_conj(Conj::No, rhs);
-            if b.iter().any(|v| !v.is_finite()) {
-                // faer does not report tiny pivots; a non-finite solution is left for the
-                // integrator's finiteness checks to turn into a typed error.
-            }
         }
     }
 }
