@@ -48,17 +48,17 @@ impl Tolerance {
 /// local error estimate does not shrink like `h^(k+1)` and would force needlessly small steps.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum HigherIndexControl {
-    /// Exclude them from the error test, as DASSL users and IDA's `suppressalg` do. This is the
-    /// default.
+    /// Exclude them from the error test, as DASSL users and IDA's `suppressalg` do; Newton's
+    /// convergence test keeps their plain weight, as in IDA. This is the default.
     ///
-    /// With either choice Newton's convergence test weights an index-`m` component by
-    /// `min(1, h)^(m - 1)`: the iteration matrix has condition `O(h^-m)`, so the Newton updates
-    /// of those components carry round-off of that size and an unscaled test could never pass
-    /// at tight tolerances.
+    /// (In the fixed-step mode, which has no error test, Newton's convergence test always
+    /// weights an index-`m` component by `min(1, h)^(m - 1)`: the iteration matrix has
+    /// condition `O(h^-m)`, so those updates carry round-off of that size and an unscaled test
+    /// cannot pass at tight tolerances with a step that is not adapted.)
     #[default]
     Exclude,
-    /// Keep them but scale their weight by `min(1, h)^(m - 1)` (Hairer, Lubich & Roche 1989;
-    /// RADAU5's `nind2`, `nind3`).
+    /// Keep them but scale their weight by `min(1, h)^(m - 1)` in the error test and in
+    /// Newton's convergence test (Hairer, Lubich & Roche 1989; RADAU5's `nind2`, `nind3`).
     Scale,
 }
 
