@@ -56,3 +56,35 @@ pub trait ImplicitDae {
         format!("y[{i}]")
     }
 }
+
+/// A shared reference to a DAE is a DAE, so an integrator can borrow the model it integrates.
+impl<T: ImplicitDae + ?Sized> ImplicitDae for &T {
+    fn dimension(&self) -> usize {
+        (**self).dimension()
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        (**self).residual(t, y, yp, out);
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        c: f64,
+        out: &mut S,
+    ) {
+        (**self).iteration_matrix(t, y, yp, c, out);
+    }
+    fn is_differential(&self, i: usize) -> bool {
+        (**self).is_differential(i)
+    }
+    fn iteration_pattern(&self) -> Option<Vec<(usize, usize)>> {
+        (**self).iteration_pattern()
+    }
+    fn equation_name(&self, i: usize) -> String {
+        (**self).equation_name(i)
+    }
+    fn unknown_name(&self, i: usize) -> String {
+        (**self).unknown_name(i)
+    }
+}

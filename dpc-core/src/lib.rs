@@ -7,10 +7,14 @@
 //!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`), and the adapter
 //!   that turns a model with given inputs into an [`dae::ImplicitDae`];
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
+//! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
+//! * [`linalg`]: the linear solvers behind the integrator's Newton iteration;
 //! * [`reference`]: reference trajectories with exact derivatives;
 //! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model.
 
+pub mod bdf;
 pub mod dae;
+pub mod linalg;
 pub mod model;
 pub mod reference;
 pub mod sink;

@@ -1,0 +1,71 @@
+//! The integrator's error type.
+
+/// Everything that can stop the BDF integrator. No model- or user-caused condition panics.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BdfError {
+    /// A tolerance is negative, non-finite, or an error weight `1/(rtol |y_i| + atol_i)` is not
+    /// positive and finite.
+    #[error("invalid tolerance: {0}")]
+    InvalidTolerance(String),
+    /// A vector or solver has the wrong length.
+    #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
+    DimensionMismatch {
+        /// Which argument.
+        what: &'static str,
+        /// Length the DAE requires.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// An option is out of range (order, step size, output time behind the integrator, ...).
+    #[error("invalid option: {0}")]
+    InvalidOption(String),
+    /// The iteration matrix is singular and reducing the step did not help.
+    #[error("singular iteration matrix at t = {t}: unknown {unknown:?}, equation {equation:?}")]
+    SingularMatrix {
+        /// Time of the failure.
+        t: f64,
+        /// Name of the unknown whose pivot vanished, when known.
+        unknown: Option<String>,
+        /// Name of an equation whose row is identically zero, when there is one.
+        equation: Option<String>,
+    },
+    /// The model's residual returned NaN or an infinity.
+    #[error("non-finite residual at t = {t} in {equation}")]
+    NonFiniteResidual {
+        /// Time of the evaluation.
+        t: f64,
+        /// Name of the first offending equation.
+        equation: String,
+    },
+    /// Newton's method failed repeatedly, down to the minimum step (variable-step mode) or at
+    /// the given step (fixed-step mode).
+    #[error("Newton iteration failed at t = {t} with step {h}")]
+    NewtonFailed {
+        /// Time the step tried to reach.
+        t: f64,
+        /// Step size of the last attempt.
+        h: f64,
+    },
+    /// The local error test failed repeatedly, down to the minimum step.
+    #[error("error test failed repeatedly at t = {t} with step {h}")]
+    ErrorTestFailed {
+        /// Time the step tried to reach.
+        t: f64,
+        /// Step size of the last attempt.
+        h: f64,
+    },
+    /// More steps than [`super::Options::max_steps`] were needed to reach an output time.
+    #[error("too many steps ({max_steps}) before reaching t = {tout}; stopped at t = {t}")]
+    TooManySteps {
+        /// The step limit.
+        max_steps: usize,
+        /// The requested output time.
+        tout: f64,
+        /// Where the integrator stopped.
+        t: f64,
+    },
+    /// Consistent initialisation did not converge.
+    #[error("consistent initialisation failed: {0}")]
+    InitialisationFailed(String),
+}

@@ -1,0 +1,244 @@
+//! Fixed-step, fixed-order BDF ([`FixedBdf`]) for the DPC inner integration.
+//!
+//! Constant-step BDF of order `q`: `F(t_{n+1}, y_{n+1}, (1/h) sum_j a_j y_{n+1-j}) = 0`
+//! (Hairer & Wanner 1996, Section III.1, Table 1.2 of coefficients). Only past *values* of `y`
+//! enter, never `y'`, so the integration may start from inconsistent values: the first step
+//! (implicit Euler when no older values are given) projects onto the constraints. While fewer
+//! than `q` past values are available the order ramps up (`1, 2, ..., q`); supplying the
+//! history with [`FixedBdf::with_history`] gives the full order from the first step.
+
+use super::newton::{self, error_weights, JacState, NewtonProblem};
+use super::{BdfError, Options, Stats};
+use crate::linalg::LinearSolver;
+use crate::ImplicitDae;
+
+/// Coefficients `a_0..a_q` of constant-step BDF of order `q` (`a_0` multiplies `y_{n+1}`).
+const COEFFS: [[f64; 6]; 5] = [
+    [1.0, -1.0, 0.0, 0.0, 0.0, 0.0],
+    [1.5, -2.0, 0.5, 0.0, 0.0, 0.0],
+    [11.0 / 6.0, -3.0, 1.5, -1.0 / 3.0, 0.0, 0.0],
+    [25.0 / 12.0, -4.0, 3.0, -4.0 / 3.0, 0.25, 0.0],
+    [137.0 / 60.0, -5.0, 5.0, -10.0 / 3.0, 1.25, -0.2],
+];
+
+/// Fixed-step BDF integrator of a given order.
+///
+/// Newton's iteration matrix `dF/dy + (a_0/h) dF/dy'` is reused across steps and refreshed only
+/// when Newton fails with it. A step is accepted only when Newton's update test passes *and*
+/// the residual satisfies `max_i |F_i| <= Options::residual_tolerance`; otherwise the step
+/// returns [`BdfError::NewtonFailed`] (or the singular-matrix / non-finite-residual error) and
+/// the integrator stays at the previous point.
+pub struct FixedBdf<D: ImplicitDae, L: LinearSolver> {
+    dae: D,
+    ls: L,
+    opts: Options,
+    order: usize,
+    h: f64,
+    t: f64,
+    /// `hist[0]` is `y_n`, `hist[j]` is `y_{n-j}`.
+    hist: Vec<Vec<f64>>,
+    navail: usize,
+    y: Vec<f64>,
+    yp: Vec<f64>,
+    y_pred: Vec<f64>,
+    yp_pred: Vec<f64>,
+    ee: Vec<f64>,
+    res: Vec<f64>,
+    delta: Vec<f64>,
+    w: Vec<f64>,
+    jac: JacState,
+    jac_order: usize,
+    stats: Stats,
+}
+
+impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
+    /// Start at `(t0, y0)`; `y0` may be inconsistent. The order ramps up from 1.
+    ///
+    /// # Errors
+    /// [`BdfError::InvalidOption`] for an order outside `1..=5` or a non-positive step;
+    /// dimension and tolerance errors as for [`super::Bdf::new`].
+    pub fn new(
+        dae: D,
+        ls: L,
+        opts: Options,
+        order: usize,
+        h: f64,
+        t0: f64,
+        y0: &[f64],
+    ) -> Result<Self, BdfError> {
+        Self::with_history(dae, ls, opts, order, h, t0, &[y0])
+    }
+
+    /// Start at `t0` with `history[j] = y(t0 - j h)` for `j = 0, 1, ...` (at least one entry,
+    /// at most `order`); steps use order `min(order, available values)`.
+    ///
+    /// # Errors
+    /// As for [`FixedBdf::new`], and [`BdfError::InvalidOption`] for an empty or too long
+    /// history.
+    pub fn with_history(
+        dae: D,
+        ls: L,
+        opts: Options,
+        order: usize,
+        h: f64,
+        t0: f64,
+        history: &[&[f64]],
+    ) -> Result<Self, BdfError> {
+        let n = dae.dimension();
+        if !(1..=5).contains(&order) {
+            return Err(BdfError::InvalidOption(format!(
+                "order {order} is not in 1..=5"
+            )));
+        }
+        if !(h.is_finite() && h > 0.0 && t0.is_finite()) {
+            return Err(BdfError::InvalidOption(format!("step h = {h}, t0 = {t0}")));
+        }
+        if history.is_empty() || history.len() > order {
+            return Err(BdfError::InvalidOption(format!(
+                "history of {} values for order {order}",
+                history.len()
+            )));
+        }
+        if ls.dimension() != n {
+            return Err(BdfError::DimensionMismatch {
+                what: "linear solver",
+                expected: n,
+                found: ls.dimension(),
+            });
+        }
+        for v in history {
+            if v.len() != n {
+                return Err(BdfError::DimensionMismatch {
+                    what: "y0",
+                    expected: n,
+                    found: v.len(),
+                });
+            }
+        }
+        opts.validate(n)?;
+        let mut hist = vec![vec![0.0; n]; 6];
+        for (dst, src) in hist.iter_mut().zip(history) {
+            dst.copy_from_slice(src);
+        }
+        Ok(Self {
+            dae,
+            ls,
+            opts,
+            order,
+            h,
+            t: t0,
+            navail: history.len(),
+            y: history[0].to_vec(),
+            yp: vec![0.0; n],
+            y_pred: vec![0.0; n],
+            yp_pred: vec![0.0; n],
+            ee: vec![0.0; n],
+            res: vec![0.0; n],
+            delta: vec![0.0; n],
+            w: vec![0.0; n],
+            hist,
+            jac: JacState::default(),
+            jac_order: 0,
+            stats: Stats::default(),
+        })
+    }
+
+    /// Current time.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Solution at [`t`](Self::t).
+    pub fn y(&self) -> &[f64] {
+        &self.hist[0]
+    }
+
+    /// The BDF derivative approximation at [`t`](Self::t) (zero before the first step).
+    pub fn yp(&self) -> &[f64] {
+        &self.yp
+    }
+
+    /// Work counters so far.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// The DAE being integrated.
+    pub fn dae(&self) -> &D {
+        &self.dae
+    }
+
+    /// Take one step of size `h`; returns the new time. On error the state is unchanged.
+    ///
+    /// # Errors
+    /// [`BdfError::NewtonFailed`], [`BdfError::SingularMatrix`],
+    /// [`BdfError::NonFiniteResidual`], [`BdfError::InvalidTolerance`].
+    pub fn step(&mut self) -> Result<f64, BdfError> {
+        let q = self.order.min(self.navail);
+        let a = &COEFFS[q - 1];
+        let h = self.h;
+        let t_new = self.t + h;
+        let cj = a[0] / h;
+        // Predictor: polynomial extrapolation through the available past values.
+        let m = self.navail.min(q + 1);
+        self.y_pred.fill(0.0);
+        let mut binom = 1.0;
+        for j in 0..m {
+            // coefficient (-1)^j C(m, j+1)
+            binom = binom * (m - j) as f64 / (j + 1) as f64;
+            let c = if j % 2 == 0 { binom } else { -binom };
+            for (p, v) in self.y_pred.iter_mut().zip(&self.hist[j]) {
+                *p += c * v;
+            }
+        }
+        for i in 0..self.y_pred.len() {
+            let mut s = a[0] * self.y_pred[i];
+            for (j, aj) in a.iter().enumerate().take(q + 1).skip(1) {
+                s += aj * self.hist[j - 1][i];
+            }
+            self.yp_pred[i] = s / h;
+        }
+        error_weights(&self.opts, &self.hist[0], &mut self.w)?;
+        let hs = h.min(1.0);
+        for (i, w) in self.w.iter_mut().enumerate() {
+            let m = self.opts.index_of(i);
+            if m > 1 {
+                *w *= hs.powi(i32::from(m) - 1);
+            }
+        }
+        let problem = NewtonProblem {
+            t: t_new,
+            cj,
+            y_pred: &self.y_pred,
+            yp_pred: &self.yp_pred,
+            w: &self.w,
+            max_iterations: self.opts.max_newton_iterations.max(4),
+            epcon: self.opts.newton_tolerance,
+            residual_tolerance: self.opts.residual_tolerance,
+            force_setup: self.jac_order != q,
+        };
+        let out = newton::solve(
+            &self.dae,
+            &mut self.ls,
+            &mut self.jac,
+            &mut self.stats,
+            &problem,
+            &mut self.y,
+            &mut self.yp,
+            &mut self.ee,
+            &mut self.res,
+            &mut self.delta,
+        );
+        if let Err(f) = out {
+            self.stats.newton_failures += 1;
+            return Err(f.into_error(&self.dae, t_new, h));
+        }
+        self.jac_order = q;
+        self.hist.rotate_right(1);
+        self.hist[0].copy_from_slice(&self.y);
+        self.navail = (self.navail + 1).min(6);
+        self.t = t_new;
+        self.stats.steps += 1;
+        Ok(t_new)
+    }
+}

@@ -1,0 +1,268 @@
+//! Modified Newton iteration on `G(y) = F(t, y, y'_pred + cj (y - y_pred)) = 0`, shared by the
+//! variable-step and fixed-step integrators.
+//!
+//! The iteration matrix `dF/dy + cj dF/dy'` is kept across steps and refactorised only when
+//! Newton fails with a stale matrix or `cj` drifts beyond the window `[0.6, 1.67]` of the value
+//! it was factorised with (IDA's `XRATE = 0.25`); in between, updates are scaled by
+//! `2 / (1 + cj/cj_old)` to compensate (Brenan, Campbell & Petzold 1989, Section 5.2.2).
+//! Convergence is declared from the rate estimate `s = rho / (1 - rho)`:
+//! `s |delta| <= epcon` in the weighted RMS norm (IDA's `IDANewtonIter`).
+
+use super::{BdfError, Options, Stats};
+use crate::linalg::{FactorError, LinearSolver};
+use crate::ImplicitDae;
+
+/// State of the iteration matrix and its factorisation.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct JacState {
+    /// `cj` the matrix was formed with.
+    pub cj_factored: f64,
+    /// The matrix was formed in the current step attempt (a retry cannot help).
+    pub current: bool,
+    /// A valid factorisation exists.
+    pub valid: bool,
+    /// Convergence-rate factor `s` carried between steps.
+    pub ss: f64,
+}
+
+impl Default for JacState {
+    fn default() -> Self {
+        Self {
+            cj_factored: 0.0,
+            current: false,
+            valid: false,
+            ss: 20.0,
+        }
+    }
+}
+
+/// Why an attempt failed; recoverable by a smaller step in the variable-step integrator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum NewtonFailure {
+    /// Slow or diverging iteration.
+    Convergence,
+    /// Singular iteration matrix (pivot column, zero row).
+    Singular(Option<usize>, Option<usize>),
+    /// Non-finite residual in this equation.
+    NonFinite(usize),
+    /// Matrix entry outside the declared pattern: not recoverable.
+    OutsidePattern(usize, usize),
+}
+
+impl NewtonFailure {
+    /// The typed error to report when this failure is final.
+    pub fn into_error<D: ImplicitDae>(self, dae: &D, t: f64, h: f64) -> BdfError {
+        match self {
+            Self::Convergence => BdfError::NewtonFailed { t, h },
+            Self::Singular(col, row) => BdfError::SingularMatrix {
+                t,
+                unknown: col.map(|c| dae.unknown_name(c)),
+                equation: row.map(|r| dae.equation_name(r)),
+            },
+            Self::NonFinite(i) => BdfError::NonFiniteResidual {
+                t,
+                equation: dae.equation_name(i),
+            },
+            Self::OutsidePattern(r, c) => BdfError::InvalidOption(format!(
+                "iteration matrix entry ({}, {}) is outside the declared pattern",
+                dae.equation_name(r),
+                dae.unknown_name(c)
+            )),
+        }
+    }
+}
+
+/// Weighted RMS norm `sqrt(sum (v_i w_i)^2 / n)`.
+#[inline]
+pub(crate) fn wrms(v: &[f64], w: &[f64]) -> f64 {
+    let n = v.len().max(1) as f64;
+    let s: f64 = v.iter().zip(w).map(|(a, b)| (a * b) * (a * b)).sum();
+    (s / n).sqrt()
+}
+
+/// Error weights `1 / (rtol_i |y_i| + atol_i)`.
+pub(crate) fn error_weights(opts: &Options, y: &[f64], w: &mut [f64]) -> Result<(), BdfError> {
+    for (i, (wi, yi)) in w.iter_mut().zip(y).enumerate() {
+        let d = opts.rtol.get(i) * yi.abs() + opts.atol.get(i);
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(BdfError::InvalidTolerance(format!(
+                "error weight of component {i} is not positive (rtol |y| + atol = {d})"
+            )));
+        }
+        *wi = 1.0 / d;
+    }
+    Ok(())
+}
+
+/// First index of a non-finite entry.
+#[inline]
+pub(crate) fn first_non_finite(v: &[f64]) -> Option<usize> {
+    v.iter().position(|x| !x.is_finite())
+}
+
+/// Form and factorise `dF/dy + cj dF/dy'` at `(t, y, yp)`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn setup<D: ImplicitDae, L: LinearSolver>(
+    dae: &D,
+    ls: &mut L,
+    jac: &mut JacState,
+    stats: &mut Stats,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+    cj: f64,
+) -> Result<(), NewtonFailure> {
+    use crate::MatrixSink;
+    let m = ls.matrix_mut();
+    m.fill_zero();
+    dae.iteration_matrix(t, y, yp, cj, m);
+    stats.jacobian_evaluations += 1;
+    stats.factorisations += 1;
+    jac.cj_factored = cj;
+    jac.current = true;
+    jac.ss = 20.0;
+    match ls.factor() {
+        Ok(()) => {
+            jac.valid = true;
+            Ok(())
+        }
+        Err(FactorError::Singular { column, row }) => {
+            jac.valid = false;
+            Err(NewtonFailure::Singular(column, row))
+        }
+        Err(FactorError::OutsidePattern { row, col }) => {
+            jac.valid = false;
+            Err(NewtonFailure::OutsidePattern(row, col))
+        }
+    }
+}
+
+/// Work vectors and inputs of one Newton solve.
+pub(crate) struct NewtonProblem<'a> {
+    pub t: f64,
+    pub cj: f64,
+    pub y_pred: &'a [f64],
+    pub yp_pred: &'a [f64],
+    /// Weights of the convergence test.
+    pub w: &'a [f64],
+    pub max_iterations: usize,
+    pub epcon: f64,
+    /// When finite: the max-norm of the residual at the solution must not exceed this.
+    pub residual_tolerance: f64,
+    /// Force a fresh iteration matrix before the first iteration.
+    pub force_setup: bool,
+}
+
+/// Solve for `y`, `yp` (and the correction `ee = y - y_pred`). On failure with a stale matrix
+/// the attempt is repeated once with a fresh one, as IDA does.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
+    dae: &D,
+    ls: &mut L,
+    jac: &mut JacState,
+    stats: &mut Stats,
+    p: &NewtonProblem<'_>,
+    y: &mut [f64],
+    yp: &mut [f64],
+    ee: &mut [f64],
+    res: &mut [f64],
+    delta: &mut [f64],
+) -> Result<usize, NewtonFailure> {
+    jac.current = false;
+    let mut need_setup = p.force_setup || !jac.valid || {
+        let r = p.cj / jac.cj_factored;
+        !(0.6..=1.0 / 0.6).contains(&r)
+    };
+    loop {
+        y.copy_from_slice(p.y_pred);
+        yp.copy_from_slice(p.yp_pred);
+        ee.fill(0.0);
+        if need_setup {
+            setup(dae, ls, jac, stats, p.t, y, yp, p.cj)?;
+        }
+        match iterate(dae, ls, jac, stats, p, y, yp, ee, res, delta) {
+            Ok(m) => return Ok(m),
+            Err(NewtonFailure::Convergence | NewtonFailure::NonFinite(_)) if !jac.current => {
+                need_setup = true;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn iterate<D: ImplicitDae, L: LinearSolver>(
+    dae: &D,
+    ls: &mut L,
+    jac: &mut JacState,
+    stats: &mut Stats,
+    p: &NewtonProblem<'_>,
+    y: &mut [f64],
+    yp: &mut [f64],
+    ee: &mut [f64],
+    res: &mut [f64],
+    delta: &mut [f64],
+) -> Result<usize, NewtonFailure> {
+    let cjratio = p.cj / jac.cj_factored;
+    let scale = if cjratio == 1.0 {
+        1.0
+    } else {
+        2.0 / (1.0 + cjratio)
+    };
+    let mut oldnrm = 0.0;
+    let mut m = 0;
+    loop {
+        dae.residual(p.t, y, yp, res);
+        stats.residual_evaluations += 1;
+        if let Some(i) = first_non_finite(res) {
+            return Err(NewtonFailure::NonFinite(i));
+        }
+        delta.copy_from_slice(res);
+        ls.solve_in_place(delta);
+        stats.newton_iterations += 1;
+        if scale != 1.0 {
+            delta.iter_mut().for_each(|d| *d *= scale);
+        }
+        for i in 0..y.len() {
+            y[i] -= delta[i];
+            ee[i] -= delta[i];
+            yp[i] -= p.cj * delta[i];
+        }
+        let delnrm = wrms(delta, p.w);
+        if !delnrm.is_finite() {
+            return Err(NewtonFailure::Convergence);
+        }
+        let mut converged = false;
+        if m == 0 {
+            oldnrm = delnrm;
+            if delnrm <= 1e-4 * p.epcon {
+                converged = true;
+            }
+        } else {
+            let rate = (delnrm / oldnrm).powf(1.0 / m as f64);
+            if rate > 0.9 {
+                return Err(NewtonFailure::Convergence);
+            }
+            jac.ss = rate / (1.0 - rate);
+        }
+        if converged || jac.ss * delnrm <= p.epcon {
+            if p.residual_tolerance.is_finite() {
+                dae.residual(p.t, y, yp, res);
+                stats.residual_evaluations += 1;
+                if let Some(i) = first_non_finite(res) {
+                    return Err(NewtonFailure::NonFinite(i));
+                }
+                let rn = res.iter().fold(0.0f64, |a, r| a.max(r.abs()));
+                if rn <= p.residual_tolerance {
+                    return Ok(m + 1);
+                }
+            } else {
+                return Ok(m + 1);
+            }
+        }
+        m += 1;
+        if m >= p.max_iterations {
+            return Err(NewtonFailure::Convergence);
+        }
+    }
+}

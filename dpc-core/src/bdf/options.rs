@@ -1,0 +1,204 @@
+//! Integrator options.
+
+use super::BdfError;
+
+/// A tolerance, the same for every component or one per component.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Tolerance {
+    /// One value for all components.
+    Scalar(f64),
+    /// One value per component.
+    Vector(Vec<f64>),
+}
+
+impl Tolerance {
+    #[inline]
+    pub(crate) fn get(&self, i: usize) -> f64 {
+        match self {
+            Self::Scalar(v) => *v,
+            Self::Vector(v) => v[i],
+        }
+    }
+
+    fn check(&self, name: &str, n: usize) -> Result<(), BdfError> {
+        if let Self::Vector(v) = self {
+            if v.len() != n {
+                return Err(BdfError::DimensionMismatch {
+                    what: if name == "rtol" { "rtol" } else { "atol" },
+                    expected: n,
+                    found: v.len(),
+                });
+            }
+        }
+        for i in 0..n {
+            let x = self.get(i);
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(BdfError::InvalidTolerance(format!(
+                    "{name}[{i}] = {x} must be finite and non-negative"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// How components the user marks as index 2 or 3 enter the local error test.
+///
+/// BDF approximates an index-`m` component only to order `k - m + 1` in the step, so its
+/// local error estimate does not shrink like `h^(k+1)` and would force needlessly small steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum HigherIndexControl {
+    /// Exclude them from the error test, as DASSL users and IDA's `suppressalg` do; Newton's
+    /// convergence test keeps their plain weight, as in IDA. This is the default.
+    ///
+    /// (In the fixed-step mode, which has no error test, Newton's convergence test always
+    /// weights an index-`m` component by `min(1, h)^(m - 1)`: the iteration matrix has
+    /// condition `O(h^-m)`, so those updates carry round-off of that size and an unscaled test
+    /// cannot pass at tight tolerances with a step that is not adapted.)
+    #[default]
+    Exclude,
+    /// Keep them but scale their weight by `min(1, h)^(m - 1)` in the error test and in
+    /// Newton's convergence test (Hairer, Lubich & Roche 1989; RADAU5's `nind2`, `nind3`).
+    Scale,
+}
+
+/// Options of the variable-step integrator ([`super::Bdf`]) and, where they apply, of the
+/// fixed-step mode ([`super::FixedBdf`]) and consistent initialisation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// Relative tolerance (default `1e-6`).
+    pub rtol: Tolerance,
+    /// Absolute tolerance (default `1e-8`).
+    pub atol: Tolerance,
+    /// Highest BDF order, 1 to 5 (default 5).
+    pub max_order: usize,
+    /// Step limit for one call of [`super::Bdf::solve_to`] (default 100 000).
+    pub max_steps: usize,
+    /// First step size; `None` lets the integrator choose (IDA's rule: `0.001 |tout - t0|`,
+    /// reduced so that `h |y'|` is at most half a tolerance unit).
+    pub initial_step: Option<f64>,
+    /// Largest step size (default infinity).
+    pub max_step: f64,
+    /// Smallest step size before the integrator gives up (default 0, meaning only the round-off
+    /// bound `4 eps |t|`).
+    pub min_step: f64,
+    /// Newton iterations per attempt (default 4, IDA's `maxcor`).
+    pub max_newton_iterations: usize,
+    /// Newton convergence constant (default 0.33, IDA's `epcon`): the iteration stops when the
+    /// estimated remaining error is below this fraction of the local error tolerance.
+    pub newton_tolerance: f64,
+    /// Newton failures allowed within one step before giving up (default 10).
+    pub max_newton_failures: usize,
+    /// Error test failures allowed within one step before giving up (default 10).
+    pub max_error_test_failures: usize,
+    /// Differential index per component (0 or 1 for ordinary components, 2 or 3 for
+    /// higher-index ones). Empty means every component has index at most 1.
+    pub index: Vec<u8>,
+    /// How components with index 2 or 3 enter the error test.
+    pub higher_index: HigherIndexControl,
+    /// Fixed-step mode only: after Newton's update test passes, the residual must also satisfy
+    /// `max_i |F_i| <= residual_tolerance` (default `1e-8`); `f64::INFINITY` disables the check.
+    pub residual_tolerance: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            rtol: Tolerance::Scalar(1e-6),
+            atol: Tolerance::Scalar(1e-8),
+            max_order: 5,
+            max_steps: 100_000,
+            initial_step: None,
+            max_step: f64::INFINITY,
+            min_step: 0.0,
+            max_newton_iterations: 4,
+            newton_tolerance: 0.33,
+            max_newton_failures: 10,
+            max_error_test_failures: 10,
+            index: Vec::new(),
+            higher_index: HigherIndexControl::Exclude,
+            residual_tolerance: 1e-8,
+        }
+    }
+}
+
+impl Options {
+    /// Options with scalar relative and absolute tolerances, other fields default.
+    pub fn with_tolerances(rtol: f64, atol: f64) -> Self {
+        Self {
+            rtol: Tolerance::Scalar(rtol),
+            atol: Tolerance::Scalar(atol),
+            ..Self::default()
+        }
+    }
+
+    /// Check every field against the dimension `n` of the DAE.
+    ///
+    /// # Errors
+    /// [`BdfError::InvalidTolerance`], [`BdfError::DimensionMismatch`] or
+    /// [`BdfError::InvalidOption`].
+    pub fn validate(&self, n: usize) -> Result<(), BdfError> {
+        self.rtol.check("rtol", n)?;
+        self.atol.check("atol", n)?;
+        for i in 0..n {
+            if self.rtol.get(i) == 0.0 && self.atol.get(i) == 0.0 {
+                return Err(BdfError::InvalidTolerance(format!(
+                    "rtol[{i}] and atol[{i}] are both zero"
+                )));
+            }
+        }
+        if !(1..=5).contains(&self.max_order) {
+            return Err(BdfError::InvalidOption(format!(
+                "max_order = {} is not in 1..=5",
+                self.max_order
+            )));
+        }
+        if !self.index.is_empty() && self.index.len() != n {
+            return Err(BdfError::DimensionMismatch {
+                what: "index",
+                expected: n,
+                found: self.index.len(),
+            });
+        }
+        if let Some(&m) = self.index.iter().find(|&&m| m > 3) {
+            return Err(BdfError::InvalidOption(format!(
+                "index {m} is not supported (at most 3)"
+            )));
+        }
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if let Some(h) = self.initial_step {
+            if !positive(h) {
+                return Err(BdfError::InvalidOption(format!("initial_step = {h}")));
+            }
+        }
+        if self.max_step.is_nan()
+            || self.max_step <= 0.0
+            || !self.min_step.is_finite()
+            || self.min_step < 0.0
+            || self.min_step > self.max_step
+        {
+            return Err(BdfError::InvalidOption(format!(
+                "min_step = {}, max_step = {}",
+                self.min_step, self.max_step
+            )));
+        }
+        if self.max_newton_iterations == 0 || !positive(self.newton_tolerance) {
+            return Err(BdfError::InvalidOption(
+                "max_newton_iterations and newton_tolerance must be positive".into(),
+            ));
+        }
+        if self.residual_tolerance.is_nan() || self.residual_tolerance <= 0.0 {
+            return Err(BdfError::InvalidOption(format!(
+                "residual_tolerance = {}",
+                self.residual_tolerance
+            )));
+        }
+        Ok(())
+    }
+
+    /// Index of component `i` (at least 1).
+    #[inline]
+    pub(crate) fn index_of(&self, i: usize) -> u8 {
+        self.index.get(i).copied().unwrap_or(1).max(1)
+    }
+}

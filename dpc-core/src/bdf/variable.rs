@@ -1,0 +1,667 @@
+//! The variable-step, variable-order integrator ([`Bdf`]).
+//!
+//! Fixed-leading-coefficient BDF in modified-divided-difference form, as in DASSL and IDA
+//! (Brenan, Campbell & Petzold 1989, Section 5.2; Hindmarsh et al. 2005, Section 2.1). The
+//! history is the array `phi` of modified divided differences; the predictor is their sum,
+//! the corrector is Newton's method on `F(t, y, y'_pred + cj (y - y_pred)) = 0` with
+//! `cj = -alpha_s / h`, and the local error estimate is `ck |y - y_pred|`. Step and order
+//! selection follow IDA's `IDATestError`/`IDACompleteStep`, including the initial phase that
+//! raises the order and doubles the step until the first failure.
+
+use super::newton::{self, error_weights, wrms, JacState, NewtonFailure, NewtonProblem};
+use super::{BdfError, HigherIndexControl, Options, Stats};
+use crate::linalg::LinearSolver;
+use crate::ImplicitDae;
+
+const MAXORD: usize = 5;
+
+/// Variable-step, variable-order BDF integrator for `F(t, y, y') = 0`.
+///
+/// All work vectors are allocated in [`Bdf::new`]; with an allocation-free linear solver
+/// (such as [`crate::linalg::NalgebraLu`]) and model, [`Bdf::step`] and [`Bdf::solve_to`]
+/// never touch the heap (error paths excepted, which build names for the message).
+pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
+    dae: D,
+    ls: L,
+    opts: Options,
+    n: usize,
+    // Method state (names follow IDA).
+    tn: f64,
+    hh: f64,
+    hused: f64,
+    kk: usize,
+    kused: usize,
+    knew: usize,
+    ns: usize,
+    phase: u8,
+    cj: f64,
+    psi: [f64; MAXORD + 2],
+    alpha: [f64; MAXORD + 2],
+    beta: [f64; MAXORD + 2],
+    sigma: [f64; MAXORD + 2],
+    gamma: [f64; MAXORD + 2],
+    ck: f64,
+    err_k: f64,
+    err_km1: f64,
+    terr_k: f64,
+    terr_km1: f64,
+    phi: Vec<Vec<f64>>,
+    h_initialised: bool,
+    tstop: Option<f64>,
+    // Work vectors.
+    y: Vec<f64>,
+    yp: Vec<f64>,
+    y_pred: Vec<f64>,
+    yp_pred: Vec<f64>,
+    ee: Vec<f64>,
+    res: Vec<f64>,
+    delta: Vec<f64>,
+    ewt: Vec<f64>,
+    w_newton: Vec<f64>,
+    w_err: Vec<f64>,
+    jac: JacState,
+    stats: Stats,
+}
+
+impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
+    /// Set up the integrator at `(t0, y0, yp0)`, which must be consistent
+    /// (`F(t0, y0, yp0) = 0`; see [`super::consistent_initial_values`]).
+    ///
+    /// # Errors
+    /// [`BdfError::DimensionMismatch`] if `y0`, `yp0` or the solver do not match
+    /// `dae.dimension()`; option errors from [`Options::validate`];
+    /// [`BdfError::NonFiniteResidual`] if `F(t0, y0, yp0)` is not finite.
+    pub fn new(
+        dae: D,
+        ls: L,
+        opts: Options,
+        t0: f64,
+        y0: &[f64],
+        yp0: &[f64],
+    ) -> Result<Self, BdfError> {
+        let n = dae.dimension();
+        for (what, found) in [
+            ("y0", y0.len()),
+            ("yp0", yp0.len()),
+            ("linear solver", ls.dimension()),
+        ] {
+            if found != n {
+                return Err(BdfError::DimensionMismatch {
+                    what,
+                    expected: n,
+                    found,
+                });
+            }
+        }
+        opts.validate(n)?;
+        if !t0.is_finite() {
+            return Err(BdfError::InvalidOption(format!("t0 = {t0}")));
+        }
+        let mut res = vec![0.0; n];
+        dae.residual(t0, y0, yp0, &mut res);
+        if let Some(i) = newton::first_non_finite(&res) {
+            return Err(BdfError::NonFiniteResidual {
+                t: t0,
+                equation: dae.equation_name(i),
+            });
+        }
+        let mut phi = vec![vec![0.0; n]; MAXORD + 2];
+        phi[0].copy_from_slice(y0);
+        phi[1].copy_from_slice(yp0);
+        let mut ewt = vec![0.0; n];
+        error_weights(&opts, y0, &mut ewt)?;
+        let stats = Stats {
+            residual_evaluations: 1,
+            ..Stats::default()
+        };
+        Ok(Self {
+            dae,
+            ls,
+            n,
+            tn: t0,
+            hh: 0.0,
+            hused: 0.0,
+            kk: 1,
+            kused: 0,
+            knew: 1,
+            ns: 0,
+            phase: 0,
+            cj: 0.0,
+            psi: [0.0; MAXORD + 2],
+            alpha: [0.0; MAXORD + 2],
+            beta: [0.0; MAXORD + 2],
+            sigma: [0.0; MAXORD + 2],
+            gamma: [0.0; MAXORD + 2],
+            ck: 0.0,
+            err_k: 0.0,
+            err_km1: 0.0,
+            terr_k: 0.0,
+            terr_km1: 0.0,
+            phi,
+            h_initialised: false,
+            tstop: None,
+            y: y0.to_vec(),
+            yp: yp0.to_vec(),
+            y_pred: vec![0.0; n],
+            yp_pred: vec![0.0; n],
+            ee: vec![0.0; n],
+            res,
+            delta: vec![0.0; n],
+            w_newton: ewt.clone(),
+            w_err: ewt.clone(),
+            ewt,
+            jac: JacState::default(),
+            stats,
+            opts,
+        })
+    }
+
+    /// The DAE being integrated.
+    pub fn dae(&self) -> &D {
+        &self.dae
+    }
+
+    /// Work counters so far.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Time reached by the last accepted step.
+    pub fn t(&self) -> f64 {
+        self.tn
+    }
+
+    /// Solution at [`t`](Self::t).
+    pub fn y(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// Derivative at [`t`](Self::t).
+    pub fn yp(&self) -> &[f64] {
+        &self.yp
+    }
+
+    /// Order used in the last step (0 before the first).
+    pub fn last_order(&self) -> usize {
+        self.kused
+    }
+
+    /// Step size used in the last step (0 before the first).
+    pub fn last_step(&self) -> f64 {
+        self.hused
+    }
+
+    /// Never step past `tstop` (for example a discontinuity of the model's inputs).
+    ///
+    /// # Errors
+    /// [`BdfError::InvalidOption`] if `tstop` is not ahead of the current time.
+    pub fn set_stop_time(&mut self, tstop: f64) -> Result<(), BdfError> {
+        if tstop <= self.tn || !tstop.is_finite() {
+            return Err(BdfError::InvalidOption(format!(
+                "stop time {tstop} is not ahead of t = {}",
+                self.tn
+            )));
+        }
+        self.tstop = Some(tstop);
+        Ok(())
+    }
+
+    fn init_step(&mut self, tout: f64) {
+        let mut h = match self.opts.initial_step {
+            Some(h) => h,
+            None => {
+                let tdist = (tout - self.tn).abs();
+                let mut h = if tdist > 0.0 {
+                    1e-3 * tdist
+                } else {
+                    1e-6 * self.tn.abs().max(1.0)
+                };
+                let ypnorm = wrms(&self.phi[1], &self.ewt);
+                if ypnorm * h > 0.5 {
+                    h = 0.5 / ypnorm;
+                }
+                h
+            }
+        };
+        h = h.min(self.opts.max_step);
+        self.hh = h;
+        // phi[1] holds h y'(t0) from here on.
+        for v in &mut self.phi[1] {
+            *v *= h;
+        }
+        self.h_initialised = true;
+    }
+
+    /// Integrate to `tout` (ahead of the initial time) and write `y(tout)` (and `y'(tout)` if
+    /// given) by interpolation with the polynomial of the last step.
+    ///
+    /// # Errors
+    /// Any step failure; [`BdfError::TooManySteps`] after [`Options::max_steps`] steps in this
+    /// call; [`BdfError::InvalidOption`] if `tout` lies before the last step.
+    pub fn solve_to(
+        &mut self,
+        tout: f64,
+        y_out: &mut [f64],
+        yp_out: Option<&mut [f64]>,
+    ) -> Result<(), BdfError> {
+        if y_out.len() != self.n {
+            return Err(BdfError::DimensionMismatch {
+                what: "y_out",
+                expected: self.n,
+                found: y_out.len(),
+            });
+        }
+        if !self.h_initialised {
+            if tout <= self.tn || tout.is_nan() {
+                return Err(BdfError::InvalidOption(format!(
+                    "tout = {tout} is not ahead of t0 = {}",
+                    self.tn
+                )));
+            }
+            self.init_step(tout);
+        }
+        let mut steps = 0;
+        while self.tn < tout {
+            if steps >= self.opts.max_steps {
+                return Err(BdfError::TooManySteps {
+                    max_steps: self.opts.max_steps,
+                    tout,
+                    t: self.tn,
+                });
+            }
+            if let Some(ts) = self.tstop {
+                if ts <= tout && self.tn >= ts {
+                    break;
+                }
+            }
+            self.step_internal()?;
+            steps += 1;
+        }
+        self.interpolate(tout, y_out, yp_out)
+    }
+
+    /// Take one step; returns the new time.
+    ///
+    /// # Errors
+    /// [`BdfError::NewtonFailed`], [`BdfError::ErrorTestFailed`], [`BdfError::SingularMatrix`],
+    /// [`BdfError::NonFiniteResidual`] when a step cannot be completed even at the minimum
+    /// step size; [`BdfError::InvalidTolerance`] when an error weight becomes non-positive.
+    pub fn step(&mut self) -> Result<f64, BdfError> {
+        if !self.h_initialised {
+            let t = self.tn;
+            self.init_step(t);
+        }
+        self.step_internal()?;
+        Ok(self.tn)
+    }
+
+    /// Interpolate the solution (and derivative) at `t` in `[t - h_last, t]` of the last step,
+    /// with the interpolating polynomial of the order used (IDA's `IDAGetSolution`).
+    ///
+    /// # Errors
+    /// [`BdfError::InvalidOption`] if `t` is outside the last step (with a round-off margin).
+    pub fn interpolate(
+        &self,
+        t: f64,
+        y_out: &mut [f64],
+        yp_out: Option<&mut [f64]>,
+    ) -> Result<(), BdfError> {
+        if y_out.len() != self.n {
+            return Err(BdfError::DimensionMismatch {
+                what: "y_out",
+                expected: self.n,
+                found: y_out.len(),
+            });
+        }
+        let margin = 100.0 * f64::EPSILON * (self.tn.abs() + self.hused.abs());
+        if t > self.tn + margin || t < self.tn - self.hused - margin {
+            return Err(BdfError::InvalidOption(format!(
+                "interpolation time {t} outside the last step [{}, {}]",
+                self.tn - self.hused,
+                self.tn
+            )));
+        }
+        if self.stats.steps == 0 {
+            y_out.copy_from_slice(&self.phi[0]);
+            if let Some(yp) = yp_out {
+                yp.copy_from_slice(&self.yp);
+            }
+            return Ok(());
+        }
+        super::dense::interpolate(&self.phi, &self.psi, self.kused, self.tn, t, y_out, yp_out);
+        Ok(())
+    }
+
+    fn hmin(&self) -> f64 {
+        self.opts.min_step.max(4.0 * f64::EPSILON * self.tn.abs())
+    }
+
+    /// Weights for Newton and the error test from the current solution and step.
+    fn update_weights(&mut self) -> Result<(), BdfError> {
+        error_weights(&self.opts, &self.phi[0], &mut self.ewt)?;
+        let hs = self.hh.abs().min(1.0);
+        for i in 0..self.n {
+            let m = self.opts.index_of(i);
+            let w = self.ewt[i];
+            if m <= 1 {
+                self.w_newton[i] = w;
+                self.w_err[i] = w;
+                continue;
+            }
+            let s = w * hs.powi(i32::from(m) - 1);
+            (self.w_newton[i], self.w_err[i]) = match self.opts.higher_index {
+                // IDA's suppressalg: Newton keeps the plain weight. On the pendulum this gives
+                // fewer steps and more digits than scaling Newton's weights as well.
+                HigherIndexControl::Exclude => (w, 0.0),
+                HigherIndexControl::Scale => (s, s),
+            };
+        }
+        Ok(())
+    }
+
+    fn step_internal(&mut self) -> Result<(), BdfError> {
+        if self.stats.steps == 0 {
+            self.kk = 1;
+            self.kused = 0;
+            self.hused = 0.0;
+            self.psi[0] = self.hh;
+            self.cj = 1.0 / self.hh;
+            self.phase = 0;
+            self.ns = 0;
+        }
+        if let Some(ts) = self.tstop {
+            if self.tn + self.hh > ts {
+                let hnew = ts - self.tn;
+                if self.stats.steps == 0 {
+                    let r = hnew / self.hh;
+                    self.phi[1].iter_mut().for_each(|v| *v *= r);
+                    self.psi[0] = hnew;
+                }
+                self.hh = hnew;
+            }
+        }
+        let saved_t = self.tn;
+        let mut ncf = 0;
+        let mut nef = 0;
+        loop {
+            self.update_weights()?;
+            self.set_coeffs();
+            self.tn = saved_t + self.hh;
+            self.predict();
+            let problem = NewtonProblem {
+                t: self.tn,
+                cj: self.cj,
+                y_pred: &self.y_pred,
+                yp_pred: &self.yp_pred,
+                w: &self.w_newton,
+                max_iterations: self.opts.max_newton_iterations,
+                epcon: self.opts.newton_tolerance,
+                residual_tolerance: f64::INFINITY,
+                force_setup: self.stats.steps == 0 && ncf == 0 && nef == 0,
+            };
+            let outcome = newton::solve(
+                &self.dae,
+                &mut self.ls,
+                &mut self.jac,
+                &mut self.stats,
+                &problem,
+                &mut self.y,
+                &mut self.yp,
+                &mut self.ee,
+                &mut self.res,
+                &mut self.delta,
+            );
+            match outcome {
+                Ok(_) => {
+                    if self.error_test() {
+                        break;
+                    }
+                    self.restore(saved_t);
+                    self.stats.error_test_failures += 1;
+                    nef += 1;
+                    self.phase = 1;
+                    if nef >= self.opts.max_error_test_failures {
+                        return Err(BdfError::ErrorTestFailed {
+                            t: saved_t + self.hh,
+                            h: self.hh,
+                        });
+                    }
+                    let h_old = self.hh;
+                    if nef == 1 {
+                        let err = if self.knew + 1 == self.kk {
+                            self.err_km1
+                        } else {
+                            self.err_k
+                        };
+                        self.kk = self.knew;
+                        let rr = 0.9 * (2.0 * err + 1e-4).powf(-1.0 / (self.kk as f64 + 1.0));
+                        self.hh *= rr.clamp(0.25, 0.9);
+                    } else if nef == 2 {
+                        self.kk = self.knew;
+                        self.hh *= 0.25;
+                    } else {
+                        self.kk = 1;
+                        self.hh *= 0.25;
+                    }
+                    if self.hh.abs() < self.hmin() {
+                        return Err(BdfError::ErrorTestFailed {
+                            t: saved_t + h_old,
+                            h: h_old,
+                        });
+                    }
+                    self.after_failure(h_old);
+                }
+                Err(fail) => {
+                    self.restore(saved_t);
+                    self.stats.newton_failures += 1;
+                    ncf += 1;
+                    self.phase = 1;
+                    if let NewtonFailure::OutsidePattern(..) = fail {
+                        return Err(fail.into_error(&self.dae, saved_t + self.hh, self.hh));
+                    }
+                    let h_old = self.hh;
+                    self.hh *= 0.25;
+                    if ncf >= self.opts.max_newton_failures || self.hh.abs() < self.hmin() {
+                        return Err(fail.into_error(&self.dae, saved_t + h_old, h_old));
+                    }
+                    self.after_failure(h_old);
+                }
+            }
+        }
+        self.complete_step();
+        Ok(())
+    }
+
+    fn after_failure(&mut self, h_old: f64) {
+        if self.stats.steps == 0 {
+            let r = self.hh / h_old;
+            self.psi[0] = self.hh;
+            self.phi[1].iter_mut().for_each(|v| *v *= r);
+        }
+    }
+
+    /// IDA's `IDASetCoeffs`: coefficients of the modified divided differences for step `hh`
+    /// and order `kk`, and the scaling of `phi` to `phi*`.
+    fn set_coeffs(&mut self) {
+        let kk = self.kk;
+        if self.hh != self.hused || kk != self.kused {
+            self.ns = 0;
+        }
+        self.ns = (self.ns + 1).min(self.kused + 2);
+        if kk + 1 >= self.ns {
+            self.beta[0] = 1.0;
+            self.alpha[0] = 1.0;
+            let mut temp1 = self.hh;
+            self.gamma[0] = 0.0;
+            self.sigma[0] = 1.0;
+            for i in 1..=kk {
+                let temp2 = self.psi[i - 1];
+                self.psi[i - 1] = temp1;
+                self.beta[i] = self.beta[i - 1] * self.psi[i - 1] / temp2;
+                temp1 = temp2 + self.hh;
+                self.alpha[i] = self.hh / temp1;
+                self.sigma[i] = i as f64 * self.sigma[i - 1] * self.alpha[i];
+                self.gamma[i] = self.gamma[i - 1] + self.alpha[i - 1] / self.hh;
+            }
+            self.psi[kk] = temp1;
+        }
+        let mut alphas = 0.0;
+        let mut alpha0 = 0.0;
+        for i in 0..kk {
+            alphas -= 1.0 / (i as f64 + 1.0);
+            alpha0 -= self.alpha[i];
+        }
+        self.cj = -alphas / self.hh;
+        self.ck = (self.alpha[kk] + alphas - alpha0).abs().max(self.alpha[kk]);
+        if self.ns <= kk {
+            for i in self.ns..=kk {
+                let b = self.beta[i];
+                self.phi[i].iter_mut().for_each(|v| *v *= b);
+            }
+        }
+    }
+
+    /// IDA's `IDAPredict`.
+    fn predict(&mut self) {
+        self.y_pred.copy_from_slice(&self.phi[0]);
+        self.yp_pred.fill(0.0);
+        for j in 1..=self.kk {
+            let g = self.gamma[j];
+            for i in 0..self.n {
+                self.y_pred[i] += self.phi[j][i];
+                self.yp_pred[i] += g * self.phi[j][i];
+            }
+        }
+    }
+
+    /// IDA's `IDARestore`: undo `set_coeffs` after a failed attempt.
+    fn restore(&mut self, saved_t: f64) {
+        self.tn = saved_t;
+        for j in 1..=self.kk {
+            self.psi[j - 1] = self.psi[j] - self.hh;
+        }
+        if self.ns <= self.kk {
+            for j in self.ns..=self.kk {
+                let b = 1.0 / self.beta[j];
+                self.phi[j].iter_mut().for_each(|v| *v *= b);
+            }
+        }
+    }
+
+    /// IDA's `IDATestError`: local error test and the order `knew` suggested after it.
+    fn error_test(&mut self) -> bool {
+        let kk = self.kk;
+        let enorm_k = wrms(&self.ee, &self.w_err);
+        self.err_k = self.sigma[kk] * enorm_k;
+        self.terr_k = (kk as f64 + 1.0) * self.err_k;
+        self.knew = kk;
+        if kk > 1 {
+            for i in 0..self.n {
+                self.delta[i] = self.phi[kk][i] + self.ee[i];
+            }
+            let enorm_km1 = wrms(&self.delta, &self.w_err);
+            self.err_km1 = self.sigma[kk - 1] * enorm_km1;
+            self.terr_km1 = kk as f64 * self.err_km1;
+            if kk > 2 {
+                for i in 0..self.n {
+                    self.delta[i] += self.phi[kk - 1][i];
+                }
+                let enorm_km2 = wrms(&self.delta, &self.w_err);
+                let err_km2 = self.sigma[kk - 2] * enorm_km2;
+                let terr_km2 = (kk as f64 - 1.0) * err_km2;
+                if self.terr_km1.max(terr_km2) <= self.terr_k {
+                    self.knew = kk - 1;
+                }
+            } else if self.terr_km1 <= 0.5 * self.terr_k {
+                self.knew = kk - 1;
+            }
+        }
+        self.ck * enorm_k <= 1.0
+    }
+
+    /// IDA's `IDACompleteStep`: accept the step, choose the next order and step, update `phi`.
+    fn complete_step(&mut self) {
+        self.stats.steps += 1;
+        let kk = self.kk;
+        let kdiff = kk as isize - self.kused as isize;
+        self.kused = kk;
+        self.hused = self.hh;
+        let maxord = self.opts.max_order;
+        if self.knew + 1 == kk || kk == maxord {
+            self.phase = 1;
+        }
+        let hmax = self.opts.max_step;
+        if self.phase == 0 {
+            if self.stats.steps > 1 {
+                self.kk += 1;
+                self.hh = (2.0 * self.hh).min(hmax);
+            }
+        } else {
+            #[derive(PartialEq)]
+            enum Action {
+                Unset,
+                Lower,
+                Maintain,
+                Raise,
+            }
+            let mut action = Action::Unset;
+            if self.knew + 1 == kk {
+                action = Action::Lower;
+            } else if kk == maxord || kk + 1 >= self.ns || kdiff == 1 {
+                action = Action::Maintain;
+            }
+            let mut err_kp1 = 0.0;
+            if action == Action::Unset {
+                for i in 0..self.n {
+                    self.delta[i] = self.ee[i] - self.phi[kk + 1][i];
+                }
+                let enorm_kp1 = wrms(&self.delta, &self.w_err);
+                err_kp1 = enorm_kp1 / (kk as f64 + 2.0);
+                let terr_kp1 = enorm_kp1;
+                action = if kk == 1 {
+                    if terr_kp1 >= 0.5 * self.terr_k {
+                        Action::Maintain
+                    } else {
+                        Action::Raise
+                    }
+                } else if self.terr_km1 <= self.terr_k.min(terr_kp1) {
+                    Action::Lower
+                } else if terr_kp1 >= self.terr_k {
+                    Action::Maintain
+                } else {
+                    Action::Raise
+                };
+            }
+            let err_knew = match action {
+                Action::Raise => {
+                    self.kk += 1;
+                    err_kp1
+                }
+                Action::Lower => {
+                    self.kk -= 1;
+                    self.err_km1
+                }
+                _ => self.err_k,
+            };
+            let rr = (2.0 * err_knew + 1e-4).powf(-1.0 / (self.kk as f64 + 1.0));
+            if rr >= 2.0 {
+                self.hh = (2.0 * self.hh).min(hmax);
+            } else if rr <= 1.0 {
+                self.hh *= rr.clamp(0.5, 0.9);
+            }
+        }
+        let ku = self.kused;
+        if ku < MAXORD {
+            let (lo, hi) = self.phi.split_at_mut(ku + 1);
+            hi[0].copy_from_slice(&self.ee);
+            lo[ku].iter_mut().zip(&self.ee).for_each(|(p, e)| *p += e);
+        } else {
+            let ee = &self.ee;
+            self.phi[ku].iter_mut().zip(ee).for_each(|(p, e)| *p += e);
+        }
+        for j in (0..ku).rev() {
+            let (lo, hi) = self.phi.split_at_mut(j + 1);
+            lo[j].iter_mut().zip(&hi[0]).for_each(|(p, q)| *p += q);
+        }
+    }
+}

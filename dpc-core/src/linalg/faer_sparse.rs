@@ -1,0 +1,209 @@
+//! Sparse LU (faer) for iteration matrices with a known structural pattern.
+
+use faer::linalg::solvers::SolveCore;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::linalg::LuError;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{Conj, MatMut};
+
+use super::{FactorError, LinearSolver};
+use crate::sink::MatrixSink;
+
+/// Values of a sparse matrix laid out by a fixed compressed-column pattern; a [`MatrixSink`].
+///
+/// Writes to positions outside the pattern are not stored; the first one is remembered and
+/// reported by [`FaerSparseLu::factor`] as [`FactorError::OutsidePattern`].
+#[derive(Debug, Clone)]
+pub struct PatternMatrix {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    values: Vec<f64>,
+    outside: Option<(usize, usize)>,
+}
+
+impl PatternMatrix {
+    fn slot(&self, row: usize, col: usize) -> Option<usize> {
+        if col >= self.n {
+            return None;
+        }
+        let (lo, hi) = (self.col_ptr[col], self.col_ptr[col + 1]);
+        self.row_idx[lo..hi]
+            .binary_search(&row)
+            .ok()
+            .map(|k| lo + k)
+    }
+
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.values.len()
+    }
+}
+
+impl MatrixSink for PatternMatrix {
+    fn rows(&self) -> usize {
+        self.n
+    }
+    fn cols(&self) -> usize {
+        self.n
+    }
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        match self.slot(row, col) {
+            Some(k) => self.values[k] = value,
+            None => {
+                if value != 0.0 {
+                    self.outside.get_or_insert((row, col));
+                }
+            }
+        }
+    }
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        match self.slot(row, col) {
+            Some(k) => self.values[k] += value,
+            None => {
+                if value != 0.0 {
+                    self.outside.get_or_insert((row, col));
+                }
+            }
+        }
+    }
+    fn fill_zero(&mut self) {
+        self.values.fill(0.0);
+        self.outside = None;
+    }
+}
+
+/// Sparse LU with partial pivoting (faer), symbolic analysis done once at construction.
+///
+/// The diagonal is always added to the pattern, so a model may leave it out.
+#[derive(Debug)]
+pub struct FaerSparseLu {
+    matrix: PatternMatrix,
+    symbolic_mat: SymbolicSparseColMat<usize>,
+    symbolic: SymbolicLu<usize>,
+    lu: Option<Lu<usize, f64>>,
+}
+
+impl FaerSparseLu {
+    /// A solver for `n x n` systems with non-zeros only at `pattern` (`(row, col)` pairs) and
+    /// on the diagonal.
+    ///
+    /// # Errors
+    /// [`FactorError::OutsidePattern`] if an index is out of range, [`FactorError::Singular`]
+    /// if faer's symbolic analysis fails.
+    pub fn new(n: usize, pattern: &[(usize, usize)]) -> Result<Self, FactorError> {
+        let mut entries: Vec<(usize, usize)> = pattern
+            .iter()
+            .map(|&(r, c)| (c, r))
+            .chain((0..n).map(|i| (i, i)))
+            .collect();
+        if let Some(&(c, r)) = entries.iter().find(|&&(c, r)| r >= n || c >= n) {
+            return Err(FactorError::OutsidePattern { row: r, col: c });
+        }
+        entries.sort_unstable();
+        entries.dedup();
+        let mut col_ptr = vec![0usize; n + 1];
+        for &(c, _) in &entries {
+            col_ptr[c + 1] += 1;
+        }
+        for c in 0..n {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let row_idx: Vec<usize> = entries.iter().map(|&(_, r)| r).collect();
+        let symbolic_mat =
+            SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
+        let symbolic =
+            SymbolicLu::try_new(symbolic_mat.as_ref()).map_err(|_| FactorError::Singular {
+                column: None,
+                row: None,
+            })?;
+        let nnz = row_idx.len();
+        Ok(Self {
+            matrix: PatternMatrix {
+                n,
+                col_ptr,
+                row_idx,
+                values: vec![0.0; nnz],
+                outside: None,
+            },
+            symbolic_mat,
+            symbolic,
+            lu: None,
+        })
+    }
+}
+
+impl LinearSolver for FaerSparseLu {
+    type Matrix = PatternMatrix;
+
+    fn dimension(&self) -> usize {
+        self.matrix.n
+    }
+
+    fn matrix_mut(&mut self) -> &mut Self::Matrix {
+        &mut self.matrix
+    }
+
+    fn factor(&mut self) -> Result<(), FactorError> {
+        self.lu = None;
+        if let Some((row, col)) = self.matrix.outside {
+            return Err(FactorError::OutsidePattern { row, col });
+        }
+        let m = &self.matrix;
+        if let Some(v) = m.values.iter().position(|v| !v.is_finite()) {
+            let col = m.col_ptr.partition_point(|&p| p <= v) - 1;
+            return Err(FactorError::Singular {
+                column: Some(col),
+                row: None,
+            });
+        }
+        let zero_row = {
+            let mut nonzero = vec![false; m.n];
+            for (k, &r) in m.row_idx.iter().enumerate() {
+                nonzero[r] |= m.values[k] != 0.0;
+            }
+            nonzero.iter().position(|&b| !b)
+        };
+        if let Some(col) = (0..m.n).find(|&c| {
+            m.values[m.col_ptr[c]..m.col_ptr[c + 1]]
+                .iter()
+                .all(|v| *v == 0.0)
+        }) {
+            return Err(FactorError::Singular {
+                column: Some(col),
+                row: zero_row,
+            });
+        }
+        let a = SparseColMatRef::new(self.symbolic_mat.as_ref(), &m.values);
+        match Lu::try_new_with_symbolic(self.symbolic.clone(), a) {
+            Ok(lu) => {
+                if zero_row.is_some() {
+                    return Err(FactorError::Singular {
+                        column: None,
+                        row: zero_row,
+                    });
+                }
+                self.lu = Some(lu);
+                Ok(())
+            }
+            Err(LuError::SymbolicSingular { index }) => Err(FactorError::Singular {
+                column: Some(index),
+                row: zero_row,
+            }),
+            Err(LuError::Generic(_)) => Err(FactorError::Singular {
+                column: None,
+                row: zero_row,
+            }),
+        }
+    }
+
+    fn solve_in_place(&mut self, b: &mut [f64]) {
+        if let Some(lu) = &self.lu {
+            let n = b.len();
+            let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
+            // faer does not report numerically zero pivots; a non-finite solution is caught by
+            // the integrator's Newton iteration and reported as a failure.
+            lu.solve_in_place_with_conj(Conj::No, rhs);
+        }
+    }
+}

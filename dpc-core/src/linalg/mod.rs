@@ -1,0 +1,77 @@
+//! Linear solvers for the BDF iteration matrix `G = dF/dy + (alpha/h) dF/dy'`.
+//!
+//! One trait, [`LinearSolver`], with three implementations chosen by type:
+//!
+//! * [`NalgebraLu`]: fixed-size `SMatrix<f64, N, N>` with nalgebra's partial-pivoting LU on the
+//!   stack, for models generated with compile-time dimensions. Nothing allocates after
+//!   construction, so an integrator step built on it is allocation-free.
+//! * [`FaerDenseLu`]: faer's blocked partial-pivoting LU on a heap matrix, with the
+//!   permutation and scratch memory allocated once at construction.
+//! * [`FaerSparseLu`]: faer's sparse LU (symbolic analysis once, from
+//!   [`crate::ImplicitDae::iteration_pattern`], numeric factorisation per Jacobian update).
+//!
+//! The integrator writes `G` into [`LinearSolver::matrix_mut`] after zeroing it, calls
+//! [`LinearSolver::factor`], then solves as often as Newton needs with
+//! [`LinearSolver::solve_in_place`].
+
+mod faer_dense;
+mod faer_sparse;
+mod nalgebra_lu;
+
+pub use faer_dense::FaerDenseLu;
+pub use faer_sparse::{FaerSparseLu, PatternMatrix};
+pub use nalgebra_lu::NalgebraLu;
+
+use crate::sink::MatrixSink;
+
+/// Why a factorisation failed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum FactorError {
+    /// The matrix is (numerically or structurally) singular.
+    ///
+    /// `column` is the unknown whose pivot vanished, `row` an equation whose row of the matrix
+    /// is entirely zero, when such a row exists (the usual cause: an equation that does not
+    /// depend on any unknown at this `alpha/h`).
+    #[error("singular matrix (zero pivot in column {column:?}, zero row {row:?})")]
+    Singular {
+        /// Column (unknown) index whose pivot vanished, when known.
+        column: Option<usize>,
+        /// Row (equation) index that is entirely zero, when there is one.
+        row: Option<usize>,
+    },
+    /// The model wrote an entry outside the sparsity pattern it declared.
+    #[error("entry ({row}, {col}) lies outside the declared sparsity pattern")]
+    OutsidePattern {
+        /// Row of the offending entry.
+        row: usize,
+        /// Column of the offending entry.
+        col: usize,
+    },
+}
+
+/// A linear solver for a square system whose matrix is written through a [`MatrixSink`].
+pub trait LinearSolver {
+    /// The storage the iteration matrix is written into.
+    type Matrix: MatrixSink;
+
+    /// Size `n` of the `n x n` system.
+    fn dimension(&self) -> usize;
+
+    /// The matrix storage, to be zeroed and filled before [`factor`](Self::factor).
+    fn matrix_mut(&mut self) -> &mut Self::Matrix;
+
+    /// Factorise the matrix currently held in [`matrix_mut`](Self::matrix_mut).
+    ///
+    /// # Errors
+    /// [`FactorError`] when the matrix is singular or was written outside its pattern.
+    fn factor(&mut self) -> Result<(), FactorError>;
+
+    /// Overwrite `b` (length [`dimension`](Self::dimension)) with the solution of `A x = b`
+    /// for the last successfully factorised `A`.
+    fn solve_in_place(&mut self, b: &mut [f64]);
+}
+
+/// First row of a dense column-major accessor that is entirely zero, if any.
+pub(crate) fn zero_row(n: usize, get: impl Fn(usize, usize) -> f64) -> Option<usize> {
+    (0..n).find(|&i| (0..n).all(|j| get(i, j) == 0.0))
+}

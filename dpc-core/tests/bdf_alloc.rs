@@ -1,0 +1,114 @@
+//! The fixed-size back end makes integration steps allocation-free after setup.
+//!
+//! A counting global allocator (in its own test binary, so no other test interferes) records
+//! every allocation; after the integrator is built and has taken its first step, further
+//! steps, output requests and interpolation must not allocate at all.
+
+#[path = "common/bdf_problems.rs"]
+mod problems;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use dpc_core::bdf::{Bdf, FixedBdf, Options, Tolerance};
+use dpc_core::linalg::NalgebraLu;
+use problems::{robertson_atol, Pendulum, Robertson, PENDULUM_INDEX};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator and only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.load(Ordering::SeqCst)
+}
+
+// One test function only: the harness itself may allocate in other threads while tests run.
+#[test]
+fn steps_after_setup_do_not_allocate() {
+    // Variable step, Robertson (index 1): thousands of steps with rejections, order changes,
+    // Jacobian refreshes and interpolation.
+    let rtol = 1e-6;
+    let opts = Options {
+        rtol: Tolerance::Scalar(rtol),
+        atol: Tolerance::Vector(robertson_atol(rtol)),
+        ..Options::default()
+    };
+    let mut bdf = Bdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        opts,
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[-0.04, 0.04, 0.0],
+    )
+    .unwrap();
+    let mut y = [0.0; 3];
+    let mut yp = [0.0; 3];
+    bdf.solve_to(1e-6, &mut y, Some(&mut yp)).unwrap();
+    let before = allocations();
+    let mut t = 1e-5;
+    while t <= 1e10 {
+        bdf.solve_to(t, &mut y, Some(&mut yp)).unwrap();
+        t *= 10.0;
+    }
+    let steps = bdf.stats().steps;
+    let during = allocations() - before;
+    assert!(steps > 100, "{steps}");
+    assert!(bdf.stats().error_test_failures > 0 && bdf.stats().factorisations > 10);
+    assert_eq!(during, 0, "{during} allocations in {steps} steps");
+
+    // Variable step, index-3 pendulum with excluded components.
+    let p = Pendulum::default();
+    let (y0, yp0) = p.initial(1.0);
+    let opts = Options {
+        index: PENDULUM_INDEX.to_vec(),
+        ..Options::with_tolerances(1e-6, 1e-6)
+    };
+    let mut bdf = Bdf::new(p, NalgebraLu::<5>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    let mut y = [0.0; 5];
+    bdf.step().unwrap();
+    let before = allocations();
+    for k in 1..=30 {
+        bdf.solve_to(0.1 * f64::from(k), &mut y, None).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
+
+    // Fixed step from inconsistent values.
+    let mut f = FixedBdf::new(
+        p,
+        NalgebraLu::<5>::new(),
+        Options::default(),
+        3,
+        1e-3,
+        0.0,
+        &[0.8, -0.6, 1.0, 1.0, 0.0],
+    )
+    .unwrap();
+    f.step().unwrap();
+    let before = allocations();
+    for _ in 0..1000 {
+        f.step().unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
+}

@@ -1,0 +1,420 @@
+//! Every user- or model-caused failure of the integrator is a typed error, never a panic.
+
+#[path = "common/bdf_problems.rs"]
+mod problems;
+
+use dpc_core::bdf::{consistent_initial_values, Bdf, BdfError, FixedBdf, Options, Tolerance};
+use dpc_core::linalg::{FaerDenseLu, FaerSparseLu, NalgebraLu};
+use dpc_core::{ImplicitDae, MatrixSink};
+use problems::Robertson;
+
+/// `y0' + y0 = 0` and a second equation chosen by `kind`:
+/// 0: `0 = y0 - 1` (the unknown `z` appears nowhere: singular column);
+/// 1: `0 = 0` (an empty equation: singular row);
+/// 2: `0 = z - y0` but the residual is NaN for `t > 0.5`.
+struct Broken {
+    kind: u8,
+}
+
+impl ImplicitDae for Broken {
+    fn dimension(&self) -> usize {
+        2
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        out[0] = yp[0] + y[0];
+        out[1] = match self.kind {
+            0 => y[0] - 1.0,
+            1 => 0.0,
+            _ => {
+                if t > 0.5 {
+                    f64::NAN
+                } else {
+                    y[1] - y[0]
+                }
+            }
+        };
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        _: &[f64],
+        _: &[f64],
+        c: f64,
+        m: &mut S,
+    ) {
+        m.set(0, 0, 1.0 + c);
+        match self.kind {
+            0 => m.set(1, 0, 1.0),
+            1 => {}
+            _ => {
+                m.set(1, 1, 1.0);
+                m.set(1, 0, -1.0);
+            }
+        }
+    }
+    fn is_differential(&self, i: usize) -> bool {
+        i == 0
+    }
+    fn equation_name(&self, i: usize) -> String {
+        ["decay", "constraint"][i].to_string()
+    }
+    fn unknown_name(&self, i: usize) -> String {
+        ["x", "z"][i].to_string()
+    }
+}
+
+fn run<L: dpc_core::linalg::LinearSolver>(kind: u8, ls: L, y0: [f64; 2]) -> Result<(), BdfError> {
+    let yp0 = [-y0[0], 0.0];
+    let mut bdf = Bdf::new(Broken { kind }, ls, Options::default(), 0.0, &y0, &yp0)?;
+    let mut y = [0.0; 2];
+    bdf.solve_to(1.0, &mut y, None)
+}
+
+#[test]
+fn singular_column_names_the_unknown() {
+    for err in [
+        run(0, NalgebraLu::<2>::new(), [1.0, 0.0]).unwrap_err(),
+        run(0, FaerDenseLu::new(2), [1.0, 0.0]).unwrap_err(),
+    ] {
+        match err {
+            BdfError::SingularMatrix { unknown, .. } => assert_eq!(unknown.as_deref(), Some("z")),
+            e => panic!("unexpected {e:?}"),
+        }
+    }
+    let sparse = FaerSparseLu::new(2, &[(0, 0), (1, 0)]).unwrap();
+    assert!(matches!(
+        run(0, sparse, [1.0, 0.0]),
+        Err(BdfError::SingularMatrix { .. })
+    ));
+}
+
+#[test]
+fn singular_row_names_the_equation() {
+    match run(1, NalgebraLu::<2>::new(), [1.0, 0.0]).unwrap_err() {
+        BdfError::SingularMatrix { equation, .. } => {
+            assert_eq!(equation.as_deref(), Some("constraint"))
+        }
+        e => panic!("unexpected {e:?}"),
+    }
+    let sparse = FaerSparseLu::new(2, &[(0, 0)]).unwrap();
+    match run(1, sparse, [1.0, 0.0]).unwrap_err() {
+        BdfError::SingularMatrix { equation, .. } => {
+            assert_eq!(equation.as_deref(), Some("constraint"))
+        }
+        e => panic!("unexpected {e:?}"),
+    }
+}
+
+#[test]
+fn nan_residual_names_the_equation() {
+    match run(2, NalgebraLu::<2>::new(), [1.0, 1.0]).unwrap_err() {
+        BdfError::NonFiniteResidual { equation, t } => {
+            assert_eq!(equation, "constraint");
+            assert!(t > 0.5);
+        }
+        e => panic!("unexpected {e:?}"),
+    }
+    // Non-finite at the initial point is reported at construction.
+    let r = Bdf::new(
+        Broken { kind: 2 },
+        NalgebraLu::<2>::new(),
+        Options::default(),
+        1.0,
+        &[1.0, 1.0],
+        &[0.0; 2],
+    );
+    assert!(matches!(r, Err(BdfError::NonFiniteResidual { .. })));
+}
+
+#[test]
+fn bad_tolerances_are_rejected() {
+    let y0 = [1.0, 0.0, 0.0];
+    let yp0 = [-0.04, 0.04, 0.0];
+    let bad = [
+        Options::with_tolerances(-1e-6, 1e-8),
+        Options::with_tolerances(1e-6, f64::NAN),
+        Options::with_tolerances(0.0, 0.0),
+    ];
+    for opts in bad {
+        let r = Bdf::new(
+            Robertson,
+            NalgebraLu::<3>::new(),
+            opts.clone(),
+            0.0,
+            &y0,
+            &yp0,
+        );
+        assert!(matches!(r, Err(BdfError::InvalidTolerance(_))), "{opts:?}");
+    }
+    let opts = Options {
+        atol: Tolerance::Vector(vec![1e-8; 2]),
+        ..Options::default()
+    };
+    let r = Bdf::new(Robertson, NalgebraLu::<3>::new(), opts, 0.0, &y0, &yp0);
+    assert!(matches!(
+        r,
+        Err(BdfError::DimensionMismatch { what: "atol", .. })
+    ));
+    // A weight that becomes infinite (pure relative tolerance, component at zero).
+    let opts = Options::with_tolerances(1e-6, 0.0);
+    let mut bdf = Bdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        opts,
+        0.0,
+        &[1.0, 0.5, 0.0],
+        &yp0,
+    );
+    if let Ok(b) = &mut bdf {
+        let mut y = [0.0; 3];
+        assert!(matches!(
+            b.solve_to(1.0, &mut y, None),
+            Err(BdfError::InvalidTolerance(_))
+        ));
+    } else {
+        assert!(matches!(bdf, Err(BdfError::InvalidTolerance(_))));
+    }
+}
+
+#[test]
+fn bad_options_are_rejected() {
+    let y0 = [1.0, 0.0, 0.0];
+    let yp0 = [-0.04, 0.04, 0.0];
+    for opts in [
+        Options {
+            max_order: 6,
+            ..Options::default()
+        },
+        Options {
+            max_order: 0,
+            ..Options::default()
+        },
+        Options {
+            initial_step: Some(-1.0),
+            ..Options::default()
+        },
+        Options {
+            index: vec![1, 1, 4],
+            ..Options::default()
+        },
+    ] {
+        let r = Bdf::new(
+            Robertson,
+            NalgebraLu::<3>::new(),
+            opts.clone(),
+            0.0,
+            &y0,
+            &yp0,
+        );
+        assert!(matches!(r, Err(BdfError::InvalidOption(_))), "{opts:?}");
+    }
+    let r = FixedBdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        Options::default(),
+        6,
+        0.1,
+        0.0,
+        &y0,
+    );
+    assert!(matches!(r, Err(BdfError::InvalidOption(_))));
+    let r = FixedBdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        Options::default(),
+        2,
+        0.0,
+        0.0,
+        &y0,
+    );
+    assert!(matches!(r, Err(BdfError::InvalidOption(_))));
+}
+
+#[test]
+fn dimension_mismatches_are_rejected() {
+    let r = Bdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        Options::default(),
+        0.0,
+        &[1.0, 0.0],
+        &[0.0; 3],
+    );
+    assert!(matches!(
+        r,
+        Err(BdfError::DimensionMismatch {
+            what: "y0",
+            expected: 3,
+            found: 2
+        })
+    ));
+    let r = Bdf::new(
+        Robertson,
+        NalgebraLu::<2>::new(),
+        Options::default(),
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[0.0; 3],
+    );
+    assert!(matches!(
+        r,
+        Err(BdfError::DimensionMismatch {
+            what: "linear solver",
+            ..
+        })
+    ));
+    let r = FixedBdf::new(
+        Robertson,
+        FaerDenseLu::new(4),
+        Options::default(),
+        1,
+        0.1,
+        0.0,
+        &[1.0, 0.0, 0.0],
+    );
+    assert!(matches!(r, Err(BdfError::DimensionMismatch { .. })));
+    let mut bdf = Bdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        Options::default(),
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[-0.04, 0.04, 0.0],
+    )
+    .unwrap();
+    let mut short = [0.0; 2];
+    assert!(matches!(
+        bdf.solve_to(1.0, &mut short, None),
+        Err(BdfError::DimensionMismatch { .. })
+    ));
+}
+
+#[test]
+fn too_many_steps() {
+    let opts = Options {
+        max_steps: 10,
+        ..Options::default()
+    };
+    let mut bdf = Bdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        opts,
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[-0.04, 0.04, 0.0],
+    )
+    .unwrap();
+    let mut y = [0.0; 3];
+    match bdf.solve_to(1e5, &mut y, None) {
+        Err(BdfError::TooManySteps {
+            max_steps: 10, t, ..
+        }) => assert!(t > 0.0 && t < 1e5),
+        r => panic!("unexpected {r:?}"),
+    }
+    // The integrator is still usable after the error.
+    assert!(bdf.solve_to(bdf.t() + 1e-6, &mut y, None).is_ok());
+}
+
+/// `0 = y^2 + 1` has no real solution: the fixed-step Newton iteration must fail cleanly.
+struct NoSolution;
+impl ImplicitDae for NoSolution {
+    fn dimension(&self) -> usize {
+        1
+    }
+    fn residual(&self, _: f64, y: &[f64], _: &[f64], out: &mut [f64]) {
+        out[0] = y[0] * y[0] + 1.0;
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        y: &[f64],
+        _: &[f64],
+        _: f64,
+        m: &mut S,
+    ) {
+        m.set(0, 0, 2.0 * y[0]);
+    }
+    fn is_differential(&self, _: usize) -> bool {
+        false
+    }
+}
+
+#[test]
+fn fixed_step_newton_failure_is_typed_and_leaves_state() {
+    let mut f = FixedBdf::new(
+        NoSolution,
+        NalgebraLu::<1>::new(),
+        Options::default(),
+        1,
+        0.1,
+        0.0,
+        &[1.0],
+    )
+    .unwrap();
+    assert!(matches!(f.step(), Err(BdfError::NewtonFailed { .. })));
+    assert_eq!(f.t(), 0.0);
+    assert_eq!(f.y(), &[1.0]);
+    // Variable-step: Newton fails down to the limit of failures.
+    let mut b = Bdf::new(
+        NoSolution,
+        NalgebraLu::<1>::new(),
+        Options::default(),
+        0.0,
+        &[1.0],
+        &[0.0],
+    )
+    .unwrap();
+    let mut y = [0.0];
+    assert!(matches!(
+        b.solve_to(1.0, &mut y, None),
+        Err(BdfError::NewtonFailed { .. } | BdfError::SingularMatrix { .. })
+    ));
+}
+
+#[test]
+fn consistent_initialisation_rejects_higher_index() {
+    // Index 2: `x' = -x + z`, `0 = x - 1`; z cannot be computed from x alone.
+    struct Index2;
+    impl ImplicitDae for Index2 {
+        fn dimension(&self) -> usize {
+            2
+        }
+        fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            out[0] = yp[0] + y[0] - y[1];
+            out[1] = y[0] - 1.0;
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            _: f64,
+            _: &[f64],
+            _: &[f64],
+            c: f64,
+            m: &mut S,
+        ) {
+            m.set(0, 0, 1.0 + c);
+            m.set(0, 1, -1.0);
+            m.set(1, 0, 1.0);
+        }
+        fn is_differential(&self, i: usize) -> bool {
+            i == 0
+        }
+        fn unknown_name(&self, i: usize) -> String {
+            ["x", "z"][i].to_string()
+        }
+    }
+    let (mut y, mut yp) = ([1.0, 0.0], [0.0, 0.0]);
+    let r = consistent_initial_values(
+        &Index2,
+        &mut NalgebraLu::<2>::new(),
+        &Options::default(),
+        0.0,
+        &mut y,
+        &mut yp,
+    );
+    match r {
+        Err(BdfError::SingularMatrix { equation, .. }) => {
+            assert_eq!(equation.as_deref(), Some("equation 1"));
+        }
+        r => panic!("unexpected {r:?}"),
+    }
+}

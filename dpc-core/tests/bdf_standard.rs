@@ -1,0 +1,166 @@
+//! Standard problems with reference solutions: Robertson (index 1) and the Cartesian pendulum
+//! (index 3). Significant correct digits are printed (`--nocapture`) and checked against a
+//! floor per tolerance.
+
+#[path = "common/bdf_problems.rs"]
+mod problems;
+
+use dpc_core::bdf::{consistent_initial_values, Bdf, Options, Tolerance};
+use dpc_core::linalg::{FaerSparseLu, NalgebraLu};
+use dpc_core::ImplicitDae;
+use problems::*;
+use std::time::Instant;
+
+/// Robertson to `t = 1e11`: returns (significant digits, steps, seconds).
+fn robertson(rtol: f64) -> (f64, usize, f64) {
+    let start = Instant::now();
+    let opts = Options {
+        rtol: Tolerance::Scalar(rtol),
+        atol: Tolerance::Vector(robertson_atol(rtol)),
+        ..Options::default()
+    };
+    let y0 = [1.0, 0.0, 0.0];
+    let yp0 = [-0.04, 0.04, 0.0];
+    let mut bdf = Bdf::new(Robertson, NalgebraLu::<3>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    bdf.set_stop_time(ROBERTSON_T_END).unwrap();
+    let mut y = [0.0; 3];
+    bdf.solve_to(ROBERTSON_T_END, &mut y, None).unwrap();
+    let scd = significant_digits(&y, &ROBERTSON_REF, &[0, 1, 2]);
+    (scd, bdf.stats().steps, start.elapsed().as_secs_f64())
+}
+
+#[test]
+fn robertson_to_1e11_matches_reference() {
+    // (rtol, minimum significant digits required)
+    for (rtol, floor) in [(1e-4, 1.0), (1e-6, 3.5), (1e-8, 4.5), (1e-10, 6.0)] {
+        let (scd, steps, _) = robertson(rtol);
+        println!("Robertson rtol {rtol:e}: {scd:.2} significant digits in {steps} steps");
+        assert!(scd >= floor, "rtol {rtol}: {scd} digits");
+        assert!(steps < 8000, "rtol {rtol}: {steps} steps");
+    }
+}
+
+const THETA0: f64 = 1.0;
+const PENDULUM_T: f64 = 3.0;
+
+/// Pendulum to `t = 3`: returns (digits in positions, digits in all components, steps, s).
+fn pendulum(rtol: f64) -> (f64, f64, usize, f64) {
+    let p = Pendulum::default();
+    let reference = p.reference(THETA0, PENDULUM_T);
+    let start = Instant::now();
+    let opts = Options {
+        index: PENDULUM_INDEX.to_vec(),
+        ..Options::with_tolerances(rtol, rtol)
+    };
+    let (y0, yp0) = p.initial(THETA0);
+    let mut bdf = Bdf::new(p, NalgebraLu::<5>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    let mut y = [0.0; 5];
+    bdf.set_stop_time(PENDULUM_T).unwrap();
+    bdf.solve_to(PENDULUM_T, &mut y, None).unwrap();
+
+    let elapsed = start.elapsed().as_secs_f64();
+    (
+        significant_digits(&y, &reference, &[0, 1]),
+        significant_digits(&y, &reference, &[0, 1, 2, 3, 4]),
+        bdf.stats().steps,
+        elapsed,
+    )
+}
+
+#[test]
+fn pendulum_index3_matches_independent_reference() {
+    // Index 3 with error-per-step control on the positions only: the pendulum conserves
+    // energy, so local errors accumulate linearly over the ~100-1000 steps and the observed
+    // accuracy is well below the tolerance (see README, "BDF integrator").
+    for (rtol, floor) in [(1e-4, 1.5), (1e-6, 3.5), (1e-8, 4.0), (1e-10, 5.0)] {
+        let (pos, all, steps, _) = pendulum(rtol);
+        println!(
+            "pendulum rtol {rtol:e}: {pos:.2} digits (x, y), {all:.2} digits (all), {steps} steps"
+        );
+        assert!(pos >= floor, "rtol {rtol}: {pos} digits");
+        assert!(
+            all >= floor - 2.0,
+            "rtol {rtol}: {all} digits in all components"
+        );
+    }
+}
+
+#[test]
+fn pendulum_sparse_back_end_agrees() {
+    let p = Pendulum::default();
+    let opts = Options {
+        index: PENDULUM_INDEX.to_vec(),
+        ..Options::with_tolerances(1e-6, 1e-6)
+    };
+    let (y0, yp0) = p.initial(THETA0);
+    let sparse = FaerSparseLu::new(5, &p.iteration_pattern().unwrap()).unwrap();
+    let mut a = Bdf::new(p, sparse, opts.clone(), 0.0, &y0, &yp0).unwrap();
+    let mut b = Bdf::new(p, NalgebraLu::<5>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    let (mut ya, mut yb) = ([0.0; 5], [0.0; 5]);
+    a.solve_to(1.0, &mut ya, None).unwrap();
+    b.solve_to(1.0, &mut yb, None).unwrap();
+    // Different round-off gives different step sequences: positions agree to the tolerance
+    // (the excluded components u, v, lambda only to the method's accuracy for them).
+    for i in 0..2 {
+        assert!((ya[i] - yb[i]).abs() < 1e-6, "{ya:?} vs {yb:?}");
+    }
+}
+
+#[test]
+fn consistent_initialisation_of_robertson() {
+    let opts = Options::default();
+    let mut y = [1.0, 0.0, 0.3];
+    let mut yp = [0.0; 3];
+    consistent_initial_values(
+        &Robertson,
+        &mut NalgebraLu::<3>::new(),
+        &opts,
+        0.0,
+        &mut y,
+        &mut yp,
+    )
+    .unwrap();
+    assert_eq!(y[0], 1.0);
+    assert!(y[2].abs() < 1e-12, "{y:?}");
+    assert!(
+        (yp[0] + 0.04).abs() < 1e-10 && (yp[1] - 0.04).abs() < 1e-10,
+        "{yp:?}"
+    );
+}
+
+/// Work-precision table for the README (`cargo test --release -p dpc-core --test bdf_standard
+/// -- --ignored --nocapture work_precision`).
+#[test]
+#[ignore = "timing run for the README table"]
+fn work_precision() {
+    println!("| problem | rtol | steps | significant digits | time [ms] |");
+    println!("|---|---|---|---|---|");
+    for k in 4..=10 {
+        let rtol = 10f64.powi(-k);
+        let (scd, steps, s) = robertson(rtol);
+        let reps = 20;
+        let t0 = Instant::now();
+        for _ in 0..reps {
+            robertson(rtol);
+        }
+        let s = s.min(t0.elapsed().as_secs_f64() / f64::from(reps));
+        println!(
+            "| Robertson (t=1e11) | 1e-{k} | {steps} | {scd:.2} | {:.3} |",
+            s * 1e3
+        );
+    }
+    for k in 4..=10 {
+        let rtol = 10f64.powi(-k);
+        let (pos, all, steps, s) = pendulum(rtol);
+        let reps = 20;
+        let t0 = Instant::now();
+        for _ in 0..reps {
+            pendulum(rtol);
+        }
+        let _ = s;
+        println!(
+            "| pendulum (t=3) | 1e-{k} | {steps} | {pos:.2} (x,y) / {all:.2} (all) | {:.3} |",
+            t0.elapsed().as_secs_f64() / f64::from(reps) * 1e3
+        );
+    }
+}
