@@ -6,9 +6,12 @@
 //! * [`model`]: the trait that `dpc::model!` implements for every declared plant
 //!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`), and the adapter
 //!   that turns a model with given inputs into an [`dae::ImplicitDae`];
-//! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes.
+//! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
+//! * [`linear`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
+//!   verdict, preliminary feedback `K_n`).
 
 pub mod dae;
+pub mod linear;
 pub mod model;
 pub mod sink;
 
