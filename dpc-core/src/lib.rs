@@ -9,12 +9,15 @@
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
 //! * [`linalg`]: the linear solvers behind the integrator's Newton iteration;
+//! * [`linear`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
+//!   verdict, preliminary feedback `K_n`);
 //! * [`reference`]: reference trajectories with exact derivatives;
 //! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model.
 
 pub mod bdf;
 pub mod dae;
 pub mod linalg;
+pub mod linear;
 pub mod model;
 pub mod reference;
 pub mod sink;
