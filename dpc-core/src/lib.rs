@@ -7,6 +7,7 @@
 //!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`), and the adapter
 //!   that turns a model with given inputs into an [`dae::ImplicitDae`];
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
+//! * [`dpc`]: one sampled update of the Descriptor Predictive Controller;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
 //! * [`linalg`]: the linear solvers behind the integrator's Newton iteration;
 //! * [`linear`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
@@ -16,6 +17,7 @@
 
 pub mod bdf;
 pub mod dae;
+pub mod dpc;
 pub mod linalg;
 pub mod linear;
 pub mod model;
