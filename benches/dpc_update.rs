@@ -1,0 +1,36 @@
+//! One DPC control update for the paper's wheel (tracking DAE with `W = s + 5` on both
+//! outputs, `delta = 1e-3`, fixed-size LU): the cost of the controller per sample.
+//!
+//! Run with `cargo bench --bench dpc_update`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use dpc::core::dpc::{Dpc, DpcOptions, Extraction};
+use dpc::core::linalg::NalgebraLu;
+use dpc_models::{WheelReference, WheelTracking};
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let mut group = c.benchmark_group("wheel DPC update");
+    for extraction in [Extraction::FirstUsable, Extraction::Extrapolated] {
+        let mut dpc = Dpc::new(
+            WheelTracking::default(),
+            WheelReference::default(),
+            NalgebraLu::<7>::new(),
+            DpcOptions {
+                extraction,
+                ..DpcOptions::default()
+            },
+        )
+        .expect("controller");
+        let x = [std::f64::consts::FRAC_PI_2 + 0.01, -0.3, 0.0, 0.0, -6.0];
+        let mut u = [0.0; 2];
+        dpc.control(0.05, &x, &mut u).expect("warm-up update");
+        group.bench_function(format!("{extraction:?}"), |b| {
+            b.iter(|| dpc.control(black_box(0.05), black_box(&x), &mut u))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
