@@ -12,6 +12,7 @@
 //! * [`linalg`]: the linear solvers behind the integrator's Newton iteration;
 //! * [`linear`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
 //!   verdict, preliminary feedback `K_n`);
+//! * [`linearize`]: state-space linearisation of a generated model from its Jacobians;
 //! * [`reference`]: reference trajectories with exact derivatives;
 //! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model.
 
@@ -20,6 +21,7 @@ pub mod dae;
 pub mod dpc;
 pub mod linalg;
 pub mod linear;
+pub mod linearize;
 pub mod model;
 pub mod reference;
 pub mod sink;

@@ -1,0 +1,152 @@
+//! Linearisation of a generated model about an operating point, from its analytic Jacobians.
+//!
+//! For `F(t, x, x', z, u) = 0`, `y = h(t, x, z, u)` at a point where `[dF/dx' dF/dz]` is
+//! regular (an ODE, or a DAE of index 1 in `z`), the variations satisfy
+//! `[F_x' F_z] [dx'; dz] = -F_x dx - F_u du`, so
+//! `dx' = A dx + B du`, `dz = Z_x dx + Z_u du`, `dy = (h_x + h_z Z_x) dx + (h_u + h_z Z_u) du`.
+//! The solve uses a column-pivoted QR factorisation, and the rank decision is relative to the
+//! norm of `[F_x' F_z]`; no Jacobian comes from finite differences.
+
+use crate::linear::LinearSystem;
+use crate::model::DaeModel;
+use nalgebra::DMatrix;
+use thiserror::Error;
+
+/// Errors of [`linearize`].
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum LinearizeError {
+    /// A point vector has the wrong length.
+    #[error("{what} has length {found}, expected {expected}")]
+    Dimension {
+        /// Which vector.
+        what: &'static str,
+        /// Required length.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// `[dF/dx' dF/dz]` is singular at the point: the model is not an ODE or index-1 DAE
+    /// there, so no state-space linearisation `x' = A x + B u` exists.
+    #[error("[dF/dx' dF/dz] is singular at the point (rank {rank} of {n}, tolerance {tolerance:e}): the plant is not of index 1 there")]
+    Singular {
+        /// Numerical rank found.
+        rank: usize,
+        /// Size of the matrix.
+        n: usize,
+        /// Rank tolerance used.
+        tolerance: f64,
+    },
+    /// The model produced a non-finite Jacobian entry at the point.
+    #[error("non-finite Jacobian entry at the linearisation point")]
+    NonFinite,
+    /// The linear system could not be formed (for example outputs and inputs differ in
+    /// number).
+    #[error(transparent)]
+    System(#[from] crate::linear::LinearError),
+}
+
+/// A point `(t, x, x', z, u)` of a model.
+#[derive(Debug, Clone, Copy)]
+pub struct OperatingPoint<'a> {
+    /// Time.
+    pub t: f64,
+    /// States.
+    pub x: &'a [f64],
+    /// State derivatives (along a nominal trajectory; zeros at an equilibrium).
+    pub xdot: &'a [f64],
+    /// Algebraic unknowns.
+    pub z: &'a [f64],
+    /// Inputs.
+    pub u: &'a [f64],
+}
+
+/// The state-space linearisation `(A, B, C, D)` of `model` about `point`.
+///
+/// # Errors
+/// [`LinearizeError`] for wrong lengths, a singular `[dF/dx' dF/dz]`, non-finite Jacobians,
+/// and a non-square result (as many outputs as inputs are required for DPC).
+pub fn linearize<M: DaeModel>(
+    model: &M,
+    point: OperatingPoint<'_>,
+) -> Result<LinearSystem, LinearizeError> {
+    let (nx, nz, nu, ny, ne) = (
+        M::N_STATES,
+        M::N_ALGEBRAIC,
+        M::N_INPUTS,
+        M::N_OUTPUTS,
+        M::N_EQUATIONS,
+    );
+    for (what, v, n) in [
+        ("x", point.x, nx),
+        ("x'", point.xdot, nx),
+        ("z", point.z, nz),
+        ("u", point.u, nu),
+    ] {
+        if v.len() != n {
+            return Err(LinearizeError::Dimension {
+                what,
+                expected: n,
+                found: v.len(),
+            });
+        }
+    }
+    let mut r = vec![0.0; ne];
+    let mut f_xdot = DMatrix::zeros(ne, nx);
+    let mut f_x = DMatrix::zeros(ne, nx);
+    let mut f_z = DMatrix::zeros(ne, nz);
+    let mut f_u = DMatrix::zeros(ne, nu);
+    model.evaluate(
+        point.t,
+        point.x,
+        point.xdot,
+        point.z,
+        point.u,
+        &mut r,
+        &mut f_xdot,
+        &mut f_x,
+        &mut f_z,
+        &mut f_u,
+    );
+    let mut h_x = DMatrix::zeros(ny, nx);
+    let mut h_z = DMatrix::zeros(ny, nz);
+    let mut h_u = DMatrix::zeros(ny, nu);
+    model.output_jacobians(
+        point.t, point.x, point.z, point.u, &mut h_x, &mut h_z, &mut h_u,
+    );
+    let all_finite = [&f_xdot, &f_x, &f_z, &f_u, &h_x, &h_z, &h_u]
+        .iter()
+        .all(|m| m.iter().all(|v| v.is_finite()));
+    if !all_finite {
+        return Err(LinearizeError::NonFinite);
+    }
+    // [F_x' F_z] [dx'; dz] = -[F_x F_u] [dx; du].
+    let mut lhs = DMatrix::zeros(ne, nx + nz);
+    lhs.columns_mut(0, nx).copy_from(&f_xdot);
+    lhs.columns_mut(nx, nz).copy_from(&f_z);
+    let mut rhs = DMatrix::zeros(ne, nx + nu);
+    rhs.columns_mut(0, nx).copy_from(&(-&f_x));
+    rhs.columns_mut(nx, nu).copy_from(&(-&f_u));
+    let qr = lhs.clone().col_piv_qr();
+    let rdiag = qr.r().diagonal();
+    let tolerance = (ne.max(1) as f64) * f64::EPSILON * 100.0 * lhs.amax().max(f64::MIN_POSITIVE);
+    let rank = rdiag.iter().filter(|v| v.abs() > tolerance).count();
+    if rank < ne {
+        return Err(LinearizeError::Singular {
+            rank,
+            n: ne,
+            tolerance,
+        });
+    }
+    let sol = qr.solve(&rhs).ok_or(LinearizeError::Singular {
+        rank,
+        n: ne,
+        tolerance,
+    })?;
+    let a = sol.view((0, 0), (nx, nx)).into_owned();
+    let b = sol.view((0, nx), (nx, nu)).into_owned();
+    let z_x = sol.view((nx, 0), (nz, nx)).into_owned();
+    let z_u = sol.view((nx, nx), (nz, nu)).into_owned();
+    let c = &h_x + &h_z * z_x;
+    let d = &h_u + &h_z * z_u;
+    Ok(LinearSystem::new(a, b, c, d)?)
+}
