@@ -173,3 +173,67 @@ fn bad_inputs_are_typed_errors() {
         Err(DpcError::Dimension { .. })
     ));
 }
+
+/// The origin as nominal trajectory.
+struct Origin;
+
+impl dpc::core::dpc::Nominal for Origin {
+    fn state(&self, _t: f64, x0: &mut [f64]) {
+        x0.fill(0.0);
+    }
+    fn input(&self, _t: f64, u0: &mut [f64]) {
+        u0.fill(0.0);
+    }
+}
+
+#[test]
+fn with_prefeedback_the_update_converges_to_the_prefed_law() {
+    // Paper, Section 4: poles of Abar_4 + Bbar_2 K_2 at -5; DPC on x' = (A + B K_n) x + B v.
+    let analysis = analyze(
+        &paper_system(),
+        &AnalysisOptions {
+            w: Some(vec![vec![5.0], vec![5.0]]),
+            poles: Some(vec![dpc::nalgebra::Complex::new(-5.0, 0.0); 3]),
+            ..AnalysisOptions::default()
+        },
+    )
+    .unwrap();
+    let k_n = analysis
+        .k_n
+        .clone()
+        .expect("K_n is built for the unstable Abar_4");
+    let k_j_pre = analysis.k_j_prefeedback.clone().expect("analysis redone");
+    let mut dpc = Dpc::new(
+        WheelLinearTracking::default(),
+        zero_reference(),
+        NalgebraLu::<7>::new(),
+        DpcOptions {
+            delta: 5e-4,
+            ..DpcOptions::default()
+        },
+    )
+    .unwrap()
+    .with_prefeedback(dpc::core::dpc::Prefeedback {
+        k_n: k_n.clone(),
+        nominal: Box::new(Origin),
+    })
+    .unwrap();
+    let x = [0.1, -0.2, 0.3, 0.05, -0.1];
+    let mut v = [0.0; 2];
+    dpc.control(0.0, &x, &mut v).unwrap();
+    let xv = DVector::from_column_slice(&x);
+    let expected_v = &k_j_pre * &xv;
+    let err = ((v[0] - expected_v[0]).powi(2) + (v[1] - expected_v[1]).powi(2)).sqrt();
+    assert!(
+        err < 1e-4 * (1.0 + expected_v.norm()),
+        "v = {v:?}, K_J' x = {expected_v}"
+    );
+    // The plant input is u = K_n x + v: the closed loop A + B (K_n + K_J') is stable.
+    let mut u = [0.0; 2];
+    dpc.prefeedback()
+        .unwrap()
+        .input(0.0, &x, &v, &mut [0.0; 5], &mut u);
+    let expected_u = (&k_n + &k_j_pre) * &xv;
+    assert!((u[0] - expected_u[0]).abs() + (u[1] - expected_u[1]).abs() < 1e-3);
+    assert_eq!(analysis.dpc_stable_prefeedback, Some(true));
+}

@@ -174,10 +174,57 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     y: Vec<f64>,
     xdot: Vec<f64>,
     res: Vec<f64>,
+    /// Residual written by `evaluate` while assembling a prefeedback Jacobian (discarded).
+    res_scratch: Vec<f64>,
     w: Vec<f64>,
     scratch: Vec<f64>,
     u_first: Vec<f64>,
     u_second: Vec<f64>,
+    prefeedback: Option<PrefeedbackWork>,
+}
+
+/// A nominal trajectory `(x0(t), u0(t))` about which a preliminary feedback acts.
+pub trait Nominal {
+    /// `x0(t)` into `x0` (length = number of states).
+    fn state(&self, t: f64, x0: &mut [f64]);
+    /// `u0(t)` into `u0` (length = number of inputs).
+    fn input(&self, t: f64, u0: &mut [f64]);
+}
+
+/// A preliminary feedback `u = u0(t) + K_n (x - x0(t)) + v` (paper, Section 3.1), applied in
+/// deviation coordinates about a nominal trajectory.
+pub struct Prefeedback {
+    /// `K_n` (`inputs x states`), from [`crate::linear::analyze`] on the linearisation.
+    pub k_n: nalgebra::DMatrix<f64>,
+    /// The nominal trajectory.
+    pub nominal: Box<dyn Nominal + Send + Sync>,
+}
+
+impl Prefeedback {
+    /// `u = u0(t) + K_n (x - x0(t)) + v`, using the scratch buffers `x0` and `u0`.
+    pub fn input(&self, t: f64, x: &[f64], v: &[f64], x0: &mut [f64], u: &mut [f64]) {
+        self.nominal.state(t, x0);
+        self.nominal.input(t, u);
+        for (i, ui) in u.iter_mut().enumerate() {
+            let mut s = v[i];
+            for (j, (xj, x0j)) in x.iter().zip(x0.iter()).enumerate() {
+                s += self.k_n[(i, j)] * (xj - x0j);
+            }
+            *ui += s;
+        }
+    }
+}
+
+/// Buffers for evaluating the tracking DAE under a preliminary feedback.
+struct PrefeedbackWork {
+    law: Prefeedback,
+    x0: Vec<f64>,
+    /// `[Z; u]`: the plant's algebraic unknowns and the actual input.
+    z_eval: Vec<f64>,
+    f_xdot: nalgebra::DMatrix<f64>,
+    f_x: nalgebra::DMatrix<f64>,
+    f_z: nalgebra::DMatrix<f64>,
+    f_w: nalgebra::DMatrix<f64>,
 }
 
 impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
@@ -245,11 +292,127 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             y: vec![0.0; n],
             xdot: vec![0.0; T::N_STATES],
             res: vec![0.0; n],
+            res_scratch: vec![0.0; n],
             w: vec![0.0; T::N_INPUTS],
             scratch: vec![0.0; (order + 1) * T::N_OUTPUTS],
             u_first: vec![0.0; nu_plant],
             u_second: vec![0.0; nu_plant],
+            prefeedback: None,
         })
+    }
+
+    /// Apply DPC to the plant under the preliminary feedback `u = u0 + K_n (x - x0) + v`: the
+    /// tracking DAE is integrated in `v`, and [`control`](Self::control) returns `v`; the plant
+    /// input is [`Prefeedback::input`] of it (held as a whole, or with the feedback applied
+    /// continuously and only `v` held).
+    ///
+    /// # Errors
+    /// [`DpcError::Dimension`] when `K_n` is not `inputs x states`.
+    pub fn with_prefeedback(mut self, law: Prefeedback) -> Result<Self, DpcError> {
+        let (m, n) = (self.u_first.len(), T::N_STATES);
+        if law.k_n.nrows() != m || law.k_n.ncols() != n {
+            return Err(DpcError::Dimension {
+                what: "K_n (inputs x states), entries",
+                expected: m * n,
+                found: law.k_n.len(),
+            });
+        }
+        let ne = T::N_EQUATIONS;
+        self.prefeedback = Some(PrefeedbackWork {
+            law,
+            x0: vec![0.0; n],
+            z_eval: vec![0.0; T::N_ALGEBRAIC],
+            f_xdot: nalgebra::DMatrix::zeros(ne, n),
+            f_x: nalgebra::DMatrix::zeros(ne, n),
+            f_z: nalgebra::DMatrix::zeros(ne, T::N_ALGEBRAIC),
+            f_w: nalgebra::DMatrix::zeros(ne, T::N_INPUTS),
+        });
+        self.have_warm = false;
+        Ok(self)
+    }
+
+    /// The preliminary feedback in use, if any.
+    pub fn prefeedback(&self) -> Option<&Prefeedback> {
+        self.prefeedback.as_ref().map(|p| &p.law)
+    }
+
+    /// With a preliminary feedback, the algebraic unknowns `[Z; u]` the plant sees for the
+    /// current iterate `[X; Z; v]`.
+    fn fill_plant_inputs(&mut self, t: f64) {
+        let nx = T::N_STATES;
+        if let Some(pf) = self.prefeedback.as_mut() {
+            let n_u = self.u_first.len();
+            let nz = T::N_ALGEBRAIC - n_u;
+            let (xs, zs) = self.y.split_at(nx);
+            pf.z_eval[..nz].copy_from_slice(&zs[..nz]);
+            pf.law
+                .input(t, xs, &zs[nz..], &mut pf.x0, &mut pf.z_eval[nz..]);
+        }
+    }
+
+    fn evaluate_residual(&mut self, t: f64) {
+        let nx = T::N_STATES;
+        self.fill_plant_inputs(t);
+        let (xs, zs) = self.y.split_at(nx);
+        let z_eval = match &self.prefeedback {
+            Some(pf) => &pf.z_eval[..],
+            None => zs,
+        };
+        self.model
+            .residual(t, xs, &self.xdot, z_eval, &self.w, &mut self.res);
+    }
+
+    /// The Newton matrix `dG/dY + c dG/dX'` for the unknowns `Y = [X; Z; U]`, or, under a
+    /// preliminary feedback, `Y = [X; Z; v]` with `dG/dX` gaining `dG/du K_n`.
+    fn evaluate_iteration_matrix(&mut self, t: f64, c: f64) {
+        let nx = T::N_STATES;
+        let (xs, zs) = self.y.split_at(nx);
+        let matrix = self.solver.matrix_mut();
+        matrix.fill_zero();
+        let Some(pf) = self.prefeedback.as_mut() else {
+            self.model
+                .iteration_matrix(t, xs, &self.xdot, zs, &self.w, c, matrix);
+            return;
+        };
+        // z_eval is current: fill_plant_inputs ran for this iterate in evaluate_residual.
+        for m in [&mut pf.f_xdot, &mut pf.f_x, &mut pf.f_z, &mut pf.f_w] {
+            m.fill(0.0);
+        }
+        self.model.evaluate(
+            t,
+            xs,
+            &self.xdot,
+            &pf.z_eval,
+            &self.w,
+            &mut self.res_scratch,
+            &mut pf.f_xdot,
+            &mut pf.f_x,
+            &mut pf.f_z,
+            &mut pf.f_w,
+        );
+        let ne = T::N_EQUATIONS;
+        let nz_all = T::N_ALGEBRAIC;
+        let n_u = pf.law.k_n.nrows();
+        let u_col = nz_all - n_u;
+        for j in 0..nx {
+            for i in 0..ne {
+                let mut v = pf.f_x[(i, j)] + c * pf.f_xdot[(i, j)];
+                for k in 0..n_u {
+                    v += pf.f_z[(i, u_col + k)] * pf.law.k_n[(k, j)];
+                }
+                if v != 0.0 {
+                    matrix.set(i, j, v);
+                }
+            }
+        }
+        for j in 0..nz_all {
+            for i in 0..ne {
+                let v = pf.f_z[(i, j)];
+                if v != 0.0 {
+                    matrix.set(i, nx + j, v);
+                }
+            }
+        }
     }
 
     /// The `nu` in use.
@@ -388,10 +551,8 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 for i in 0..nx {
                     self.xdot[i] = (self.y[i] - self.x_prev[i]) / delta;
                 }
-                let (xs, zs) = self.y.split_at(nx);
-                self.model
-                    .residual(tj, xs, &self.xdot, zs, &self.w, &mut self.res);
-                let scale = 1.0 + xs.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                self.evaluate_residual(tj);
+                let scale = 1.0 + self.y[..nx].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
                 residual = self
                     .res
                     .iter()
@@ -406,10 +567,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                     converged = true;
                     break;
                 }
-                let matrix = self.solver.matrix_mut();
-                matrix.fill_zero();
-                self.model
-                    .iteration_matrix(tj, xs, &self.xdot, zs, &self.w, 1.0 / delta, matrix);
+                self.evaluate_iteration_matrix(tj, 1.0 / delta);
                 self.solver
                     .factor()
                     .map_err(|source| DpcError::Singular { t: tj, source })?;
