@@ -430,6 +430,11 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         &self.model
     }
 
+    /// The reference being tracked.
+    pub fn reference(&self) -> &R {
+        &self.reference
+    }
+
     /// Forget the warm start (after a jump of the plant or the reference).
     pub fn reset(&mut self) {
         self.have_warm = false;

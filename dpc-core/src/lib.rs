@@ -14,7 +14,8 @@
 //!   verdict, preliminary feedback `K_n`);
 //! * [`linearize`]: state-space linearisation of a generated model from its Jacobians;
 //! * [`reference`]: reference trajectories with exact derivatives;
-//! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model.
+//! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model;
+//! * [`simulate`]: the sampled closed loop, with the plant integrated accurately between samples.
 
 pub mod bdf;
 pub mod dae;
@@ -24,6 +25,7 @@ pub mod linear;
 pub mod linearize;
 pub mod model;
 pub mod reference;
+pub mod simulate;
 pub mod sink;
 pub mod tracking;
 

@@ -1,0 +1,449 @@
+//! Closed-loop simulation of sampled DPC (paper, Section 5).
+//!
+//! At each sample `t_k = k h` the controller measures the plant state and computes a control
+//! ([`crate::dpc::Dpc::control`]); the plant, which may be a different model or have different
+//! parameters than the controller's (to study mismatch), is then integrated accurately to
+//! `t_(k+1)` by the variable-step BDF integrator with the control held (zero-order hold).
+//! Two hold variants: hold the whole input `u`, or, with a preliminary feedback, apply
+//! `u = u0 + K_n (x - x0) + v` continuously and hold only `v`.
+//!
+//! The loop reports divergence (a state leaving the given domain, a non-finite state, a
+//! controller failing on consecutive samples, the plant integrator failing) with its time and
+//! cause, and stops there, instead of panicking or producing NaN.
+
+use std::cell::RefCell;
+
+use crate::bdf::{consistent_initial_values, Bdf, BdfError, Options};
+use crate::dae::ImplicitDae;
+use crate::dpc::{Dpc, DpcError, Prefeedback};
+use crate::linalg::{FaerDenseLu, LinearSolver};
+use crate::model::DaeModel;
+use crate::reference::Reference;
+use crate::sink::MatrixSink;
+use crate::tracking::TrackingDae;
+use nalgebra::DMatrix;
+use thiserror::Error;
+
+/// What the zero-order hold keeps constant between samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Hold {
+    /// Hold the whole plant input `u` (with a preliminary feedback, evaluated at the sample).
+    #[default]
+    Input,
+    /// Apply the preliminary feedback continuously and hold only the DPC correction `v`.
+    Correction,
+}
+
+/// Options of a closed-loop run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClosedLoopOptions {
+    /// Sampling period `h`.
+    pub h: f64,
+    /// End time.
+    pub t_end: f64,
+    /// Relative tolerance of the plant integration.
+    pub rtol: f64,
+    /// Absolute tolerance of the plant integration.
+    pub atol: f64,
+    /// What is held between samples.
+    pub hold: Hold,
+    /// The run counts as diverged when some `|x_i|` exceeds this bound.
+    pub state_bound: f64,
+    /// The run counts as diverged after this many consecutive samples on which the controller
+    /// failed (the previous control is held meanwhile).
+    pub max_consecutive_failures: usize,
+}
+
+impl Default for ClosedLoopOptions {
+    fn default() -> Self {
+        Self {
+            h: 0.05,
+            t_end: 20.0,
+            rtol: 1e-8,
+            atol: 1e-10,
+            hold: Hold::Input,
+            state_bound: 1e3,
+            max_consecutive_failures: 3,
+        }
+    }
+}
+
+/// Errors that prevent a run from starting (a run that starts and fails later reports a
+/// [`Divergence`] instead).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SimulateError {
+    /// An option is out of range.
+    #[error("invalid simulation option: {0}")]
+    InvalidOption(String),
+    /// The initial state has the wrong length or is not finite.
+    #[error("initial state: {0}")]
+    InitialState(String),
+    /// [`Hold::Correction`] needs a controller with a preliminary feedback.
+    #[error("hold = correction needs a preliminary feedback")]
+    NoPrefeedback,
+    /// The plant and the controller disagree on the number of inputs or outputs.
+    #[error("plant has {plant} {what}, controller {controller}")]
+    Mismatch {
+        /// What differs.
+        what: &'static str,
+        /// The plant's count.
+        plant: usize,
+        /// The controller's count.
+        controller: usize,
+    },
+}
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Divergence {
+    /// Time at which it was detected.
+    pub t: f64,
+    /// What happened.
+    pub cause: String,
+}
+
+/// One sample of a run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Sample {
+    /// Sample time.
+    pub t: f64,
+    /// Measured plant state.
+    pub x: Vec<f64>,
+    /// Plant input applied from this sample on (at the sample time).
+    pub u: Vec<f64>,
+    /// Plant outputs.
+    pub y: Vec<f64>,
+    /// References at `t`.
+    pub reference: Vec<f64>,
+    /// Tracking errors `y - xi`.
+    pub error: Vec<f64>,
+}
+
+/// The result of a closed-loop run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ClosedLoop {
+    /// Samples in time order.
+    pub samples: Vec<Sample>,
+    /// Set when the run stopped early.
+    pub divergence: Option<Divergence>,
+    /// Newton iterations of the controller, over all samples.
+    pub newton_iterations: usize,
+    /// Samples on which the controller retried with a larger `delta`.
+    pub retried_samples: usize,
+    /// Retries with a larger `delta`, over all samples.
+    pub retries: usize,
+    /// Samples on which the controller failed (the previous control was held).
+    pub failed_samples: usize,
+}
+
+/// The plant with its inputs given by the hold: constant `u`, or the preliminary feedback
+/// `u0(t) + K_n (x - x0(t)) + v` with constant `v`.
+struct HeldPlant<'a, M: DaeModel> {
+    model: M,
+    held: Vec<f64>,
+    feedback: Option<&'a Prefeedback>,
+    scratch: RefCell<HeldScratch>,
+}
+
+struct HeldScratch {
+    u: Vec<f64>,
+    x0: Vec<f64>,
+    f_xdot: DMatrix<f64>,
+    f_x: DMatrix<f64>,
+    f_z: DMatrix<f64>,
+    f_u: DMatrix<f64>,
+    res: Vec<f64>,
+}
+
+impl<'a, M: DaeModel> HeldPlant<'a, M> {
+    fn new(model: M, held: &[f64], feedback: Option<&'a Prefeedback>) -> Self {
+        let ne = M::N_EQUATIONS;
+        Self {
+            model,
+            held: held.to_vec(),
+            feedback,
+            scratch: RefCell::new(HeldScratch {
+                u: vec![0.0; M::N_INPUTS],
+                x0: vec![0.0; M::N_STATES],
+                f_xdot: DMatrix::zeros(ne, M::N_STATES),
+                f_x: DMatrix::zeros(ne, M::N_STATES),
+                f_z: DMatrix::zeros(ne, M::N_ALGEBRAIC),
+                f_u: DMatrix::zeros(ne, M::N_INPUTS),
+                res: vec![0.0; ne],
+            }),
+        }
+    }
+
+    fn inputs(&self, t: f64, x: &[f64], s: &mut HeldScratch) {
+        match self.feedback {
+            Some(pf) => pf.input(t, x, &self.held, &mut s.x0, &mut s.u),
+            None => s.u.copy_from_slice(&self.held),
+        }
+    }
+}
+
+impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
+    fn dimension(&self) -> usize {
+        M::N_EQUATIONS
+    }
+
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        let (x, z) = y.split_at(M::N_STATES);
+        let s = &mut *self.scratch.borrow_mut();
+        self.inputs(t, x, s);
+        self.model.residual(t, x, &yp[..M::N_STATES], z, &s.u, out);
+    }
+
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        c: f64,
+        out: &mut S,
+    ) {
+        let nx = M::N_STATES;
+        let (x, z) = y.split_at(nx);
+        let xdot = &yp[..nx];
+        let s = &mut *self.scratch.borrow_mut();
+        self.inputs(t, x, s);
+        let Some(pf) = self.feedback else {
+            self.model.iteration_matrix(t, x, xdot, z, &s.u, c, out);
+            return;
+        };
+        for m in [&mut s.f_xdot, &mut s.f_x, &mut s.f_z, &mut s.f_u] {
+            m.fill(0.0);
+        }
+        self.model.evaluate(
+            t,
+            x,
+            xdot,
+            z,
+            &s.u,
+            &mut s.res,
+            &mut s.f_xdot,
+            &mut s.f_x,
+            &mut s.f_z,
+            &mut s.f_u,
+        );
+        // u depends on x through K_n: dF/dx gains dF/du K_n.
+        let j_x = &s.f_x + &s.f_xdot * c + &s.f_u * &pf.k_n;
+        for j in 0..nx {
+            for i in 0..M::N_EQUATIONS {
+                out.set(i, j, j_x[(i, j)]);
+            }
+        }
+        for j in 0..M::N_ALGEBRAIC {
+            for i in 0..M::N_EQUATIONS {
+                out.set(i, nx + j, s.f_z[(i, j)]);
+            }
+        }
+    }
+
+    fn is_differential(&self, i: usize) -> bool {
+        i < M::N_STATES
+    }
+
+    fn equation_name(&self, i: usize) -> String {
+        M::EQUATIONS.get(i).map_or_else(
+            || format!("equation {i}"),
+            |e| format!("equation {i} ({e})"),
+        )
+    }
+
+    fn unknown_name(&self, i: usize) -> String {
+        M::STATE_NAMES
+            .iter()
+            .chain(M::ALGEBRAIC_NAMES)
+            .nth(i)
+            .map_or_else(|| format!("y[{i}]"), |s| (*s).to_string())
+    }
+}
+
+/// Run the closed loop of `dpc` on `plant` from the state `x0` (algebraic unknowns of the
+/// plant are initialised consistently at every sample).
+///
+/// # Errors
+/// [`SimulateError`] when the run cannot start; failures during the run are reported in
+/// [`ClosedLoop::divergence`].
+pub fn simulate<P, T, R, L>(
+    plant: &P,
+    dpc: &mut Dpc<T, R, L>,
+    x0: &[f64],
+    opts: &ClosedLoopOptions,
+) -> Result<ClosedLoop, SimulateError>
+where
+    P: DaeModel + Clone,
+    T: TrackingDae,
+    R: Reference,
+    L: LinearSolver,
+{
+    let (nx, nz, nu, ny) = (P::N_STATES, P::N_ALGEBRAIC, P::N_INPUTS, P::N_OUTPUTS);
+    if !(opts.h.is_finite() && opts.h > 0.0 && opts.t_end.is_finite() && opts.t_end > 0.0) {
+        return Err(SimulateError::InvalidOption(format!(
+            "h = {}, t_end = {}",
+            opts.h, opts.t_end
+        )));
+    }
+    if opts.state_bound.is_nan() || opts.state_bound <= 0.0 {
+        return Err(SimulateError::InvalidOption(format!(
+            "state_bound = {}",
+            opts.state_bound
+        )));
+    }
+    if x0.len() != nx || x0.iter().any(|v| !v.is_finite()) {
+        return Err(SimulateError::InitialState(format!(
+            "expected {nx} finite values, got {x0:?}"
+        )));
+    }
+    if T::N_STATES != nx {
+        return Err(SimulateError::Mismatch {
+            what: "states",
+            plant: nx,
+            controller: T::N_STATES,
+        });
+    }
+    let controller_inputs = T::N_ALGEBRAIC - <T::Plant as DaeModel>::N_ALGEBRAIC;
+    if controller_inputs != nu {
+        return Err(SimulateError::Mismatch {
+            what: "inputs",
+            plant: nu,
+            controller: controller_inputs,
+        });
+    }
+    if T::N_OUTPUTS != ny {
+        return Err(SimulateError::Mismatch {
+            what: "outputs",
+            plant: ny,
+            controller: T::N_OUTPUTS,
+        });
+    }
+    if opts.hold == Hold::Correction && dpc.prefeedback().is_none() {
+        return Err(SimulateError::NoPrefeedback);
+    }
+    let bdf_opts = Options::with_tolerances(opts.rtol, opts.atol);
+    let mut result = ClosedLoop {
+        samples: Vec::new(),
+        divergence: None,
+        newton_iterations: 0,
+        retried_samples: 0,
+        retries: 0,
+        failed_samples: 0,
+    };
+    let mut y = vec![0.0; nx + nz];
+    y[..nx].copy_from_slice(x0);
+    let mut yp = vec![0.0; nx + nz];
+    let mut control = vec![0.0; nu];
+    let mut applied = vec![0.0; nu];
+    let mut x0_scratch = vec![0.0; nx];
+    let mut consecutive_failures = 0;
+    let mut reference = vec![0.0; ny];
+    let mut outputs = vec![0.0; ny];
+    let steps = (opts.t_end / opts.h).round() as usize;
+    for k in 0..=steps {
+        let t = k as f64 * opts.h;
+        let x = &y[..nx];
+        if let Some((i, v)) = x
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite() || v.abs() > opts.state_bound)
+        {
+            result.divergence = Some(Divergence {
+                t,
+                cause: format!(
+                    "state {} = {v} left the domain |x| <= {}",
+                    P::STATE_NAMES.get(i).copied().unwrap_or("?"),
+                    opts.state_bound
+                ),
+            });
+            break;
+        }
+        match dpc.control(t, x, &mut control) {
+            Ok(report) => {
+                consecutive_failures = 0;
+                result.newton_iterations += report.newton_iterations;
+                if report.retries > 0 {
+                    result.retried_samples += 1;
+                    result.retries += report.retries;
+                }
+            }
+            Err(err) => {
+                result.failed_samples += 1;
+                consecutive_failures += 1;
+                if consecutive_failures > opts.max_consecutive_failures
+                    || !matches!(err, DpcError::NoSolution { .. } | DpcError::Singular { .. })
+                {
+                    result.divergence = Some(Divergence {
+                        t,
+                        cause: format!("controller failed: {err}"),
+                    });
+                    break;
+                }
+                // Hold the previous control and try again at the next sample.
+            }
+        }
+        // The plant input at the sample (for the record, and for Hold::Input).
+        match dpc.prefeedback() {
+            Some(pf) => pf.input(t, x, &control, &mut x0_scratch, &mut applied),
+            None => applied.copy_from_slice(&control),
+        }
+        let (xs, zs) = y.split_at(nx);
+        plant.outputs(t, xs, zs, &applied, &mut outputs);
+        let ref_ok = record_reference(dpc, t, &mut reference);
+        result.samples.push(Sample {
+            t,
+            x: xs.to_vec(),
+            u: applied.clone(),
+            y: outputs.clone(),
+            reference: reference.clone(),
+            error: outputs
+                .iter()
+                .zip(&reference)
+                .map(|(a, b)| if ref_ok { a - b } else { f64::NAN })
+                .collect(),
+        });
+        if k == steps {
+            break;
+        }
+        // Integrate the plant over [t, t + h] with the hold.
+        let held_plant = match opts.hold {
+            Hold::Input => HeldPlant::new(plant.clone(), &applied, None),
+            Hold::Correction => HeldPlant::new(plant.clone(), &control, dpc.prefeedback()),
+        };
+        if let Err(err) = integrate_interval(&held_plant, &bdf_opts, t, t + opts.h, &mut y, &mut yp)
+        {
+            result.divergence = Some(Divergence {
+                t,
+                cause: format!("plant integration failed: {err}"),
+            });
+            break;
+        }
+    }
+    Ok(result)
+}
+
+fn record_reference<T: TrackingDae, R: Reference, L: LinearSolver>(
+    dpc: &Dpc<T, R, L>,
+    t: f64,
+    out: &mut [f64],
+) -> bool {
+    dpc.reference().derivatives(t, 0, out).is_ok()
+}
+
+/// Make the plant consistent at `t0` (the input may have jumped) and integrate to `t1`.
+fn integrate_interval<D: ImplicitDae>(
+    dae: &D,
+    opts: &Options,
+    t0: f64,
+    t1: f64,
+    y: &mut [f64],
+    yp: &mut [f64],
+) -> Result<(), BdfError> {
+    let n = dae.dimension();
+    let mut ls = FaerDenseLu::new(n);
+    consistent_initial_values(dae, &mut ls, opts, t0, y, yp)?;
+    let mut bdf = Bdf::new(dae, ls, opts.clone(), t0, y, yp)?;
+    bdf.set_stop_time(t1)?;
+    bdf.solve_to(t1, y, Some(yp))
+}
