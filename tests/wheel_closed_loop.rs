@@ -97,8 +97,8 @@ fn late_error(run: &ClosedLoop) -> [f64; 2] {
     let t_end = run.samples.last().unwrap().t;
     let mut m = [0.0_f64; 2];
     for s in run.samples.iter().filter(|s| s.t >= 0.75 * t_end) {
-        for i in 0..2 {
-            m[i] = m[i].max(s.error[i].abs());
+        for (mi, e) in m.iter_mut().zip(&s.error) {
+            *mi = mi.max(e.abs());
         }
     }
     m
