@@ -143,6 +143,30 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         })
     }
 
+    /// Restart at `(t0, y0)` (possibly inconsistent) without allocating: the order ramps up
+    /// again and the iteration matrix is re-formed at the first step. This is the call for
+    /// each sample of the DPC controller.
+    ///
+    /// # Errors
+    /// [`BdfError::DimensionMismatch`] if `y0` has the wrong length.
+    pub fn reset(&mut self, t0: f64, y0: &[f64]) -> Result<(), BdfError> {
+        if y0.len() != self.y.len() {
+            return Err(BdfError::DimensionMismatch {
+                what: "y0",
+                expected: self.y.len(),
+                found: y0.len(),
+            });
+        }
+        self.t = t0;
+        self.hist[0].copy_from_slice(y0);
+        self.y.copy_from_slice(y0);
+        self.yp.fill(0.0);
+        self.navail = 1;
+        self.jac = JacState::default();
+        self.jac_order = 0;
+        Ok(())
+    }
+
     /// Current time.
     pub fn t(&self) -> f64 {
         self.t
