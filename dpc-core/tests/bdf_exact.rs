@@ -325,3 +325,19 @@ fn reinit_and_reset_restart_cleanly() {
         f.y()
     );
 }
+
+#[test]
+fn stop_time_is_honoured_and_cleared() {
+    let opts = Options::with_tolerances(1e-8, 1e-10);
+    let (y0, yp0) = (Index1::exact(0.0), Index1::exact_p(0.0));
+    let mut bdf = Bdf::new(Index1, NalgebraLu::<2>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    bdf.set_stop_time(1.5).unwrap();
+    let mut out = [0.0; 2];
+    let t = bdf.solve_to(4.0, &mut out, None).unwrap();
+    assert_eq!(t, 1.5);
+    assert_eq!(bdf.t(), 1.5);
+    assert!(max_err(&out, &Index1::exact(1.5)) < 1e-6);
+    let t = bdf.solve_to(4.0, &mut out, None).unwrap();
+    assert_eq!(t, 4.0);
+    assert!(max_err(&out, &Index1::exact(4.0)) < 1e-6);
+}

@@ -281,7 +281,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     }
 
     /// Integrate to `tout` (ahead of the initial time) and write `y(tout)` (and `y'(tout)` if
-    /// given) by interpolation with the polynomial of the last step.
+    /// given) by interpolation with the polynomial of the last step. Returns the time the
+    /// output refers to: `tout`, or the stop time when [`set_stop_time`](Self::set_stop_time)
+    /// set one before `tout` (it is then cleared, as IDA does).
     ///
     /// # Errors
     /// Any step failure; [`BdfError::TooManySteps`] after [`Options::max_steps`] steps in this
@@ -291,7 +293,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         tout: f64,
         y_out: &mut [f64],
         yp_out: Option<&mut [f64]>,
-    ) -> Result<(), BdfError> {
+    ) -> Result<f64, BdfError> {
         if y_out.len() != self.n {
             return Err(BdfError::DimensionMismatch {
                 what: "y_out",
@@ -310,6 +312,13 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         let mut steps = 0;
         while self.tn < tout {
+            if let Some(ts) = self.tstop {
+                if self.tn >= ts {
+                    self.tstop = None;
+                    self.interpolate(ts, y_out, yp_out)?;
+                    return Ok(ts);
+                }
+            }
             if steps >= self.opts.max_steps {
                 return Err(BdfError::TooManySteps {
                     max_steps: self.opts.max_steps,
@@ -317,15 +326,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                     t: self.tn,
                 });
             }
-            if let Some(ts) = self.tstop {
-                if ts <= tout && self.tn >= ts {
-                    break;
-                }
-            }
             self.step_internal()?;
             steps += 1;
         }
-        self.interpolate(tout, y_out, yp_out)
+        self.interpolate(tout, y_out, yp_out)?;
+        Ok(tout)
     }
 
     /// Take one step; returns the new time.
