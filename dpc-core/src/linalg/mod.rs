@@ -2,13 +2,15 @@
 //!
 //! One trait, [`LinearSolver`], with three implementations chosen by type:
 //!
-//! * [`NalgebraLu`]: fixed-size `SMatrix<f64, N, N>` with nalgebra's partial-pivoting LU on the
-//!   stack, for models generated with compile-time dimensions. Nothing allocates after
-//!   construction, so an integrator step built on it is allocation-free.
-//! * [`FaerDenseLu`]: faer's blocked partial-pivoting LU on a heap matrix, with the
-//!   permutation and scratch memory allocated once at construction.
+//! * [`NalgebraLu`]: fixed-size `SMatrix<f64, N, N>` with a partial-pivoting LU on the stack,
+//!   for models generated with compile-time dimensions. Nothing allocates after construction,
+//!   so an integrator step built on it is allocation-free.
+//! * [`FaerDenseLu`]: faer's blocked partial-pivoting LU on a heap matrix, with the permutation
+//!   and scratch memory allocated once at construction, so it too is allocation-free per step
+//!   (`tests/bdf_alloc.rs` checks both dense back ends).
 //! * [`FaerSparseLu`]: faer's sparse LU (symbolic analysis once, from
 //!   [`crate::ImplicitDae::iteration_pattern`], numeric factorisation per Jacobian update).
+//!   Factorisations and solves allocate their scratch memory (faer's high-level sparse API).
 //!
 //! The integrator writes `G` into [`LinearSolver::matrix_mut`] after zeroing it, calls
 //! [`LinearSolver::factor`], then solves as often as Newton needs with
