@@ -6,7 +6,7 @@
 mod problems;
 
 use dpc_core::bdf::{consistent_initial_values, Bdf, Options, Tolerance};
-use dpc_core::linalg::{FaerSparseLu, NalgebraLu};
+use dpc_core::linalg::{FaerDenseLu, FaerSparseLu, LinearSolver, NalgebraLu};
 use dpc_core::ImplicitDae;
 use problems::*;
 use std::time::Instant;
@@ -227,5 +227,62 @@ fn pendulum_index2_matches_independent_reference() {
             bdf.stats().steps
         );
         assert!(pos >= floor, "rtol {rtol}: {pos}");
+    }
+}
+
+/// Heat equation with `m` intervals to `t = 0.1` with the given solver; (max error, steps, s).
+fn heat<L: LinearSolver>(m: usize, ls: L, rtol: f64) -> (f64, usize, f64) {
+    let h = Heat { m };
+    let (mut u0, mut up0) = (vec![0.0; m + 1], vec![0.0; m + 1]);
+    h.exact(0.0, &mut u0, &mut up0);
+    let start = Instant::now();
+    let mut bdf = Bdf::new(h, ls, Options::with_tolerances(rtol, rtol), 0.0, &u0, &up0).unwrap();
+    let mut u = vec![0.0; m + 1];
+    bdf.solve_to(0.1, &mut u, None).unwrap();
+    let elapsed = start.elapsed().as_secs_f64();
+    let (mut ue, mut upe) = (vec![0.0; m + 1], vec![0.0; m + 1]);
+    h.exact(0.1, &mut ue, &mut upe);
+    let err = u
+        .iter()
+        .zip(&ue)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    (err, bdf.stats().steps, elapsed)
+}
+
+#[test]
+fn heat_equation_sparse_and_dense_match_exact_solution() {
+    let m = 100;
+    let pattern = Heat { m }.iteration_pattern().unwrap();
+    let (es, ss, _) = heat(m, FaerSparseLu::new(m + 1, &pattern).unwrap(), 1e-6);
+    let (ed, sd, _) = heat(m, FaerDenseLu::new(m + 1), 1e-6);
+    println!("heat m = {m}: sparse error {es:e} in {ss} steps, dense error {ed:e} in {sd} steps");
+    assert!(es < 1e-5 && ed < 1e-5, "{es} {ed}");
+    assert!(ss.abs_diff(sd) <= 2, "{ss} vs {sd}");
+}
+
+/// Dense vs sparse faer LU on the heat equation (`cargo test --release -p dpc-core --test
+/// bdf_standard -- --ignored --nocapture large_model_back_ends`).
+#[test]
+#[ignore = "timing run for the README"]
+fn large_model_back_ends() {
+    println!("| m + 1 | back end | steps | max error | time [ms] |");
+    println!("|---|---|---|---|---|");
+    for m in [100usize, 400, 1600] {
+        let pattern = Heat { m }.iteration_pattern().unwrap();
+        let (e, s, t) = heat(m, FaerSparseLu::new(m + 1, &pattern).unwrap(), 1e-6);
+        println!(
+            "| {} | faer sparse LU | {s} | {e:.1e} | {:.2} |",
+            m + 1,
+            t * 1e3
+        );
+        if m <= 400 {
+            let (e, s, t) = heat(m, FaerDenseLu::new(m + 1), 1e-6);
+            println!(
+                "| {} | faer dense LU | {s} | {e:.1e} | {:.2} |",
+                m + 1,
+                t * 1e3
+            );
+        }
     }
 }
