@@ -209,8 +209,7 @@ fn fixed_error<D: ImplicitDae + Copy, const N: usize>(
     let h = 1.0 / steps as f64;
     let hist: Vec<[f64; N]> = (0..q).map(|j| exact(-(j as f64) * h)).collect();
     let refs: Vec<&[f64]> = hist.iter().map(|v| &v[..]).collect();
-    let mut opts = Options::with_tolerances(1e-13, 1e-13);
-    opts.residual_tolerance = 1e-10;
+    let opts = Options::with_tolerances(1e-13, 1e-13);
     let mut bdf = FixedBdf::with_history(dae, FaerDenseLu::new(N), opts, q, h, 0.0, &refs).unwrap();
     for _ in 0..steps {
         bdf.step().unwrap();

@@ -25,7 +25,7 @@ const COEFFS: [[f64; 6]; 5] = [
 ///
 /// Newton's iteration matrix `dF/dy + (a_0/h) dF/dy'` is reused across steps and refreshed only
 /// when Newton fails with it. A step is accepted only when Newton's update test passes *and*
-/// the residual satisfies `max_i |F_i| <= Options::residual_tolerance`; otherwise the step
+/// the scaled residual passes [`Options::residual_tolerance`]; otherwise the step
 /// returns [`BdfError::NewtonFailed`] (or the singular-matrix / non-finite-residual error) and
 /// the integrator stays at the previous point.
 pub struct FixedBdf<D: ImplicitDae, L: LinearSolver> {

@@ -147,7 +147,8 @@ pub(crate) struct NewtonProblem<'a> {
     pub w: &'a [f64],
     pub max_iterations: usize,
     pub epcon: f64,
-    /// When finite: the max-norm of the residual at the solution must not exceed this.
+    /// When finite: the scaled residual `max_i |F_i| / max_j (|G_ij| / w_j)` at the solution
+    /// must not exceed this.
     pub residual_tolerance: f64,
     /// Force a fresh iteration matrix before the first iteration.
     pub force_setup: bool,
@@ -252,7 +253,12 @@ fn iterate<D: ImplicitDae, L: LinearSolver>(
                 if let Some(i) = first_non_finite(res) {
                     return Err(NewtonFailure::NonFinite(i));
                 }
-                let rn = res.iter().fold(0.0f64, |a, r| a.max(r.abs()));
+                // Scaled residual: each equation relative to the change one tolerance unit of
+                // the unknowns causes in it (absolute where a row of the matrix is empty).
+                ls.scaled_row_norms(p.w, delta);
+                let rn = res.iter().zip(delta.iter()).fold(0.0f64, |a, (r, s)| {
+                    a.max(if *s > 0.0 { r.abs() / s } else { r.abs() })
+                });
                 if rn <= p.residual_tolerance {
                     return Ok(m + 1);
                 }

@@ -71,6 +71,10 @@ pub trait LinearSolver {
     /// Overwrite `b` (length [`dimension`](Self::dimension)) with the solution of `A x = b`
     /// for the last successfully factorised `A`.
     fn solve_in_place(&mut self, b: &mut [f64]);
+
+    /// Row scales `out_i = max_j |A_ij| / w_j` of the matrix last written, for weights `w`
+    /// (the change of equation `i` caused by moving one unknown by one unit `1/w_j`).
+    fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]);
 }
 
 /// First row of a dense column-major accessor that is entirely zero, if any.
