@@ -6,7 +6,7 @@
 mod problems;
 
 use dpc_core::bdf::{consistent_initial_values, Bdf, Options, Tolerance};
-use dpc_core::linalg::{FaerDenseLu, FaerSparseLu, LinearSolver, NalgebraLu};
+use dpc_core::linalg::{FaerDenseLu, FaerLu, FaerSparseLu, LinearSolver, NalgebraLu};
 use dpc_core::ImplicitDae;
 use problems::*;
 use std::time::Instant;
@@ -259,6 +259,12 @@ fn heat_equation_sparse_and_dense_match_exact_solution() {
     println!("heat m = {m}: sparse error {es:e} in {ss} steps, dense error {ed:e} in {sd} steps");
     assert!(es < 1e-5 && ed < 1e-5, "{es} {ed}");
     assert!(ss.abs_diff(sd) <= 2, "{ss} vs {sd}");
+    // The run-time choice picks the sparse LU for the tridiagonal pattern, dense for tiny ones.
+    let auto = FaerLu::for_dae(&Heat { m });
+    assert!(auto.is_sparse());
+    let (ea, sa, _) = heat(m, auto, 1e-6);
+    assert!(ea < 1e-5 && sa == ss, "{ea} {sa}");
+    assert!(!FaerLu::for_dae(&Heat { m: 10 }).is_sparse());
 }
 
 /// Dense vs sparse faer LU on the heat equation (`cargo test --release -p dpc-core --test

@@ -1,6 +1,7 @@
 //! Linear solvers for the BDF iteration matrix `G = dF/dy + (alpha/h) dF/dy'`.
 //!
-//! One trait, [`LinearSolver`], with three implementations chosen by type:
+//! One trait, [`LinearSolver`], with three implementations chosen by type (and a run-time
+//! choice between the two faer ones):
 //!
 //! * [`NalgebraLu`]: fixed-size `SMatrix<f64, N, N>` with a partial-pivoting LU on the stack,
 //!   for models generated with compile-time dimensions. Nothing allocates after construction,
@@ -11,15 +12,19 @@
 //! * [`FaerSparseLu`]: faer's sparse LU (symbolic analysis once, from
 //!   [`crate::ImplicitDae::iteration_pattern`], numeric factorisation per Jacobian update).
 //!   Factorisations and solves allocate their scratch memory (faer's high-level sparse API).
+//! * [`FaerLu`]: one of the two faer back ends, chosen at run time by
+//!   [`FaerLu::for_dae`] from the density of the DAE's declared pattern.
 //!
 //! The integrator writes `G` into [`LinearSolver::matrix_mut`] after zeroing it, calls
 //! [`LinearSolver::factor`], then solves as often as Newton needs with
 //! [`LinearSolver::solve_in_place`].
 
+mod auto;
 mod faer_dense;
 mod faer_sparse;
 mod nalgebra_lu;
 
+pub use auto::{FaerLu, SPARSE_DENSITY, SPARSE_MIN_DIMENSION};
 pub use faer_dense::FaerDenseLu;
 pub use faer_sparse::{FaerSparseLu, PatternMatrix};
 pub use nalgebra_lu::NalgebraLu;
