@@ -32,7 +32,7 @@ fn robertson(rtol: f64) -> (f64, usize, f64) {
 #[test]
 fn robertson_to_1e11_matches_reference() {
     // (rtol, minimum significant digits required)
-    for (rtol, floor) in [(1e-4, 1.0), (1e-6, 3.5), (1e-8, 4.5), (1e-10, 6.0)] {
+    for (rtol, floor) in [(1e-4, 1.5), (1e-6, 3.0), (1e-8, 5.0), (1e-10, 6.0)] {
         let (scd, steps, _) = robertson(rtol);
         println!("Robertson rtol {rtol:e}: {scd:.2} significant digits in {steps} steps");
         assert!(scd >= floor, "rtol {rtol}: {scd} digits");
@@ -72,7 +72,7 @@ fn pendulum_index3_matches_independent_reference() {
     // energy, so local errors accumulate linearly over the ~100-1000 steps and the observed
     // accuracy is well below the tolerance (see README, "BDF integrator").
     let reference = Pendulum::default().reference(THETA0, PENDULUM_T);
-    for (rtol, floor) in [(1e-4, 1.5), (1e-6, 3.5), (1e-8, 4.0), (1e-10, 5.0)] {
+    for (rtol, floor) in [(1e-4, 1.5), (1e-6, 2.5), (1e-8, 4.5), (1e-10, 5.5)] {
         let (pos, all, steps, _) = pendulum(rtol, &reference);
         println!(
             "pendulum rtol {rtol:e}: {pos:.2} digits (x, y), {all:.2} digits (all), {steps} steps"

@@ -23,6 +23,8 @@ pub(crate) struct JacState {
     pub valid: bool,
     /// Convergence-rate factor `s` carried between steps.
     pub ss: f64,
+    /// `cj` of the previous Newton solve.
+    pub cj_last: f64,
 }
 
 impl Default for JacState {
@@ -32,6 +34,7 @@ impl Default for JacState {
             current: false,
             valid: false,
             ss: 20.0,
+            cj_last: 0.0,
         }
     }
 }
@@ -170,6 +173,11 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
     delta: &mut [f64],
 ) -> Result<usize, NewtonFailure> {
     jac.current = false;
+    // A changed cj makes the carried rate estimate unreliable: start pessimistic (IDA).
+    if p.cj != jac.cj_last {
+        jac.ss = 100.0;
+        jac.cj_last = p.cj;
+    }
     let mut need_setup = p.force_setup || !jac.valid || {
         let r = p.cj / jac.cj_factored;
         !(0.6..=1.0 / 0.6).contains(&r)
