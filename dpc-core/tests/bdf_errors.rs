@@ -282,6 +282,11 @@ fn dimension_mismatches_are_rejected() {
         &[-0.04, 0.04, 0.0],
     )
     .unwrap();
+    let mut y = [0.0; 3];
+    assert!(matches!(
+        bdf.solve_to(f64::NAN, &mut y, None),
+        Err(BdfError::InvalidOption(_))
+    ));
     let mut short = [0.0; 2];
     assert!(matches!(
         bdf.solve_to(1.0, &mut short, None),

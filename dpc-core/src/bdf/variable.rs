@@ -301,8 +301,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 found: y_out.len(),
             });
         }
+        if !tout.is_finite() {
+            return Err(BdfError::InvalidOption(format!("tout = {tout}")));
+        }
         if !self.h_initialised {
-            if tout <= self.tn || tout.is_nan() {
+            if tout <= self.tn {
                 return Err(BdfError::InvalidOption(format!(
                     "tout = {tout} is not ahead of t0 = {}",
                     self.tn
@@ -367,7 +370,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             });
         }
         let margin = 100.0 * f64::EPSILON * (self.tn.abs() + self.hused.abs());
-        if t > self.tn + margin || t < self.tn - self.hused - margin {
+        if !t.is_finite() || t > self.tn + margin || t < self.tn - self.hused - margin {
             return Err(BdfError::InvalidOption(format!(
                 "interpolation time {t} outside the last step [{}, {}]",
                 self.tn - self.hused,
