@@ -11,7 +11,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use dpc_core::bdf::{Bdf, FixedBdf, Options, Tolerance};
-use dpc_core::linalg::NalgebraLu;
+use dpc_core::linalg::{FaerDenseLu, NalgebraLu};
 use problems::{robertson_atol, Pendulum, Robertson, PENDULUM_INDEX};
 
 struct Counting;
@@ -93,6 +93,28 @@ fn steps_after_setup_do_not_allocate() {
         bdf.solve_to(0.1 * f64::from(k), &mut y, None).unwrap();
     }
     assert_eq!(allocations() - before, 0);
+
+    // The faer dense back end also keeps its workspace from construction on.
+    let opts = Options {
+        rtol: Tolerance::Scalar(rtol),
+        atol: Tolerance::Vector(robertson_atol(rtol)),
+        ..Options::default()
+    };
+    let mut bdf = Bdf::new(
+        Robertson,
+        FaerDenseLu::new(3),
+        opts,
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[-0.04, 0.04, 0.0],
+    )
+    .unwrap();
+    let mut y = [0.0; 3];
+    bdf.solve_to(1e-6, &mut y, None).unwrap();
+    let before = allocations();
+    bdf.solve_to(1e10, &mut y, None).unwrap();
+    assert!(bdf.stats().factorisations > 10);
+    assert_eq!(allocations() - before, 0, "faer dense back end");
 
     // Fixed step from inconsistent values.
     let mut f = FixedBdf::new(

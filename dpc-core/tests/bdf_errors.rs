@@ -67,7 +67,7 @@ fn run<L: dpc_core::linalg::LinearSolver>(kind: u8, ls: L, y0: [f64; 2]) -> Resu
     let yp0 = [-y0[0], 0.0];
     let mut bdf = Bdf::new(Broken { kind }, ls, Options::default(), 0.0, &y0, &yp0)?;
     let mut y = [0.0; 2];
-    bdf.solve_to(1.0, &mut y, None)
+    bdf.solve_to(1.0, &mut y, None).map(|_| ())
 }
 
 #[test]
@@ -282,6 +282,11 @@ fn dimension_mismatches_are_rejected() {
         &[-0.04, 0.04, 0.0],
     )
     .unwrap();
+    let mut y = [0.0; 3];
+    assert!(matches!(
+        bdf.solve_to(f64::NAN, &mut y, None),
+        Err(BdfError::InvalidOption(_))
+    ));
     let mut short = [0.0; 2];
     assert!(matches!(
         bdf.solve_to(1.0, &mut short, None),

@@ -209,8 +209,7 @@ fn fixed_error<D: ImplicitDae + Copy, const N: usize>(
     let h = 1.0 / steps as f64;
     let hist: Vec<[f64; N]> = (0..q).map(|j| exact(-(j as f64) * h)).collect();
     let refs: Vec<&[f64]> = hist.iter().map(|v| &v[..]).collect();
-    let mut opts = Options::with_tolerances(1e-13, 1e-13);
-    opts.residual_tolerance = 1e-10;
+    let opts = Options::with_tolerances(1e-13, 1e-13);
     let mut bdf = FixedBdf::with_history(dae, FaerDenseLu::new(N), opts, q, h, 0.0, &refs).unwrap();
     for _ in 0..steps {
         bdf.step().unwrap();
@@ -286,4 +285,58 @@ fn fixed_step_from_inconsistent_values() {
     let e = Index3::exact(bdf.t());
     assert!((bdf.y()[0] - e[0]).abs() < 1e-9);
     assert!((bdf.y()[1] - e[1]).abs() < 1e-3, "{:?} vs {e:?}", bdf.y());
+}
+
+#[test]
+fn reinit_and_reset_restart_cleanly() {
+    let opts = Options::with_tolerances(1e-8, 1e-10);
+    let (y0, yp0) = (Index1::exact(0.0), Index1::exact_p(0.0));
+    let mut bdf = Bdf::new(Index1, NalgebraLu::<2>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    let mut out = [0.0; 2];
+    bdf.solve_to(2.0, &mut out, None).unwrap();
+    // Restart at t = 5 from the exact solution there.
+    bdf.reinit(5.0, &Index1::exact(5.0), &Index1::exact_p(5.0))
+        .unwrap();
+    bdf.solve_to(7.0, &mut out, None).unwrap();
+    assert!(max_err(&out, &Index1::exact(7.0)) < 1e-6);
+
+    let mut f = FixedBdf::new(
+        Index3,
+        NalgebraLu::<3>::new(),
+        Options::default(),
+        2,
+        1e-3,
+        0.0,
+        &[0.0, 5.0, 7.0],
+    )
+    .unwrap();
+    for _ in 0..10 {
+        f.step().unwrap();
+    }
+    f.reset(1.0, &Index3::exact(1.0)).unwrap();
+    for _ in 0..1000 {
+        f.step().unwrap();
+    }
+    assert!((f.t() - 2.0).abs() < 1e-9);
+    assert!(
+        (f.y()[1] - Index3::exact(2.0)[1]).abs() < 1e-4,
+        "{:?}",
+        f.y()
+    );
+}
+
+#[test]
+fn stop_time_is_honoured_and_cleared() {
+    let opts = Options::with_tolerances(1e-8, 1e-10);
+    let (y0, yp0) = (Index1::exact(0.0), Index1::exact_p(0.0));
+    let mut bdf = Bdf::new(Index1, NalgebraLu::<2>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    bdf.set_stop_time(1.5).unwrap();
+    let mut out = [0.0; 2];
+    let t = bdf.solve_to(4.0, &mut out, None).unwrap();
+    assert_eq!(t, 1.5);
+    assert_eq!(bdf.t(), 1.5);
+    assert!(max_err(&out, &Index1::exact(1.5)) < 1e-6);
+    let t = bdf.solve_to(4.0, &mut out, None).unwrap();
+    assert_eq!(t, 4.0);
+    assert!(max_err(&out, &Index1::exact(4.0)) < 1e-6);
 }

@@ -25,7 +25,7 @@ const COEFFS: [[f64; 6]; 5] = [
 ///
 /// Newton's iteration matrix `dF/dy + (a_0/h) dF/dy'` is reused across steps and refreshed only
 /// when Newton fails with it. A step is accepted only when Newton's update test passes *and*
-/// the residual satisfies `max_i |F_i| <= Options::residual_tolerance`; otherwise the step
+/// the scaled residual passes [`Options::residual_tolerance`]; otherwise the step
 /// returns [`BdfError::NewtonFailed`] (or the singular-matrix / non-finite-residual error) and
 /// the integrator stays at the previous point.
 pub struct FixedBdf<D: ImplicitDae, L: LinearSolver> {
@@ -141,6 +141,30 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             jac_order: 0,
             stats: Stats::default(),
         })
+    }
+
+    /// Restart at `(t0, y0)` (possibly inconsistent) without allocating: the order ramps up
+    /// again and the iteration matrix is re-formed at the first step. This is the call for
+    /// each sample of the DPC controller.
+    ///
+    /// # Errors
+    /// [`BdfError::DimensionMismatch`] if `y0` has the wrong length.
+    pub fn reset(&mut self, t0: f64, y0: &[f64]) -> Result<(), BdfError> {
+        if y0.len() != self.y.len() {
+            return Err(BdfError::DimensionMismatch {
+                what: "y0",
+                expected: self.y.len(),
+                found: y0.len(),
+            });
+        }
+        self.t = t0;
+        self.hist[0].copy_from_slice(y0);
+        self.y.copy_from_slice(y0);
+        self.yp.fill(0.0);
+        self.navail = 1;
+        self.jac = JacState::default();
+        self.jac_order = 0;
+        Ok(())
     }
 
     /// Current time.

@@ -23,6 +23,8 @@ pub(crate) struct JacState {
     pub valid: bool,
     /// Convergence-rate factor `s` carried between steps.
     pub ss: f64,
+    /// `cj` of the previous Newton solve.
+    pub cj_last: f64,
 }
 
 impl Default for JacState {
@@ -32,6 +34,7 @@ impl Default for JacState {
             current: false,
             valid: false,
             ss: 20.0,
+            cj_last: 0.0,
         }
     }
 }
@@ -147,7 +150,8 @@ pub(crate) struct NewtonProblem<'a> {
     pub w: &'a [f64],
     pub max_iterations: usize,
     pub epcon: f64,
-    /// When finite: the max-norm of the residual at the solution must not exceed this.
+    /// When finite: the scaled residual `max_i |F_i| / max_j (|G_ij| / w_j)` at the solution
+    /// must not exceed this.
     pub residual_tolerance: f64,
     /// Force a fresh iteration matrix before the first iteration.
     pub force_setup: bool,
@@ -169,6 +173,11 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
     delta: &mut [f64],
 ) -> Result<usize, NewtonFailure> {
     jac.current = false;
+    // A changed cj makes the carried rate estimate unreliable: start pessimistic (IDA).
+    if p.cj != jac.cj_last {
+        jac.ss = 100.0;
+        jac.cj_last = p.cj;
+    }
     let mut need_setup = p.force_setup || !jac.valid || {
         let r = p.cj / jac.cj_factored;
         !(0.6..=1.0 / 0.6).contains(&r)
@@ -252,7 +261,12 @@ fn iterate<D: ImplicitDae, L: LinearSolver>(
                 if let Some(i) = first_non_finite(res) {
                     return Err(NewtonFailure::NonFinite(i));
                 }
-                let rn = res.iter().fold(0.0f64, |a, r| a.max(r.abs()));
+                // Scaled residual: each equation relative to the change one tolerance unit of
+                // the unknowns causes in it (absolute where a row of the matrix is empty).
+                ls.scaled_row_norms(p.w, delta);
+                let rn = res.iter().zip(delta.iter()).fold(0.0f64, |a, (r, s)| {
+                    a.max(if *s > 0.0 { r.abs() / s } else { r.abs() })
+                });
                 if rn <= p.residual_tolerance {
                     return Ok(m + 1);
                 }

@@ -96,8 +96,11 @@ pub struct Options {
     pub index: Vec<u8>,
     /// How components with index 2 or 3 enter the error test.
     pub higher_index: HigherIndexControl,
-    /// Fixed-step mode only: after Newton's update test passes, the residual must also satisfy
-    /// `max_i |F_i| <= residual_tolerance` (default `1e-8`); `f64::INFINITY` disables the check.
+    /// Fixed-step mode only: after Newton's update test passes, the scaled residual must also
+    /// satisfy `max_i |F_i| / max_j (|G_ij| / w_j) <= residual_tolerance`, with `G` the
+    /// iteration matrix and `w_j` the error weights: every equation must be satisfied to
+    /// within what a change of the unknowns by this many tolerance units would cause (default
+    /// `1.0`); `f64::INFINITY` disables the check.
     pub residual_tolerance: f64,
 }
 
@@ -117,7 +120,7 @@ impl Default for Options {
             max_error_test_failures: 10,
             index: Vec::new(),
             higher_index: HigherIndexControl::Exclude,
-            residual_tolerance: 1e-8,
+            residual_tolerance: 1.0,
         }
     }
 }

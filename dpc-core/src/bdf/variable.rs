@@ -47,6 +47,8 @@ pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
     terr_km1: f64,
     phi: Vec<Vec<f64>>,
     h_initialised: bool,
+    /// `stats.steps` when the current integration started (0, or at the last `reinit`).
+    steps_at_start: usize,
     tstop: Option<f64>,
     // Work vectors.
     y: Vec<f64>,
@@ -139,6 +141,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             terr_km1: 0.0,
             phi,
             h_initialised: false,
+            steps_at_start: 0,
             tstop: None,
             y: y0.to_vec(),
             yp: yp0.to_vec(),
@@ -154,6 +157,51 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             stats,
             opts,
         })
+    }
+
+    /// Restart from a new consistent point `(t0, y0, yp0)` without allocating (for example
+    /// after a jump of the model's inputs). Statistics keep accumulating; the stop time is
+    /// cleared and the iteration matrix is re-formed at the first step.
+    ///
+    /// # Errors
+    /// [`BdfError::DimensionMismatch`], [`BdfError::NonFiniteResidual`] or
+    /// [`BdfError::InvalidTolerance`] as for [`Bdf::new`].
+    pub fn reinit(&mut self, t0: f64, y0: &[f64], yp0: &[f64]) -> Result<(), BdfError> {
+        let n = self.n;
+        for (what, found) in [("y0", y0.len()), ("yp0", yp0.len())] {
+            if found != n {
+                return Err(BdfError::DimensionMismatch {
+                    what,
+                    expected: n,
+                    found,
+                });
+            }
+        }
+        self.dae.residual(t0, y0, yp0, &mut self.res);
+        self.stats.residual_evaluations += 1;
+        if let Some(i) = newton::first_non_finite(&self.res) {
+            return Err(BdfError::NonFiniteResidual {
+                t: t0,
+                equation: self.dae.equation_name(i),
+            });
+        }
+        error_weights(&self.opts, y0, &mut self.ewt)?;
+        self.phi[0].copy_from_slice(y0);
+        self.phi[1].copy_from_slice(yp0);
+        self.y.copy_from_slice(y0);
+        self.yp.copy_from_slice(yp0);
+        self.tn = t0;
+        self.hh = 0.0;
+        self.hused = 0.0;
+        self.kk = 1;
+        self.kused = 0;
+        self.ns = 0;
+        self.phase = 0;
+        self.h_initialised = false;
+        self.tstop = None;
+        self.jac = JacState::default();
+        self.steps_at_start = self.stats.steps;
+        Ok(())
     }
 
     /// The DAE being integrated.
@@ -233,7 +281,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     }
 
     /// Integrate to `tout` (ahead of the initial time) and write `y(tout)` (and `y'(tout)` if
-    /// given) by interpolation with the polynomial of the last step.
+    /// given) by interpolation with the polynomial of the last step. Returns the time the
+    /// output refers to: `tout`, or the stop time when [`set_stop_time`](Self::set_stop_time)
+    /// set one before `tout` (it is then cleared, as IDA does).
     ///
     /// # Errors
     /// Any step failure; [`BdfError::TooManySteps`] after [`Options::max_steps`] steps in this
@@ -243,7 +293,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         tout: f64,
         y_out: &mut [f64],
         yp_out: Option<&mut [f64]>,
-    ) -> Result<(), BdfError> {
+    ) -> Result<f64, BdfError> {
         if y_out.len() != self.n {
             return Err(BdfError::DimensionMismatch {
                 what: "y_out",
@@ -251,8 +301,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 found: y_out.len(),
             });
         }
+        if !tout.is_finite() {
+            return Err(BdfError::InvalidOption(format!("tout = {tout}")));
+        }
         if !self.h_initialised {
-            if tout <= self.tn || tout.is_nan() {
+            if tout <= self.tn {
                 return Err(BdfError::InvalidOption(format!(
                     "tout = {tout} is not ahead of t0 = {}",
                     self.tn
@@ -262,6 +315,13 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         let mut steps = 0;
         while self.tn < tout {
+            if let Some(ts) = self.tstop {
+                if self.tn >= ts {
+                    self.tstop = None;
+                    self.interpolate(ts, y_out, yp_out)?;
+                    return Ok(ts);
+                }
+            }
             if steps >= self.opts.max_steps {
                 return Err(BdfError::TooManySteps {
                     max_steps: self.opts.max_steps,
@@ -269,15 +329,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                     t: self.tn,
                 });
             }
-            if let Some(ts) = self.tstop {
-                if ts <= tout && self.tn >= ts {
-                    break;
-                }
-            }
             self.step_internal()?;
             steps += 1;
         }
-        self.interpolate(tout, y_out, yp_out)
+        self.interpolate(tout, y_out, yp_out)?;
+        Ok(tout)
     }
 
     /// Take one step; returns the new time.
@@ -314,14 +370,14 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             });
         }
         let margin = 100.0 * f64::EPSILON * (self.tn.abs() + self.hused.abs());
-        if t > self.tn + margin || t < self.tn - self.hused - margin {
+        if !t.is_finite() || t > self.tn + margin || t < self.tn - self.hused - margin {
             return Err(BdfError::InvalidOption(format!(
                 "interpolation time {t} outside the last step [{}, {}]",
                 self.tn - self.hused,
                 self.tn
             )));
         }
-        if self.stats.steps == 0 {
+        if self.nst() == 0 {
             y_out.copy_from_slice(&self.phi[0]);
             if let Some(yp) = yp_out {
                 yp.copy_from_slice(&self.yp);
@@ -330,6 +386,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         super::dense::interpolate(&self.phi, &self.psi, self.kused, self.tn, t, y_out, yp_out);
         Ok(())
+    }
+
+    /// Steps since the start of the current integration (IDA's `nst`).
+    fn nst(&self) -> usize {
+        self.stats.steps - self.steps_at_start
     }
 
     fn hmin(&self) -> f64 {
@@ -360,7 +421,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     }
 
     fn step_internal(&mut self) -> Result<(), BdfError> {
-        if self.stats.steps == 0 {
+        if self.nst() == 0 {
             self.kk = 1;
             self.kused = 0;
             self.hused = 0.0;
@@ -372,7 +433,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         if let Some(ts) = self.tstop {
             if self.tn + self.hh > ts {
                 let hnew = ts - self.tn;
-                if self.stats.steps == 0 {
+                if self.nst() == 0 {
                     let r = hnew / self.hh;
                     self.phi[1].iter_mut().for_each(|v| *v *= r);
                     self.psi[0] = hnew;
@@ -397,7 +458,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 max_iterations: self.opts.max_newton_iterations,
                 epcon: self.opts.newton_tolerance,
                 residual_tolerance: f64::INFINITY,
-                force_setup: self.stats.steps == 0 && ncf == 0 && nef == 0,
+                force_setup: self.nst() == 0 && ncf == 0 && nef == 0,
             };
             let outcome = newton::solve(
                 &self.dae,
@@ -473,7 +534,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     }
 
     fn after_failure(&mut self, h_old: f64) {
-        if self.stats.steps == 0 {
+        if self.nst() == 0 {
             let r = self.hh / h_old;
             self.psi[0] = self.hh;
             self.phi[1].iter_mut().for_each(|v| *v *= r);
@@ -592,7 +653,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         let hmax = self.opts.max_step;
         if self.phase == 0 {
-            if self.stats.steps > 1 {
+            if self.nst() > 1 {
                 self.kk += 1;
                 self.hh = (2.0 * self.hh).min(hmax);
             }

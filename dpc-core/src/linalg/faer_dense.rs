@@ -72,6 +72,15 @@ impl LinearSolver for FaerDenseLu {
         Ok(())
     }
 
+    fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (j, wj) in w.iter().enumerate() {
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = o.max(self.matrix[(i, j)].abs() / wj);
+            }
+        }
+    }
+
     fn solve_in_place(&mut self, b: &mut [f64]) {
         if !self.factored {
             return;

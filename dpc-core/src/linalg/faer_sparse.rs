@@ -197,6 +197,17 @@ impl LinearSolver for FaerSparseLu {
         }
     }
 
+    fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
+        let m = &self.matrix;
+        out.fill(0.0);
+        for (j, wj) in w.iter().enumerate().take(m.n) {
+            for k in m.col_ptr[j]..m.col_ptr[j + 1] {
+                let i = m.row_idx[k];
+                out[i] = out[i].max(m.values[k].abs() / wj);
+            }
+        }
+    }
+
     fn solve_in_place(&mut self, b: &mut [f64]) {
         if let Some(lu) = &self.lu {
             let n = b.len();

@@ -1,23 +1,30 @@
 //! Linear solvers for the BDF iteration matrix `G = dF/dy + (alpha/h) dF/dy'`.
 //!
-//! One trait, [`LinearSolver`], with three implementations chosen by type:
+//! One trait, [`LinearSolver`], with three implementations chosen by type (and a run-time
+//! choice between the two faer ones):
 //!
-//! * [`NalgebraLu`]: fixed-size `SMatrix<f64, N, N>` with nalgebra's partial-pivoting LU on the
-//!   stack, for models generated with compile-time dimensions. Nothing allocates after
-//!   construction, so an integrator step built on it is allocation-free.
-//! * [`FaerDenseLu`]: faer's blocked partial-pivoting LU on a heap matrix, with the
-//!   permutation and scratch memory allocated once at construction.
+//! * [`NalgebraLu`]: fixed-size `SMatrix<f64, N, N>` with a partial-pivoting LU on the stack,
+//!   for models generated with compile-time dimensions. Nothing allocates after construction,
+//!   so an integrator step built on it is allocation-free.
+//! * [`FaerDenseLu`]: faer's blocked partial-pivoting LU on a heap matrix, with the permutation
+//!   and scratch memory allocated once at construction, so it too is allocation-free per step
+//!   (`tests/bdf_alloc.rs` checks both dense back ends).
 //! * [`FaerSparseLu`]: faer's sparse LU (symbolic analysis once, from
 //!   [`crate::ImplicitDae::iteration_pattern`], numeric factorisation per Jacobian update).
+//!   Factorisations and solves allocate their scratch memory (faer's high-level sparse API).
+//! * [`FaerLu`]: one of the two faer back ends, chosen at run time by
+//!   [`FaerLu::for_dae`] from the density of the DAE's declared pattern.
 //!
 //! The integrator writes `G` into [`LinearSolver::matrix_mut`] after zeroing it, calls
 //! [`LinearSolver::factor`], then solves as often as Newton needs with
 //! [`LinearSolver::solve_in_place`].
 
+mod auto;
 mod faer_dense;
 mod faer_sparse;
 mod nalgebra_lu;
 
+pub use auto::{FaerLu, SPARSE_DENSITY, SPARSE_MIN_DIMENSION};
 pub use faer_dense::FaerDenseLu;
 pub use faer_sparse::{FaerSparseLu, PatternMatrix};
 pub use nalgebra_lu::NalgebraLu;
@@ -69,6 +76,10 @@ pub trait LinearSolver {
     /// Overwrite `b` (length [`dimension`](Self::dimension)) with the solution of `A x = b`
     /// for the last successfully factorised `A`.
     fn solve_in_place(&mut self, b: &mut [f64]);
+
+    /// Row scales `out_i = max_j |A_ij| / w_j` of the matrix last written, for weights `w`
+    /// (the change of equation `i` caused by moving one unknown by one unit `1/w_j`).
+    fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]);
 }
 
 /// First row of a dense column-major accessor that is entirely zero, if any.

@@ -94,6 +94,12 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
         Ok(())
     }
 
+    fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = (0..N).fold(0.0, |m: f64, j| m.max(self.matrix[(i, j)].abs() / w[j]));
+        }
+    }
+
     fn solve_in_place(&mut self, b: &mut [f64]) {
         if !self.factored {
             return;

@@ -193,3 +193,79 @@ pub fn significant_digits(y: &[f64], reference: &[f64], components: &[usize]) ->
         .log10()
         .mul_add(-1.0, 0.0)
 }
+
+/// The heat equation `u_t = u_xx` on `[0, 1]` by central differences on `m` intervals, with the
+/// boundary conditions `u_0 = 0`, `u_m = 1` kept as algebraic equations: an index-1 DAE of
+/// dimension `m + 1` with a tridiagonal iteration matrix (the large/sparse test case).
+///
+/// `u_i(t) = exp(-lambda t) sin(pi x_i) + x_i` with `lambda = (4/dx^2) sin^2(pi dx / 2)` solves
+/// the semi-discrete system exactly (`sin(pi x_i)` is an eigenvector of the discrete Laplacian,
+/// `x_i` is in its kernel).
+#[derive(Debug, Clone, Copy)]
+pub struct Heat {
+    /// Number of intervals.
+    pub m: usize,
+}
+
+impl Heat {
+    fn dx(&self) -> f64 {
+        1.0 / self.m as f64
+    }
+    /// Exact solution of the semi-discrete system.
+    pub fn exact(&self, t: f64, u: &mut [f64], up: &mut [f64]) {
+        let dx = self.dx();
+        let lam = 4.0 / (dx * dx) * (std::f64::consts::PI * dx / 2.0).sin().powi(2);
+        for i in 0..=self.m {
+            let x = i as f64 * dx;
+            let s = (std::f64::consts::PI * x).sin();
+            u[i] = (-lam * t).exp() * s + x;
+            up[i] = -lam * (-lam * t).exp() * s;
+        }
+        up[0] = 0.0;
+        up[self.m] = 0.0;
+    }
+}
+
+impl ImplicitDae for Heat {
+    fn dimension(&self) -> usize {
+        self.m + 1
+    }
+    fn residual(&self, _: f64, u: &[f64], up: &[f64], out: &mut [f64]) {
+        let m = self.m;
+        let k = 1.0 / (self.dx() * self.dx());
+        out[0] = u[0];
+        out[m] = u[m] - 1.0;
+        for i in 1..m {
+            out[i] = up[i] - k * (u[i - 1] - 2.0 * u[i] + u[i + 1]);
+        }
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        _: &[f64],
+        _: &[f64],
+        c: f64,
+        mat: &mut S,
+    ) {
+        let m = self.m;
+        let k = 1.0 / (self.dx() * self.dx());
+        mat.set(0, 0, 1.0);
+        mat.set(m, m, 1.0);
+        for i in 1..m {
+            mat.set(i, i - 1, -k);
+            mat.set(i, i, c + 2.0 * k);
+            mat.set(i, i + 1, -k);
+        }
+    }
+    fn is_differential(&self, i: usize) -> bool {
+        i > 0 && i < self.m
+    }
+    fn iteration_pattern(&self) -> Option<Vec<(usize, usize)>> {
+        let m = self.m;
+        let mut p = vec![(0, 0), (m, m)];
+        for i in 1..m {
+            p.extend([(i, i - 1), (i, i), (i, i + 1)]);
+        }
+        Some(p)
+    }
+}
