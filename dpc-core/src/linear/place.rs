@@ -168,10 +168,15 @@ pub fn place(
             tol,
         });
     }
-    // Compress B to full column rank: B W_r, u = W_r v.
+    // Compress B to full column rank (B W_r, u = W_r v) only when it is rank deficient: with
+    // full rank the chains follow the user's inputs, which keeps decoupled plants decoupled.
     let (w, sv) = subspace::svd_right(b)?;
     let dec = subspace::decide(&sv, b.shape(), tol_factor);
-    let wr = w.columns(0, dec.rank).into_owned();
+    let wr = if dec.rank == m {
+        DMatrix::identity(m, m)
+    } else {
+        w.columns(0, dec.rank).into_owned()
+    };
     let br = b * &wr;
     let r = br.ncols();
 
