@@ -169,3 +169,19 @@ proptest! {
         }
     }
 }
+#[test]
+fn hundred_states_random_system() {
+    // Realistic size: 100 states, 4 inputs with relative degrees 1..4, zero dynamics of 90.
+    let k = build(0x5eed_1234, &[1, 2, 3, 4], 90);
+    let opts = AnalysisOptions {
+        prefeedback: Prefeedback::Always,
+        ..Default::default()
+    };
+    let r = analyze(&k.sys, &opts).unwrap();
+    assert_eq!(r.finite_dim, 90);
+    assert_eq!(r.index, 4);
+    assert!(same_set(&r.transmission_zeros, &k.zeros, 1e-6));
+    assert!(r.law.theorem_3_1_residual < 1e-8);
+    assert!(r.law.vstar_distance < 1e-7);
+    assert!(r.law.theorem_3_3_residual < 1e-8);
+}

@@ -187,7 +187,8 @@ pub fn place(
     let mut current: Vec<nalgebra::DVector<f64>> =
         (0..r).map(|i| br.column(i).into_owned()).collect();
     let mut ortho: Vec<nalgebra::DVector<f64>> = Vec::new();
-    let indep_tol = 1e3 * (n as f64) * f64::EPSILON;
+    // Far above eps: a barely independent Krylov vector makes T, and so K, ill-conditioned.
+    let indep_tol = 1e-8;
     while ortho.len() < n && alive.iter().any(|&x| x) {
         for i in 0..r {
             if !alive[i] || ortho.len() == n {

@@ -86,22 +86,36 @@ pub(crate) fn singular_values(g: &DMatrix<f64>) -> Vec<f64> {
     }
 }
 
+/// Singular values below `GAP_ZONE * scale` count as zero when the gap above them is at
+/// least `MIN_GAP`, even if they exceed the `factor * max(rows, cols) * eps` tolerance: errors
+/// accumulate over the Wong and `V*` recursions (about `||A||^k eps` after `k` steps), and a
+/// clear gap is the better witness of a structural zero than a fixed multiple of `eps`.
+pub const GAP_ZONE: f64 = 1.5e-8;
+/// See [`GAP_ZONE`].
+pub const MIN_GAP: f64 = 1e4;
+
 /// Decide the numerical rank of descending singular values.
 pub(crate) fn decide(sv: &[f64], shape: (usize, usize), factor: f64) -> RankDecision {
     let smax = sv.first().copied().unwrap_or(0.0);
-    let tol = factor * (shape.0.max(shape.1) as f64) * f64::EPSILON * smax;
-    let rank = sv.iter().filter(|&&s| s > tol).count();
-    RankDecision {
-        rank,
-        tol,
-        smallest_kept: if rank > 0 { Some(sv[rank - 1]) } else { None },
-        largest_dropped: sv.get(rank).copied(),
-    }
+    decide_scaled(sv, shape, factor, smax)
 }
 
-/// Decide the rank with an absolute tolerance (used where the scale is not the matrix itself).
-pub(crate) fn decide_abs(sv: &[f64], tol: f64) -> RankDecision {
-    let rank = sv.iter().filter(|&&s| s > tol).count();
+/// Decide the rank relative to a reference norm `scale`.
+pub(crate) fn decide_scaled(
+    sv: &[f64],
+    shape: (usize, usize),
+    factor: f64,
+    scale: f64,
+) -> RankDecision {
+    let mut tol = factor * (shape.0.max(shape.1) as f64) * f64::EPSILON * scale;
+    let mut rank = sv.iter().filter(|&&s| s > tol).count();
+    // Gap rule: the first singular value inside the zone, if far below its predecessor.
+    if let Some(k) = (0..rank).find(|&k| sv[k] <= GAP_ZONE * scale) {
+        if k == 0 || sv[k - 1] >= MIN_GAP * sv[k] {
+            rank = k;
+            tol = tol.max(sv[k]);
+        }
+    }
     RankDecision {
         rank,
         tol,
@@ -159,7 +173,7 @@ pub(crate) fn range(
     }
     let (u, sv) = svd_left(g)?;
     let dec = match reference_norm {
-        Some(nrm) => decide_abs(&sv, factor * (r.max(c) as f64) * f64::EPSILON * nrm),
+        Some(nrm) => decide_scaled(&sv, (r, c), factor, nrm),
         None => decide(&sv, (r, c), factor),
     };
     Ok((u.columns(0, dec.rank).into_owned(), dec))
