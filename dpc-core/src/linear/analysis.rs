@@ -298,7 +298,11 @@ fn min_gap(ds: &[RankDecision]) -> Option<f64> {
 pub fn dpc_law(sys: &LinearSystem, tol_factor: f64) -> Result<DpcLaw, LinearError> {
     let (n, m) = (sys.n(), sys.m());
     let rc = compress::compress(sys, tol_factor)?;
-    let sp = pencil::split(&rc.e, &rc.f, tol_factor)?;
+    // E = [V_1 V_2][I; 0] and F = [V_1 V_2][A; C] with orthonormal rows [V_1 V_2].
+    let mut ac = DMatrix::zeros(n + m, n);
+    ac.view_mut((0, 0), (n, n)).copy_from(&sys.a);
+    ac.view_mut((n, 0), (m, n)).copy_from(&sys.c);
+    let sp = pencil::split(&rc.e, &rc.f, tol_factor, 1.0, subspace::norm2(&ac))?;
     let nf = sp.finite_dim;
     let ni = n - nf;
     let q = &sp.q;

@@ -50,7 +50,8 @@ pub fn compress(sys: &LinearSystem, tol_factor: f64) -> Result<RowCompression, L
         });
     }
     let u1 = u.columns(0, m);
-    let u2 = u.columns(m, n);
+    let u2 = subspace::complement(&u1.into_owned())?;
+    let u1 = u.columns(0, m);
     // G = U_1 R with R = U_1^T G (m x m, as well conditioned as G): the bottom rows R^-1 U_1^T
     // are a left inverse of G.
     let r = u1.transpose() * &g;

@@ -50,14 +50,21 @@ pub struct WeierstrassSplit {
 }
 
 /// Split the pencil `-Es + F`.
+///
+/// `scale_e` and `scale_f` are the norms rank decisions on `E` and `F` are relative to. They
+/// must not be `||E||`, `||F||` themselves: `E` can be zero up to rounding (a system with
+/// feedthrough), and a tolerance relative to `||E|| ~ 1e-17` would count rounding as rank.
+/// [`super::dpc_law`] passes `||[V_1 V_2]|| = 1` and `||[A; C]||`.
 pub fn split(
     e: &DMatrix<f64>,
     f: &DMatrix<f64>,
     tol_factor: f64,
+    scale_e: f64,
+    scale_f: f64,
 ) -> Result<WeierstrassSplit, LinearError> {
     let n = e.nrows();
-    let ne = subspace::norm2(e);
-    let nf = subspace::norm2(f);
+    let ne = subspace::norm2(e).max(scale_e);
+    let nf = subspace::norm2(f).max(scale_f);
     let mut decisions = Vec::new();
 
     // Finite part: V_{i+1} = {x : F x in E V_i}.

@@ -168,10 +168,15 @@ pub fn place(
             tol,
         });
     }
-    // Compress B to full column rank: B W_r, u = W_r v.
+    // Compress B to full column rank (B W_r, u = W_r v) only when it is rank deficient: with
+    // full rank the chains follow the user's inputs, which keeps decoupled plants decoupled.
     let (w, sv) = subspace::svd_right(b)?;
     let dec = subspace::decide(&sv, b.shape(), tol_factor);
-    let wr = w.columns(0, dec.rank).into_owned();
+    let wr = if dec.rank == m {
+        DMatrix::identity(m, m)
+    } else {
+        w.columns(0, dec.rank).into_owned()
+    };
     let br = b * &wr;
     let r = br.ncols();
 
@@ -182,7 +187,8 @@ pub fn place(
     let mut current: Vec<nalgebra::DVector<f64>> =
         (0..r).map(|i| br.column(i).into_owned()).collect();
     let mut ortho: Vec<nalgebra::DVector<f64>> = Vec::new();
-    let indep_tol = 1e3 * (n as f64) * f64::EPSILON;
+    // Far above eps: a barely independent Krylov vector makes T, and so K, ill-conditioned.
+    let indep_tol = 1e-8;
     while ortho.len() < n && alive.iter().any(|&x| x) {
         for i in 0..r {
             if !alive[i] || ortho.len() == n {

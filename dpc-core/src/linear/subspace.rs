@@ -32,61 +32,90 @@ impl RankDecision {
     }
 }
 
-/// Left singular vectors (full, `rows x rows`) and singular values (descending) of any matrix.
+/// `(U, singular values, V)`.
+type FullSvd = (DMatrix<f64>, Vec<f64>, DMatrix<f64>);
+
+/// Full SVD by faer: `U` (`rows x rows`), singular values (descending), `V` (`cols x cols`).
 ///
-/// nalgebra returns thin factors; padding a tall matrix with zero columns to a square one
-/// yields a full orthogonal `U` without changing the singular values or left vectors.
-pub(crate) fn svd_left(g: &DMatrix<f64>) -> Result<(DMatrix<f64>, Vec<f64>), LinearError> {
+/// nalgebra 0.35's SVD returns inaccurate left singular vectors for some rank-deficient
+/// matrices (seen on a 3x2 rank-one product in the property tests), and rank decisions are
+/// only as good as those vectors; faer's SVD is used instead.
+fn faer_svd(g: &DMatrix<f64>) -> Result<FullSvd, LinearError> {
     let (r, c) = g.shape();
-    let padded;
-    let m = if r > c {
-        let mut sq = DMatrix::zeros(r, r);
-        sq.view_mut((0, 0), (r, c)).copy_from(g);
-        padded = sq;
-        &padded
-    } else {
-        g
-    };
-    let svd = nalgebra::SVD::try_new(m.clone(), true, false, f64::EPSILON, 200 * r.max(c).max(10))
-        .ok_or(LinearError::NoConvergence { what: "SVD" })?;
-    let sv = svd.singular_values.iter().take(r.min(c)).copied().collect();
-    Ok((svd.u.expect("requested"), sv))
+    let fm = faer::Mat::<f64>::from_fn(r, c, |i, j| g[(i, j)]);
+    let svd = fm
+        .svd()
+        .map_err(|_| LinearError::NoConvergence { what: "SVD" })?;
+    let u = svd.U();
+    let v = svd.V();
+    let s = svd.S().column_vector();
+    let sv: Vec<f64> = (0..r.min(c)).map(|i| s[i]).collect();
+    let u = DMatrix::from_fn(r, r, |i, j| u[(i, j)]);
+    let v = DMatrix::from_fn(c, c, |i, j| v[(i, j)]);
+    Ok((u, sv, v))
 }
 
-/// Right singular vectors (full, `cols x cols`) and singular values (descending) of any matrix.
-pub(crate) fn svd_right(g: &DMatrix<f64>) -> Result<(DMatrix<f64>, Vec<f64>), LinearError> {
-    let (r, c) = g.shape();
-    let padded;
-    let m = if r < c {
-        let mut sq = DMatrix::zeros(c, c);
-        sq.view_mut((0, 0), (r, c)).copy_from(g);
-        padded = sq;
-        &padded
-    } else {
-        g
-    };
-    let svd = nalgebra::SVD::try_new(m.clone(), false, true, f64::EPSILON, 200 * r.max(c).max(10))
-        .ok_or(LinearError::NoConvergence { what: "SVD" })?;
-    let sv = svd.singular_values.iter().take(r.min(c)).copied().collect();
-    Ok((svd.v_t.expect("requested").transpose(), sv))
+/// Left singular vectors (full, `rows x rows`) and singular values (descending).
+pub(crate) fn svd_left(g: &DMatrix<f64>) -> Result<(DMatrix<f64>, Vec<f64>), LinearError> {
+    if g.is_empty() {
+        return Ok((DMatrix::identity(g.nrows(), g.nrows()), Vec::new()));
+    }
+    let (u, sv, _) = faer_svd(g)?;
+    Ok((u, sv))
 }
+
+/// Right singular vectors (full, `cols x cols`) and singular values (descending).
+pub(crate) fn svd_right(g: &DMatrix<f64>) -> Result<(DMatrix<f64>, Vec<f64>), LinearError> {
+    if g.is_empty() {
+        return Ok((DMatrix::identity(g.ncols(), g.ncols()), Vec::new()));
+    }
+    let (_, sv, v) = faer_svd(g)?;
+    Ok((v, sv))
+}
+
+/// Singular values (descending) of any matrix.
+pub(crate) fn singular_values(g: &DMatrix<f64>) -> Vec<f64> {
+    if g.is_empty() {
+        return Vec::new();
+    }
+    let (r, c) = g.shape();
+    let fm = faer::Mat::<f64>::from_fn(r, c, |i, j| g[(i, j)]);
+    match fm.singular_values() {
+        Ok(sv) => sv,
+        Err(_) => vec![f64::NAN],
+    }
+}
+
+/// Singular values below `GAP_ZONE * scale` count as zero when the gap above them is at
+/// least `MIN_GAP`, even if they exceed the `factor * max(rows, cols) * eps` tolerance: errors
+/// accumulate over the Wong and `V*` recursions (about `||A||^k eps` after `k` steps), and a
+/// clear gap is the better witness of a structural zero than a fixed multiple of `eps`.
+pub const GAP_ZONE: f64 = 1.5e-8;
+/// See [`GAP_ZONE`].
+pub const MIN_GAP: f64 = 1e4;
 
 /// Decide the numerical rank of descending singular values.
 pub(crate) fn decide(sv: &[f64], shape: (usize, usize), factor: f64) -> RankDecision {
     let smax = sv.first().copied().unwrap_or(0.0);
-    let tol = factor * (shape.0.max(shape.1) as f64) * f64::EPSILON * smax;
-    let rank = sv.iter().filter(|&&s| s > tol).count();
-    RankDecision {
-        rank,
-        tol,
-        smallest_kept: if rank > 0 { Some(sv[rank - 1]) } else { None },
-        largest_dropped: sv.get(rank).copied(),
-    }
+    decide_scaled(sv, shape, factor, smax)
 }
 
-/// Decide the rank with an absolute tolerance (used where the scale is not the matrix itself).
-pub(crate) fn decide_abs(sv: &[f64], tol: f64) -> RankDecision {
-    let rank = sv.iter().filter(|&&s| s > tol).count();
+/// Decide the rank relative to a reference norm `scale`.
+pub(crate) fn decide_scaled(
+    sv: &[f64],
+    shape: (usize, usize),
+    factor: f64,
+    scale: f64,
+) -> RankDecision {
+    let mut tol = factor * (shape.0.max(shape.1) as f64) * f64::EPSILON * scale;
+    let mut rank = sv.iter().filter(|&&s| s > tol).count();
+    // Gap rule: the first singular value inside the zone, if far below its predecessor.
+    if let Some(k) = (0..rank).find(|&k| sv[k] <= GAP_ZONE * scale) {
+        if k == 0 || sv[k - 1] >= MIN_GAP * sv[k] {
+            rank = k;
+            tol = tol.max(sv[k]);
+        }
+    }
     RankDecision {
         rank,
         tol,
@@ -96,6 +125,10 @@ pub(crate) fn decide_abs(sv: &[f64], tol: f64) -> RankDecision {
 }
 
 /// Orthonormal basis of the null space of `g` (columns), with the decision.
+///
+/// Computed as the orthogonal complement of the row space: only singular vectors of nonzero
+/// singular values are used, since those belonging to (near) zero singular values are not
+/// reliably orthogonal in nalgebra's SVD of rank-deficient matrices.
 ///
 /// When a reference norm is given, the tolerance is relative to it instead of `||g||`: that
 /// keeps the decision meaningful when `g` is a projection of a larger matrix.
@@ -116,12 +149,8 @@ pub(crate) fn null_space(
             },
         ));
     }
-    let (v, sv) = svd_right(g)?;
-    let dec = match reference_norm {
-        Some(nrm) => decide_abs(&sv, factor * (r.max(c) as f64) * f64::EPSILON * nrm),
-        None => decide(&sv, (r, c), factor),
-    };
-    Ok((v.columns(dec.rank, c - dec.rank).into_owned(), dec))
+    let (rows, dec) = range(&g.transpose(), factor, reference_norm)?;
+    Ok((complement(&rows)?, dec))
 }
 
 /// Orthonormal basis of the range of `g` (columns), with the decision.
@@ -144,47 +173,51 @@ pub(crate) fn range(
     }
     let (u, sv) = svd_left(g)?;
     let dec = match reference_norm {
-        Some(nrm) => decide_abs(&sv, factor * (r.max(c) as f64) * f64::EPSILON * nrm),
+        Some(nrm) => decide_scaled(&sv, (r, c), factor, nrm),
         None => decide(&sv, (r, c), factor),
     };
     Ok((u.columns(0, dec.rank).into_owned(), dec))
 }
 
 /// Orthonormal basis of the orthogonal complement of the span of the orthonormal columns `s`.
+///
+/// Eigenvectors of the projector `I - s s^T` for the eigenvalue 1: the symmetric eigensolver
+/// returns an orthogonal eigenvector matrix even for the multiple eigenvalues 0 and 1.
 pub(crate) fn complement(s: &DMatrix<f64>) -> Result<DMatrix<f64>, LinearError> {
     let (n, k) = s.shape();
     if k == 0 {
         return Ok(DMatrix::identity(n, n));
     }
-    let (u, _) = svd_left(s)?;
-    Ok(u.columns(k, n - k).into_owned())
+    if k >= n {
+        return Ok(DMatrix::zeros(n, 0));
+    }
+    let p = DMatrix::identity(n, n) - s * s.transpose();
+    let eig = nalgebra::SymmetricEigen::try_new(p, f64::EPSILON, 200 * n.max(10)).ok_or(
+        LinearError::NoConvergence {
+            what: "symmetric eigen",
+        },
+    )?;
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&i, &j| eig.eigenvalues[j].total_cmp(&eig.eigenvalues[i]));
+    let cols: Vec<_> = idx[..n - k]
+        .iter()
+        .map(|&i| eig.eigenvectors.column(i).into_owned())
+        .collect();
+    Ok(DMatrix::from_columns(&cols))
 }
 
 /// Spectral norm.
 pub(crate) fn norm2(g: &DMatrix<f64>) -> f64 {
-    if g.is_empty() {
-        return 0.0;
-    }
-    g.clone()
-        .svd(false, false)
-        .singular_values
-        .iter()
-        .copied()
-        .fold(0.0, f64::max)
+    singular_values(g).first().copied().unwrap_or(0.0)
 }
 
 /// 2-norm condition number of a square matrix (infinite if singular).
 pub(crate) fn cond(g: &DMatrix<f64>) -> f64 {
-    if g.is_empty() {
-        return 1.0;
-    }
-    let sv = g.clone().svd(false, false).singular_values;
-    let smax = sv.iter().copied().fold(0.0, f64::max);
-    let smin = sv.iter().copied().fold(f64::INFINITY, f64::min);
-    if smin == 0.0 {
-        f64::INFINITY
-    } else {
-        smax / smin
+    let sv = singular_values(g);
+    match (sv.first(), sv.last()) {
+        (Some(&smax), Some(&smin)) if smin > 0.0 => smax / smin,
+        (Some(_), Some(_)) => f64::INFINITY,
+        _ => 1.0,
     }
 }
 
@@ -226,4 +259,33 @@ pub(crate) fn solve(g: &DMatrix<f64>, rhs: &DMatrix<f64>) -> Option<DMatrix<f64>
         return Some(DMatrix::zeros(0, rhs.ncols()));
     }
     g.clone().full_piv_lu().solve(rhs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn orthonormal(q: &DMatrix<f64>) -> bool {
+        (q.transpose() * q - DMatrix::identity(q.ncols(), q.ncols())).amax() < 1e-12
+    }
+
+    #[test]
+    fn null_space_and_complement_are_orthonormal_and_right() {
+        let g = DMatrix::from_row_slice(2, 4, &[1.0, 2.0, 3.0, 4.0, 2.0, 4.0, 6.0, 8.0]);
+        let (nb, d) = null_space(&g, 100.0, None).unwrap();
+        assert_eq!(d.rank, 1);
+        assert_eq!(nb.ncols(), 3);
+        assert!(orthonormal(&nb));
+        assert!((&g * &nb).amax() < 1e-12);
+        let tall = g.transpose();
+        let (nb, d) = null_space(&tall, 100.0, None).unwrap();
+        assert_eq!((d.rank, nb.ncols()), (1, 1));
+        assert!((&tall * &nb).amax() < 1e-12);
+        let (r, _) = range(&tall, 100.0, None).unwrap();
+        assert_eq!(r.ncols(), 1);
+        let c = complement(&r).unwrap();
+        assert_eq!(c.ncols(), 3);
+        assert!(orthonormal(&c));
+        assert!((r.transpose() * &c).amax() < 1e-12);
+    }
 }
