@@ -445,5 +445,5 @@ fn integrate_interval<D: ImplicitDae>(
     consistent_initial_values(dae, &mut ls, opts, t0, y, yp)?;
     let mut bdf = Bdf::new(dae, ls, opts.clone(), t0, y, yp)?;
     bdf.set_stop_time(t1)?;
-    bdf.solve_to(t1, y, Some(yp))
+    bdf.solve_to(t1, y, Some(yp)).map(|_| ())
 }
