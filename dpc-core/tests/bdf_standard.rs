@@ -292,3 +292,34 @@ fn large_model_back_ends() {
         }
     }
 }
+
+#[test]
+fn consistent_initialisation_of_a_large_sparse_model() {
+    let m = 100;
+    let h = Heat { m };
+    let (mut u, mut up) = (vec![0.0; m + 1], vec![0.0; m + 1]);
+    h.exact(0.0, &mut u, &mut up);
+    let up_exact = up.clone();
+    // Wrong boundary values (algebraic) and no derivatives at all.
+    u[0] = 0.3;
+    u[m] = 0.5;
+    up.fill(0.0);
+    let mut ls = FaerSparseLu::new(m + 1, &h.iteration_pattern().unwrap()).unwrap();
+    let stats =
+        consistent_initial_values(&h, &mut ls, &Options::default(), 0.0, &mut u, &mut up).unwrap();
+    assert!(
+        u[0].abs() < 1e-12 && (u[m] - 1.0).abs() < 1e-12,
+        "{} {}",
+        u[0],
+        u[m]
+    );
+    for i in 1..m {
+        assert!(
+            (up[i] - up_exact[i]).abs() < 1e-6 * (1.0 + up_exact[i].abs()),
+            "{i}: {} vs {}",
+            up[i],
+            up_exact[i]
+        );
+    }
+    assert!(stats.newton_iterations <= 3, "{stats:?}");
+}
