@@ -246,6 +246,44 @@ fn fixed_step_convergence_order_matches_bdf_order() {
 }
 
 #[test]
+fn fixed_step_consistent_start_keeps_the_order() {
+    for q in 2..=5 {
+        let ns = [10usize, 20, 40];
+        let es: Vec<f64> = ns
+            .iter()
+            .map(|&n| {
+                let h = 1.0 / n as f64;
+                let opts = Options::with_tolerances(1e-12, 1e-12);
+                let (y0, yp0) = (Index1::exact(0.0), Index1::exact_p(0.0));
+                let mut f = FixedBdf::with_consistent_start(
+                    Index1,
+                    NalgebraLu::<2>::new(),
+                    opts,
+                    q,
+                    h,
+                    0.0,
+                    &y0,
+                    &yp0,
+                )
+                .unwrap();
+                assert!((f.t() - (q - 1) as f64 * h).abs() < 1e-12);
+                while f.t() < 1.0 - 0.5 * h {
+                    f.step().unwrap();
+                }
+                (f.y()[0] - Index1::exact(f.t())[0]).abs()
+            })
+            .collect();
+        let hs: Vec<f64> = ns.iter().map(|&n| 1.0 / n as f64).collect();
+        let p = slope(&hs, &es);
+        println!("consistent start, order {q}: errors {es:?}, observed order {p:.2}");
+        assert!(
+            (p - q as f64).abs() < 0.35,
+            "order {q}: observed {p}, errors {es:?}"
+        );
+    }
+}
+
+#[test]
 fn fixed_step_order_on_index3_velocity() {
     for q in 1..=4 {
         let ns = [20usize, 40, 80];

@@ -66,6 +66,44 @@ fn pendulum(rtol: f64, reference: &[f64; 5]) -> (f64, f64, usize, f64) {
     )
 }
 
+/// Work counters pinned as a snapshot (as diffsol does): a change of the step or order
+/// selection, Jacobian reuse or Newton strategy shows up as a diff of
+/// `tests/snapshots/bdf_standard__*.snap`.
+#[test]
+fn work_counters_are_pinned() {
+    let rtol = 1e-6;
+    let opts = Options {
+        rtol: Tolerance::Scalar(rtol),
+        atol: Tolerance::Vector(robertson_atol(rtol)),
+        ..Options::default()
+    };
+    let mut bdf = Bdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        opts,
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[-0.04, 0.04, 0.0],
+    )
+    .unwrap();
+    bdf.set_stop_time(ROBERTSON_T_END).unwrap();
+    let mut y = [0.0; 3];
+    bdf.solve_to(ROBERTSON_T_END, &mut y, None).unwrap();
+    insta::assert_debug_snapshot!("robertson_rtol_1e-6", bdf.stats());
+
+    let p = Pendulum::default();
+    let (y0, yp0) = p.initial(THETA0);
+    let opts = Options {
+        index: PENDULUM_INDEX.to_vec(),
+        ..Options::with_tolerances(1e-6, 1e-6)
+    };
+    let mut bdf = Bdf::new(p, NalgebraLu::<5>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    bdf.set_stop_time(PENDULUM_T).unwrap();
+    let mut y = [0.0; 5];
+    bdf.solve_to(PENDULUM_T, &mut y, None).unwrap();
+    insta::assert_debug_snapshot!("pendulum_rtol_1e-6", bdf.stats());
+}
+
 #[test]
 fn pendulum_index3_matches_independent_reference() {
     // Index 3 with error-per-step control on the positions only: the pendulum conserves
@@ -291,4 +329,35 @@ fn large_model_back_ends() {
             );
         }
     }
+}
+
+#[test]
+fn consistent_initialisation_of_a_large_sparse_model() {
+    let m = 100;
+    let h = Heat { m };
+    let (mut u, mut up) = (vec![0.0; m + 1], vec![0.0; m + 1]);
+    h.exact(0.0, &mut u, &mut up);
+    let up_exact = up.clone();
+    // Wrong boundary values (algebraic) and no derivatives at all.
+    u[0] = 0.3;
+    u[m] = 0.5;
+    up.fill(0.0);
+    let mut ls = FaerSparseLu::new(m + 1, &h.iteration_pattern().unwrap()).unwrap();
+    let stats =
+        consistent_initial_values(&h, &mut ls, &Options::default(), 0.0, &mut u, &mut up).unwrap();
+    assert!(
+        u[0].abs() < 1e-12 && (u[m] - 1.0).abs() < 1e-12,
+        "{} {}",
+        u[0],
+        u[m]
+    );
+    for i in 1..m {
+        assert!(
+            (up[i] - up_exact[i]).abs() < 1e-6 * (1.0 + up_exact[i].abs()),
+            "{i}: {} vs {}",
+            up[i],
+            up_exact[i]
+        );
+    }
+    assert!(stats.newton_iterations <= 3, "{stats:?}");
 }

@@ -4,11 +4,13 @@
 //! (Hairer & Wanner 1996, Section III.1, Table 1.2 of coefficients). Only past *values* of `y`
 //! enter, never `y'`, so the integration may start from inconsistent values: the first step
 //! (implicit Euler when no older values are given) projects onto the constraints. While fewer
-//! than `q` past values are available the order ramps up (`1, 2, ..., q`); supplying the
-//! history with [`FixedBdf::with_history`] gives the full order from the first step.
+//! than `q` past values are available the order ramps up (`1, 2, ..., q`), which limits the
+//! global accuracy to that of the startup; supplying the history with
+//! [`FixedBdf::with_history`], or starting from consistent values with
+//! [`FixedBdf::with_consistent_start`], gives the full order.
 
 use super::newton::{self, error_weights, JacState, NewtonProblem};
-use super::{BdfError, Options, Stats};
+use super::{BdfError, Options, Stats, Tolerance};
 use crate::linalg::LinearSolver;
 use crate::ImplicitDae;
 
@@ -165,6 +167,61 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         self.jac = JacState::default();
         self.jac_order = 0;
         Ok(())
+    }
+
+    /// Start from *consistent* values `(t0, y0, yp0)` at the full order: the first
+    /// `order - 1` points `t0 + j h` are computed by the variable-step [`super::Bdf`] with the
+    /// tolerances of `opts` divided by 1000 (at least `1e-14`), so that the startup does not
+    /// lower the convergence order. The integrator is then at `t0 + (order - 1) h`.
+    ///
+    /// # Errors
+    /// As for [`FixedBdf::new`] and [`super::Bdf::new`], and any failure of the startup
+    /// integration.
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_consistent_start(
+        dae: D,
+        ls: L,
+        opts: Options,
+        order: usize,
+        h: f64,
+        t0: f64,
+        y0: &[f64],
+        yp0: &[f64],
+    ) -> Result<Self, BdfError> {
+        let mut f = Self::with_history(dae, ls, opts, order, h, t0, &[y0])?;
+        if order == 1 {
+            return Ok(f);
+        }
+        let n = y0.len();
+        let tighten = |t: &Tolerance| match t {
+            Tolerance::Scalar(v) => Tolerance::Scalar((v * 1e-3).max(1e-14)),
+            Tolerance::Vector(v) => {
+                Tolerance::Vector(v.iter().map(|x| (x * 1e-3).max(1e-14)).collect())
+            }
+        };
+        let startup_opts = Options {
+            rtol: tighten(&f.opts.rtol),
+            atol: tighten(&f.opts.atol),
+            ..f.opts.clone()
+        };
+        let mut bdf = super::Bdf::new(&f.dae, &mut f.ls, startup_opts, t0, y0, yp0)?;
+        let mut points = vec![vec![0.0; n]; order];
+        points[0].copy_from_slice(y0);
+        for (j, p) in points.iter_mut().enumerate().skip(1) {
+            bdf.set_stop_time(t0 + j as f64 * h)?;
+            bdf.solve_to(t0 + j as f64 * h, p, None)?;
+        }
+        let startup = bdf.stats();
+        drop(bdf);
+        for (j, p) in points.iter().rev().enumerate() {
+            f.hist[j].copy_from_slice(p);
+        }
+        f.y.copy_from_slice(&points[order - 1]);
+        f.navail = order;
+        f.t = t0 + (order - 1) as f64 * h;
+        f.stats = startup;
+        f.jac = JacState::default();
+        Ok(f)
     }
 
     /// Current time.

@@ -136,7 +136,11 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
         };
     let mut fnorm = eval(y, yp, &mut res, &mut stats)?;
     for _ in 0..20 {
-        error_weights(opts, y, &mut w)?;
+        // Each unknown is measured in its own tolerance units: y_a by |y_a|, y'_d by |y'_d|.
+        for i in 0..n {
+            y_try[i] = if differential[i] { yp[i] } else { y[i] };
+        }
+        error_weights(opts, &y_try, &mut w)?;
         {
             let m = ls.matrix_mut();
             m.fill_zero();
@@ -177,7 +181,6 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
         delta.copy_from_slice(&res);
         ls.solve_in_place(&mut delta);
         stats.newton_iterations += 1;
-        // Step norm measured on y for algebraic and on h-free yp for differential unknowns.
         let dnorm = wrms(&delta, &w);
         let mut lambda = 1.0;
         loop {

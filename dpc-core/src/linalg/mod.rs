@@ -82,6 +82,27 @@ pub trait LinearSolver {
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]);
 }
 
+/// A mutable borrow of a solver is a solver, so one solver can serve several integrators in
+/// turn (as in [`crate::bdf::FixedBdf::with_consistent_start`]).
+impl<L: LinearSolver + ?Sized> LinearSolver for &mut L {
+    type Matrix = L::Matrix;
+    fn dimension(&self) -> usize {
+        (**self).dimension()
+    }
+    fn matrix_mut(&mut self) -> &mut Self::Matrix {
+        (**self).matrix_mut()
+    }
+    fn factor(&mut self) -> Result<(), FactorError> {
+        (**self).factor()
+    }
+    fn solve_in_place(&mut self, b: &mut [f64]) {
+        (**self).solve_in_place(b);
+    }
+    fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
+        (**self).scaled_row_norms(w, out);
+    }
+}
+
 /// First row of a dense column-major accessor that is entirely zero, if any.
 pub(crate) fn zero_row(n: usize, get: impl Fn(usize, usize) -> f64) -> Option<usize> {
     (0..n).find(|&i| (0..n).all(|j| get(i, j) == 0.0))
