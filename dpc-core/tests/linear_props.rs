@@ -48,6 +48,12 @@ struct Known {
 }
 
 fn build(seed: u64, rel: &[usize], n0: usize) -> Known {
+    build_with(seed, rel, n0, false)
+}
+
+/// `diagonal_outputs` keeps each output's relative degree (output scaling instead of mixing),
+/// which a per-output `W_i` needs.
+fn build_with(seed: u64, rel: &[usize], n0: usize, diagonal_outputs: bool) -> Known {
     let mut g = Rng(seed | 1);
     let m = rel.len();
     let nxi: usize = rel.iter().sum();
@@ -92,7 +98,11 @@ fn build(seed: u64, rel: &[usize], n0: usize) -> Known {
     // Random coordinates: x = T x~, u = S_u u~, y~ = S_y y.
     let t = g.orthogonal(n);
     let su = g.invertible(m);
-    let sy = g.invertible(m);
+    let sy = if diagonal_outputs {
+        DMatrix::from_diagonal(&nalgebra::DVector::from_fn(m, |_, _| 1.5 + 0.5 * g.next()))
+    } else {
+        g.invertible(m)
+    };
     let sys = LinearSystem::new(
         t.transpose() * &a * &t,
         t.transpose() * &b * &su,
@@ -126,7 +136,7 @@ fn same_set(got: &[C64], want: &[C64], tol: f64) -> bool {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
 
     #[test]
     fn theorems_3_1_to_3_3_hold(
@@ -148,6 +158,11 @@ proptest! {
         prop_assert_eq!(r.index, k.max_r);
         prop_assert!(same_set(&r.transmission_zeros, &k.zeros, 1e-7),
             "zeros {:?} vs {:?}", r.transmission_zeros, k.zeros);
+        for z in &r.transmission_zeros {
+            let hat = &k.sys;
+            prop_assert!(dpc_core::linear::zeros::rosenbrock_sigma_min(hat, *z) < 1e-8,
+                "Rosenbrock matrix keeps full rank at the zero {}", z);
+        }
         let law = &r.law;
         prop_assert!(law.theorem_3_1_residual < 1e-9, "3.1a {}", law.theorem_3_1_residual);
         prop_assert_eq!(law.vstar_dim, k.n0);
@@ -159,12 +174,17 @@ proptest! {
             "closed loop {:?} vs {:?}", r.closed_loop_eigenvalues, both);
         if ni > 0 {
             let law2 = r.law_prefeedback.as_ref().unwrap();
-            prop_assert!(same_set(&law2.abar4_eigenvalues, &poles, 1e-5),
+            // The trace is placed exactly; the eigenvalues of a companion-like closed loop are
+            // sensitive, so they are compared more loosely.
+            let placed: C64 = law2.abar4_eigenvalues.iter().sum();
+            let wanted: C64 = poles.iter().sum();
+            prop_assert!((placed - wanted).norm() < 1e-6 * (1.0 + wanted.norm()));
+            prop_assert!(same_set(&law2.abar4_eigenvalues, &poles, 1e-4),
                 "placed {:?} vs {:?}", law2.abar4_eigenvalues, poles);
             let mut want = k.zeros.clone();
             want.extend(&poles);
             let cl = r.closed_loop_eigenvalues_prefeedback.as_ref().unwrap();
-            prop_assert!(same_set(cl, &want, 1e-5), "prefed loop {:?} vs {:?}", cl, want);
+            prop_assert!(same_set(cl, &want, 1e-4), "prefed loop {:?} vs {:?}", cl, want);
             prop_assert!(law2.theorem_3_3_residual < 1e-8);
         }
     }
@@ -184,4 +204,58 @@ fn hundred_states_random_system() {
     assert!(r.law.theorem_3_1_residual < 1e-8);
     assert!(r.law.vstar_distance < 1e-7);
     assert!(r.law.theorem_3_3_residual < 1e-8);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// Partial stabilisation: `W_i(s) = prod (s + w_ij)` with `deg W_i <= r_i` adds the roots
+    /// `-w_ij` to the zeros and lowers the index to `max(r_i - deg W_i)`; repeated poles are
+    /// placed (multiplicity above rank B).
+    #[test]
+    fn partial_stabilisation_and_repeated_poles(
+        seed in any::<u64>(),
+        rel in proptest::collection::vec(1usize..4, 1..4),
+        n0 in 0usize..4,
+        degs in proptest::collection::vec(0usize..4, 3),
+        alpha in 0.5f64..4.0,
+    ) {
+        let k = build_with(seed, &rel, n0, true);
+        let w: Vec<Vec<f64>> = rel
+            .iter()
+            .zip(&degs)
+            .enumerate()
+            .map(|(i, (&r, &d))| (0..d.min(r)).map(|j| 1.0 + 0.7 * (i + 2 * j) as f64).collect())
+            .collect();
+        let mut zeros = k.zeros.clone();
+        for roots in &w {
+            zeros.extend(roots.iter().map(|&x| C64::new(-x, 0.0)));
+        }
+        let index = rel.iter().zip(&w).map(|(r, ws)| r - ws.len()).max().unwrap();
+        let ni = k.sys.n() - zeros.len();
+        let poles = vec![C64::new(-alpha, 0.0); ni];
+        let opts = AnalysisOptions {
+            w: Some(w.clone()),
+            poles: Some(poles.clone()),
+            prefeedback: Prefeedback::Always,
+            ..Default::default()
+        };
+        let r = analyze(&k.sys, &opts).unwrap();
+        prop_assert_eq!(r.index, index);
+        prop_assert_eq!(r.finite_dim, zeros.len());
+        prop_assert!(same_set(&r.transmission_zeros, &zeros, 1e-6),
+            "zeros {:?} vs {:?}", r.transmission_zeros, zeros);
+        prop_assert!(r.law.theorem_3_3_residual < 1e-8, "3.3 {}", r.law.theorem_3_3_residual);
+        prop_assert!(r.law.vstar_distance < 1e-8);
+        if ni > 0 {
+            // A pole of multiplicity ni is sensitive like eps^(1/ni): compare the
+            // characteristic polynomial's roots loosely and the mean tightly.
+            let law2 = r.law_prefeedback.as_ref().unwrap();
+            let ev = &law2.abar4_eigenvalues;
+            let mean: C64 = ev.iter().sum::<C64>() / ev.len() as f64;
+            prop_assert!((mean + alpha).norm() < 1e-6 * (1.0 + alpha), "mean {}", mean);
+            prop_assert!(ev.iter().all(|z| (z + alpha).norm() < 1e-2 * (1.0 + alpha)), "{:?}", ev);
+            prop_assert!(law2.theorem_3_3_residual < 1e-8);
+        }
+    }
 }

@@ -16,7 +16,7 @@
 //! ```
 //! use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem};
 //! use nalgebra::DMatrix;
-//! // x1' = x2, x2' = u, y = x1, stabilised by W = s + 2: DPC is u = K_J x + R_xi(d/dt) xi.
+//! // x1' = x2, x2' = u, y = x1, stabilised by W = s + 2.
 //! let sys = LinearSystem::without_feedthrough(
 //!     DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 0.0, 0.0]),
 //!     DMatrix::from_row_slice(2, 1, &[0.0, 1.0]),
@@ -25,7 +25,11 @@
 //! .unwrap();
 //! let opts = AnalysisOptions { w: Some(vec![vec![2.0]]), ..Default::default() };
 //! let report = analyze(&sys, &opts).unwrap();
-//! assert!(report.dpc_stable);
+//! assert_eq!(report.index, 1);
+//! assert!((report.transmission_zeros[0].re + 2.0).abs() < 1e-9); // the root of W
+//! // Plain DPC has eig(Abar_4) = {2}: unstable; the preliminary feedback fixes it.
+//! assert!(!report.dpc_stable);
+//! assert_eq!(report.dpc_stable_prefeedback, Some(true));
 //! ```
 
 pub mod analysis;

@@ -231,19 +231,26 @@ pub(crate) fn subspace_distance(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
     norm2(&(b - proj))
 }
 
-/// Eigenvalues of a real square matrix by the real Schur form, sorted by real part then
-/// imaginary part so that reports are reproducible.
+/// Eigenvalues of a real square matrix (faer's real Schur based eigensolver), sorted by real
+/// part then imaginary part so that reports are reproducible.
+///
+/// nalgebra 0.35's `complex_eigenvalues` returned NaN imaginary parts for 2x2 Schur blocks of
+/// nearly repeated eigenvalues in the property tests; faer's solver is used instead.
 pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, LinearError> {
     let n = a.nrows();
     if n == 0 {
         return Ok(Vec::new());
     }
-    let schur = nalgebra::Schur::try_new(a.clone(), f64::EPSILON, 1000 * n.max(10)).ok_or(
-        LinearError::NoConvergence {
-            what: "real Schur form",
-        },
-    )?;
-    let mut ev: Vec<Complex<f64>> = schur.complex_eigenvalues().iter().copied().collect();
+    let fm = faer::Mat::<f64>::from_fn(n, n, |i, j| a[(i, j)]);
+    let ev = fm.eigenvalues().map_err(|_| LinearError::NoConvergence {
+        what: "eigenvalues",
+    })?;
+    let mut ev: Vec<Complex<f64>> = ev.iter().map(|z| Complex::new(z.re, z.im)).collect();
+    if ev.iter().any(|z| !z.re.is_finite() || !z.im.is_finite()) {
+        return Err(LinearError::NoConvergence {
+            what: "eigenvalues",
+        });
+    }
     sort_eigenvalues(&mut ev);
     Ok(ev)
 }
