@@ -108,11 +108,14 @@ fn write_csv(path: &Path, run: &ClosedLoop) -> Result<(), Box<dyn Error>> {
     Ok(())
 }
 
-/// One panel: series of `(t, value)` with names and styles.
+/// A named curve `(t, value)` with its colour.
+type Series<'a> = (&'a str, Vec<(f64, f64)>, RGBColor);
+
+/// One panel of the figure.
 fn panel(
     area: &DrawingArea<SVGBackend, plotters::coord::Shift>,
     title: &str,
-    series: &[(&str, Vec<(f64, f64)>, RGBColor)],
+    series: &[Series<'_>],
 ) -> Result<(), Box<dyn Error>> {
     let t_max = series
         .iter()
