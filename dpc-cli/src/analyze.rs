@@ -256,6 +256,9 @@ fn text_report(name: &str, r: &Analysis) -> String {
             ));
         }
     }
+    if let Some(e) = &r.prefeedback_error {
+        o.push_str(&format!("No preliminary feedback could be built: {e}\n"));
+    }
     for t in &r.transfer {
         o.push_str(&format!(
             "H(s) at s = {}: real part\n",

@@ -281,6 +281,9 @@ pub struct Analysis {
     /// The whole DPC law of the pre-fed-back system.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub law_prefeedback: Option<DpcLaw>,
+    /// Why `K_n` could not be built in `Auto` mode (e.g. `(Abar_4, Bbar_2)` uncontrollable).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prefeedback_error: Option<String>,
 }
 
 /// Default relative stability margin.
@@ -487,6 +490,7 @@ pub fn analyze(sys: &LinearSystem, opts: &AnalysisOptions) -> Result<Analysis, L
         closed_loop_eigenvalues_prefeedback: None,
         dpc_stable_prefeedback: None,
         law_prefeedback: None,
+        prefeedback_error: None,
         law,
     };
     if !build {
@@ -497,7 +501,17 @@ pub fn analyze(sys: &LinearSystem, opts: &AnalysisOptions) -> Result<Analysis, L
         Some(p) => p.clone(),
         None => default_poles(&out.law, opts.w.as_deref()),
     };
-    let k2 = place::place(&out.law.abar4, &out.law.bbar2, &poles, opts.tol_factor)?;
+    let explicit = opts.poles.is_some() || opts.prefeedback == Prefeedback::Always;
+    let k2 = match place::place(&out.law.abar4, &out.law.bbar2, &poles, opts.tol_factor) {
+        Ok(k2) => k2,
+        // Asked for explicitly: the caller gets the typed error. In `Auto` mode the verdict
+        // is still worth having, with the reason why no K_n could be built.
+        Err(e) if !explicit => {
+            out.prefeedback_error = Some(e.to_string());
+            return Ok(out);
+        }
+        Err(e) => return Err(e),
+    };
     let k_n = prefeedback_gain(&out.law.q, &k2, out.law.finite_dim)?;
     let fed = hat.with_feedback(&k_n)?;
     let law2 = dpc_law(&fed, opts.tol_factor)?;
