@@ -164,8 +164,8 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     solver: L,
     opts: DpcOptions,
     nu: usize,
-    /// Scale of each residual row: `delta` for rows with `X'`, 1 otherwise (times `delta`
-    /// at use).
+    /// Whether each residual row contains `X'` (its residual is scaled by `delta` in the
+    /// convergence test).
     dynamic_row: Vec<bool>,
     /// Per inner step `j = 1..=steps`: the last accepted `[X_j; Z_j]`, the warm start.
     warm: Vec<Vec<f64>>,
@@ -278,7 +278,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         }
         let steps = nu + 2;
         let order = T::reference_orders().max().unwrap_or(0);
-        let nu_plant = T::N_ALGEBRAIC - <T::Plant as crate::DaeModel>::N_ALGEBRAIC;
+        let n_inputs = T::plant_inputs();
         Ok(Self {
             model,
             reference,
@@ -295,8 +295,8 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             res_scratch: vec![0.0; n],
             w: vec![0.0; T::N_INPUTS],
             scratch: vec![0.0; (order + 1) * T::N_OUTPUTS],
-            u_first: vec![0.0; nu_plant],
-            u_second: vec![0.0; nu_plant],
+            u_first: vec![0.0; n_inputs],
+            u_second: vec![0.0; n_inputs],
             prefeedback: None,
         })
     }

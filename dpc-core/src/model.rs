@@ -206,19 +206,29 @@ impl<M: DaeModel, U: Fn(f64, &mut [f64])> ImplicitDae for ModelDae<M, U> {
     }
 
     fn equation_name(&self, i: usize) -> String {
-        match M::EQUATIONS.get(i) {
-            Some(text) => format!("equation {i} ({text})"),
-            None => format!("equation {i}"),
-        }
+        equation_name::<M>(i)
     }
 
     fn unknown_name(&self, i: usize) -> String {
-        M::STATE_NAMES
-            .iter()
-            .chain(M::ALGEBRAIC_NAMES)
-            .nth(i)
-            .map_or_else(|| format!("y[{i}]"), |s| (*s).to_string())
+        unknown_name::<M>(i)
     }
+}
+
+/// Equation `i` of model `M` for messages: `"equation i (text)"`.
+pub fn equation_name<M: DaeModel>(i: usize) -> String {
+    match M::EQUATIONS.get(i) {
+        Some(text) => format!("equation {i} ({text})"),
+        None => format!("equation {i}"),
+    }
+}
+
+/// Unknown `i` of `[x; z]` of model `M` for messages: its declared name.
+pub fn unknown_name<M: DaeModel>(i: usize) -> String {
+    M::STATE_NAMES
+        .iter()
+        .chain(M::ALGEBRAIC_NAMES)
+        .nth(i)
+        .map_or_else(|| format!("y[{i}]"), |s| (*s).to_string())
 }
 
 /// Residual and Jacobian blocks of a model in fixed-size nalgebra types, as returned by the

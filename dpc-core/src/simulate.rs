@@ -246,18 +246,11 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
     }
 
     fn equation_name(&self, i: usize) -> String {
-        M::EQUATIONS.get(i).map_or_else(
-            || format!("equation {i}"),
-            |e| format!("equation {i} ({e})"),
-        )
+        crate::model::equation_name::<M>(i)
     }
 
     fn unknown_name(&self, i: usize) -> String {
-        M::STATE_NAMES
-            .iter()
-            .chain(M::ALGEBRAIC_NAMES)
-            .nth(i)
-            .map_or_else(|| format!("y[{i}]"), |s| (*s).to_string())
+        crate::model::unknown_name::<M>(i)
     }
 }
 
@@ -304,7 +297,7 @@ where
             controller: T::N_STATES,
         });
     }
-    let controller_inputs = T::N_ALGEBRAIC - <T::Plant as DaeModel>::N_ALGEBRAIC;
+    let controller_inputs = T::plant_inputs();
     if controller_inputs != nu {
         return Err(SimulateError::Mismatch {
             what: "inputs",

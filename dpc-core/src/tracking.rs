@@ -23,6 +23,11 @@ pub trait TrackingDae: DaeModel {
     /// output the inputs never reach, or a structurally higher-index plant).
     const RELATIVE_DEGREES: &'static [Option<usize>];
 
+    /// Number of plant inputs: the trailing algebraic unknowns of the tracking DAE.
+    fn plant_inputs() -> usize {
+        Self::N_ALGEBRAIC - <Self::Plant as DaeModel>::N_ALGEBRAIC
+    }
+
     /// Per output, how many derivatives of the reference `w_i` needs (`deg W_i`).
     fn reference_orders() -> impl Iterator<Item = usize> {
         Self::W_COEFFICIENTS.iter().map(|c| c.len() - 1)
