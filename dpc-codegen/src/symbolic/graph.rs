@@ -294,6 +294,11 @@ impl Graph {
             if let Some(e) = self.folded(x * y) {
                 return e;
             }
+            // An overflowing square stays symbolic in the same canonical form as any
+            // other `x * x`, so that `c * c` and `powi(c, 2)` are one node.
+            if a == b {
+                return self.powi(a, 2);
+            }
         }
         if ca == Some(0.0) || cb == Some(0.0) {
             return self.constant(0.0);
@@ -700,6 +705,15 @@ mod tests {
         let ex = g.func(Func::Exp, x);
         assert_eq!(g.func(Func::Ln, ex), x);
         assert_eq!(g.hypot(x, zero), ax);
+    }
+
+    #[test]
+    fn overflowing_square_of_a_constant_is_a_power() {
+        let mut g = Graph::new();
+        let big = g.constant(1e200);
+        let sq = g.mul(big, big);
+        assert_eq!(sq, g.powi(big, 2));
+        assert!(g.as_constant(sq).is_none(), "1e400 is not folded");
     }
 
     #[test]
