@@ -7,11 +7,14 @@
 //! * [`FlexibleJoint`]: a flexible-joint robot arm of relative degree 4, with two
 //!   stabilised Hirschorn steps in [`FlexibleJointTracking`].
 //!
+//! [`registry`] finds the tracked models by name for programs that pick a plant at run time.
+//!
 //! The source files are also read by the snapshot tests of `dpc-codegen`, which store the
 //! code the macro generates for each of them.
 
 mod flexible_joint;
 mod pendulum;
+pub mod registry;
 mod wheel;
 
 pub use flexible_joint::{
