@@ -1,0 +1,150 @@
+//! What a run leaves on disk: `summary.json` (the verdict and the numbers a user compares)
+//! and `trajectory.csv` (every sample).
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::run::{DesignReport, RunResult};
+use crate::scenario::Scenario;
+use crate::ScenarioError;
+
+/// The contents of `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Summary {
+    /// The scenario's title.
+    pub title: Option<String>,
+    /// The model.
+    pub model: String,
+    /// The overrides that made this run, or "main".
+    pub label: String,
+    /// Whether the run diverged (state out of bounds, repeated controller failures, plant
+    /// integration failure).
+    pub diverged: bool,
+    /// When it diverged.
+    pub t_diverged: Option<f64>,
+    /// Why it diverged.
+    pub divergence_cause: Option<String>,
+    /// Time of the last sample.
+    pub t_final: f64,
+    /// Per output, the tracking error `y - reference` at the last sample.
+    pub final_error: BTreeMap<String, f64>,
+    /// Per output, the largest `|y - reference|` over the last quarter of the run.
+    pub max_abs_error: BTreeMap<String, f64>,
+    /// Number of samples.
+    pub samples: usize,
+    /// Newton iterations of the controller over the run.
+    pub newton_iterations: usize,
+    /// Extraction retries with a larger `delta` over the run.
+    pub retries: usize,
+    /// Samples that needed at least one retry.
+    pub retried_samples: usize,
+    /// Samples on which the controller failed (the previous control was held).
+    pub failed_samples: usize,
+    /// Wall-clock time of the simulation [s].
+    pub wall_time_s: f64,
+    /// The linear analysis of the controller's model, when the scenario has a `[design]`.
+    pub linear_design: Option<DesignReport>,
+    /// The scenario as run.
+    pub scenario: Scenario,
+}
+
+impl Summary {
+    /// The summary of a run.
+    pub fn of(run: &RunResult) -> Self {
+        let cl = &run.closed_loop;
+        let t_final = cl.samples.last().map_or(0.0, |s| s.t);
+        let mut final_error = BTreeMap::new();
+        let mut max_abs_error = BTreeMap::new();
+        for (i, name) in run.names.outputs.iter().enumerate() {
+            let last = cl.samples.last().map_or(f64::NAN, |s| s.error[i]);
+            final_error.insert(name.clone(), last);
+            // The last quarter of the scheduled run; a run that stopped early is judged on
+            // the samples it has, which then include the divergence.
+            let from = 0.75 * run.scenario.t_end.min(t_final.max(0.0));
+            let m = cl
+                .samples
+                .iter()
+                .filter(|s| s.t >= from)
+                .map(|s| s.error[i].abs())
+                .fold(0.0_f64, |m, e| if e.is_nan() { f64::NAN } else { m.max(e) });
+            max_abs_error.insert(name.clone(), m);
+        }
+        Self {
+            title: run.scenario.title.clone(),
+            model: run.scenario.model.clone(),
+            label: run.label.clone(),
+            diverged: cl.divergence.is_some(),
+            t_diverged: cl.divergence.as_ref().map(|d| d.t),
+            divergence_cause: cl.divergence.as_ref().map(|d| d.cause.clone()),
+            t_final,
+            final_error,
+            max_abs_error,
+            samples: cl.samples.len(),
+            newton_iterations: cl.newton_iterations,
+            retries: cl.retries,
+            retried_samples: cl.retried_samples,
+            failed_samples: cl.failed_samples,
+            wall_time_s: run.wall_time,
+            linear_design: run.design.clone(),
+            scenario: run.scenario.clone(),
+        }
+    }
+
+    /// The largest late error over the outputs (NaN if any is NaN).
+    pub fn worst_late_error(&self) -> f64 {
+        self.max_abs_error.values().fold(
+            0.0_f64,
+            |m, e| if e.is_nan() { f64::NAN } else { m.max(*e) },
+        )
+    }
+}
+
+fn write_error(path: &Path, e: impl std::fmt::Display) -> ScenarioError {
+    ScenarioError::Write {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+/// Write `summary.json` and `trajectory.csv` of `run` into `dir` (created if needed).
+///
+/// # Errors
+/// [`ScenarioError::Write`] when a file cannot be written.
+pub fn write_run(dir: &Path, run: &RunResult) -> Result<Summary, ScenarioError> {
+    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
+    let summary = Summary::of(run);
+    let path = dir.join("summary.json");
+    let json = serde_json::to_string_pretty(&summary).map_err(|e| write_error(&path, e))?;
+    std::fs::write(&path, json + "\n").map_err(|e| write_error(&path, e))?;
+    write_trajectory(&dir.join("trajectory.csv"), run)?;
+    Ok(summary)
+}
+
+/// Write the samples as CSV: `t`, states, inputs, `ref_<output>`, `err_<output>`.
+///
+/// # Errors
+/// [`ScenarioError::Write`] when the file cannot be written.
+pub fn write_trajectory(path: &Path, run: &RunResult) -> Result<(), ScenarioError> {
+    let file = std::fs::File::create(path).map_err(|e| write_error(path, e))?;
+    let mut out = std::io::BufWriter::new(file);
+    let mut header = vec!["t".to_string()];
+    header.extend(run.names.states.iter().cloned());
+    header.extend(run.names.inputs.iter().cloned());
+    header.extend(run.names.outputs.iter().map(|o| format!("ref_{o}")));
+    header.extend(run.names.outputs.iter().map(|o| format!("err_{o}")));
+    writeln!(out, "{}", header.join(",")).map_err(|e| write_error(path, e))?;
+    for s in &run.closed_loop.samples {
+        let row: Vec<String> = std::iter::once(s.t)
+            .chain(s.x.iter().copied())
+            .chain(s.u.iter().copied())
+            .chain(s.reference.iter().copied())
+            .chain(s.error.iter().copied())
+            .map(|v| format!("{v:e}"))
+            .collect();
+        writeln!(out, "{}", row.join(",")).map_err(|e| write_error(path, e))?;
+    }
+    out.flush().map_err(|e| write_error(path, e))
+}

@@ -1,0 +1,449 @@
+//! One closed-loop run of a scenario: look the model up, set `W`, parameters and reference,
+//! design the preliminary feedback, build the controller and simulate.
+
+use std::time::Instant;
+
+use dpc::core::dpc::{Dpc, DpcOptions, Nominal, Prefeedback};
+use dpc::core::linalg::LinearSolver;
+use dpc::core::linear::{analyze, AnalysisOptions};
+use dpc::core::linearize::{linearize, OperatingPoint};
+use dpc::core::model::DaeModel;
+use dpc::core::reference::{Components, Reference, ReferenceError};
+use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions};
+use dpc::core::TrackingDae;
+use dpc::nalgebra::DMatrix;
+use dpc_models::registry::{self, Tracked, VisitTracked};
+use serde::Serialize;
+
+use crate::scenario::{scalar_reference, NominalMotion, Scenario};
+use crate::ScenarioError;
+
+/// Names of the model's variables, in order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Names {
+    /// States.
+    pub states: Vec<String>,
+    /// Inputs.
+    pub inputs: Vec<String>,
+    /// Outputs.
+    pub outputs: Vec<String>,
+}
+
+/// What the linear analysis of the controller's model said.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DesignReport {
+    /// Eigenvalues of `Abar_4` as `[re, im]`.
+    pub abar4_eigenvalues: Vec<[f64; 2]>,
+    /// Whether DPC without preliminary feedback is predicted stable (Theorem 3.2).
+    pub dpc_stable_without_prefeedback: bool,
+    /// Whether DPC after the preliminary feedback is predicted stable.
+    pub dpc_stable_with_prefeedback: Option<bool>,
+    /// `K_n`, row by row (inputs x states), when built.
+    pub k_n: Option<Vec<Vec<f64>>>,
+}
+
+/// The result of one run.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// A label (the overrides that made this run, or "main").
+    pub label: String,
+    /// The scenario as run.
+    pub scenario: Scenario,
+    /// Variable names.
+    pub names: Names,
+    /// The linear analysis, when the scenario has a `[design]`.
+    pub design: Option<DesignReport>,
+    /// The closed loop.
+    pub closed_loop: ClosedLoop,
+    /// Wall-clock time of the simulation [s].
+    pub wall_time: f64,
+}
+
+/// Run `scenario`.
+///
+/// # Errors
+/// [`ScenarioError`] for an unknown model, a scenario that does not fit the model, or a
+/// controller that cannot be set up. A run that starts and then diverges is not an error: see
+/// [`ClosedLoop::divergence`].
+pub fn run(scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError> {
+    registry::visit(
+        &scenario.model,
+        Runner {
+            scenario,
+            label: label.to_string(),
+        },
+    )?
+}
+
+struct Runner<'a> {
+    scenario: &'a Scenario,
+    label: String,
+}
+
+/// `x0(t) = state + t * rate`, `u0 = input`.
+struct SteadyMotion {
+    state: Vec<f64>,
+    rate: Vec<f64>,
+    input: Vec<f64>,
+}
+
+impl Nominal for SteadyMotion {
+    fn state(&self, t: f64, x0: &mut [f64]) {
+        for ((x, s), r) in x0.iter_mut().zip(&self.state).zip(&self.rate) {
+            *x = s + t * r;
+        }
+    }
+    fn input(&self, _t: f64, u0: &mut [f64]) {
+        u0.copy_from_slice(&self.input);
+    }
+}
+
+/// The scenario's reference: the model's own or one assembled from terms.
+enum ScenarioReference {
+    Model(Box<dyn Reference + Send + Sync>),
+    Terms(Components),
+}
+
+impl Reference for ScenarioReference {
+    fn dimension(&self) -> usize {
+        match self {
+            Self::Model(r) => r.dimension(),
+            Self::Terms(r) => r.dimension(),
+        }
+    }
+    fn max_order(&self) -> usize {
+        match self {
+            Self::Model(r) => r.max_order(),
+            Self::Terms(r) => r.max_order(),
+        }
+    }
+    fn derivatives(&self, t: f64, order: usize, out: &mut [f64]) -> Result<(), ReferenceError> {
+        match self {
+            Self::Model(r) => r.derivatives(t, order, out),
+            Self::Terms(r) => r.derivatives(t, order, out),
+        }
+    }
+}
+
+impl Runner<'_> {
+    fn invalid(&self, message: String) -> ScenarioError {
+        ScenarioError::Invalid {
+            origin: format!("scenario for model `{}`", self.scenario.model),
+            message,
+        }
+    }
+
+    fn check_length(&self, what: &str, v: &[f64], names: &[&str]) -> Result<(), ScenarioError> {
+        if v.len() == names.len() {
+            Ok(())
+        } else {
+            Err(self.invalid(format!(
+                "`{what}` has {} entries, but model `{}` has {} ({})",
+                v.len(),
+                self.scenario.model,
+                names.len(),
+                names.join(", ")
+            )))
+        }
+    }
+
+    fn output_index(
+        &self,
+        what: &str,
+        name: &str,
+        outputs: &[&str],
+    ) -> Result<usize, ScenarioError> {
+        outputs.iter().position(|o| *o == name).ok_or_else(|| {
+            self.invalid(format!(
+                "`{what}.{name}`: model `{}` has no output `{name}`; its outputs are {}",
+                self.scenario.model,
+                outputs.join(", ")
+            ))
+        })
+    }
+
+    fn reference(
+        &self,
+        own: Option<Box<dyn Reference + Send + Sync>>,
+        outputs: &[&str],
+    ) -> Result<ScenarioReference, ScenarioError> {
+        let Some(terms) = &self.scenario.reference else {
+            return own.map(ScenarioReference::Model).ok_or_else(|| {
+                self.invalid(format!(
+                    "model `{}` declares no reference; give a `[reference]` table with a list of terms for each of {}",
+                    self.scenario.model,
+                    outputs.join(", ")
+                ))
+            });
+        };
+        for name in terms.keys() {
+            self.output_index("reference", name, outputs)?;
+        }
+        let mut components = Vec::with_capacity(outputs.len());
+        for name in outputs {
+            let t = terms.get(*name).ok_or_else(|| {
+                self.invalid(format!("`[reference]` has no entry for output `{name}`"))
+            })?;
+            components.push(scalar_reference(t));
+        }
+        let c = Components::new(outputs.len(), components)
+            .map_err(|e| ScenarioError::Setup(e.to_string()))?;
+        Ok(ScenarioReference::Terms(c))
+    }
+
+    /// The per-output roots of `W` for the analysis: the scenario's, else the model's.
+    fn w_roots<T: TrackingDae>(&self, outputs: &[&str]) -> Result<Vec<Vec<f64>>, ScenarioError> {
+        let mut roots = Vec::with_capacity(outputs.len());
+        for (i, name) in outputs.iter().enumerate() {
+            match self.scenario.w.get(*name) {
+                Some(r) => roots.push(r.clone()),
+                None => roots.push(
+                    negated_real_roots(T::W_COEFFICIENTS[i]).ok_or_else(|| {
+                        self.invalid(format!(
+                            "the model's W for `{name}` has complex roots, which the linear design cannot take; give `w.{name}`"
+                        ))
+                    })?,
+                ),
+            }
+        }
+        Ok(roots)
+    }
+
+    fn design<P: DaeModel>(
+        &self,
+        model: &P,
+        nominal: &NominalMotion,
+        w: Vec<Vec<f64>>,
+    ) -> Result<(DesignReport, Option<DMatrix<f64>>), ScenarioError> {
+        let nx = P::N_STATES;
+        self.check_length("design.nominal.state", &nominal.state, P::STATE_NAMES)?;
+        let rate = nominal.rate.clone().unwrap_or_else(|| vec![0.0; nx]);
+        self.check_length("design.nominal.rate", &rate, P::STATE_NAMES)?;
+        let input = nominal
+            .input
+            .clone()
+            .unwrap_or_else(|| vec![0.0; P::N_INPUTS]);
+        self.check_length("design.nominal.input", &input, P::INPUT_NAMES)?;
+        if P::N_ALGEBRAIC > 0 {
+            return Err(self.invalid(format!(
+                "a preliminary-feedback design for model `{}` needs its algebraic unknowns at the nominal point, which scenarios cannot give yet",
+                self.scenario.model
+            )));
+        }
+        let sys = linearize(
+            model,
+            OperatingPoint {
+                t: 0.0,
+                x: &nominal.state,
+                xdot: &rate,
+                z: &[],
+                u: &input,
+            },
+        )
+        .map_err(|e| ScenarioError::Setup(format!("linearisation about the nominal: {e}")))?;
+        let poles = self
+            .scenario
+            .design
+            .as_ref()
+            .and_then(|d| d.poles.as_ref())
+            .map(|p| p.iter().map(|p| p.complex()).collect());
+        let analysis = analyze(
+            &sys,
+            &AnalysisOptions {
+                w: Some(w),
+                poles,
+                ..AnalysisOptions::default()
+            },
+        )
+        .map_err(|e| ScenarioError::Setup(format!("linear analysis: {e}")))?;
+        let k_n = analysis.k_n.clone();
+        let report = DesignReport {
+            abar4_eigenvalues: analysis
+                .abar4_eigenvalues
+                .iter()
+                .map(|c| [c.re, c.im])
+                .collect(),
+            dpc_stable_without_prefeedback: analysis.dpc_stable,
+            dpc_stable_with_prefeedback: analysis.dpc_stable_prefeedback,
+            k_n: k_n
+                .as_ref()
+                .map(|k| k.row_iter().map(|r| r.iter().copied().collect()).collect()),
+        };
+        Ok((report, k_n))
+    }
+}
+
+impl VisitTracked for Runner<'_> {
+    type Output = Result<RunResult, ScenarioError>;
+
+    fn visit<P, T, L>(self, model: Tracked<P, T, L>) -> Self::Output
+    where
+        P: DaeModel + Clone + Send + Sync + 'static,
+        T: TrackingDae<Plant = P> + Clone + Send + Sync + 'static,
+        L: LinearSolver + Send + 'static,
+    {
+        let s = self.scenario;
+        let outputs = P::OUTPUT_NAMES;
+        self.check_length("x0", &s.x0, P::STATE_NAMES)?;
+        if !s.plant.params.is_empty() || !s.controller.params.is_empty() {
+            return Err(
+                self.invalid("parameter overrides are not supported by this build".to_string())
+            );
+        }
+        for name in s.w.keys() {
+            self.output_index("w", name, outputs)?;
+        }
+        let w = self.w_roots::<T>(outputs)?;
+        for (i, roots) in w.iter().enumerate() {
+            let wanted = polynomial_from_negated_roots(roots);
+            let compiled = T::W_COEFFICIENTS[i];
+            let same = wanted.len() == compiled.len()
+                && wanted
+                    .iter()
+                    .zip(compiled)
+                    .all(|(a, b)| (a - b).abs() <= 1e-12 * (1.0 + b.abs()));
+            if !same {
+                return Err(self.invalid(format!(
+                    "`w.{}` = {roots:?} differs from the model's compiled W ({compiled:?}); this build cannot change W at run time",
+                    outputs[i]
+                )));
+            }
+        }
+        let reference = self.reference(model.reference, outputs)?;
+        let plant = model.plant;
+        let controller_model = plant.clone();
+
+        let mut design_report = None;
+        let mut k_n = None;
+        if let Some(design) = &s.design {
+            let (report, k) = self.design(&controller_model, &design.nominal, w)?;
+            design_report = Some(report);
+            k_n = k;
+        }
+        let mut dpc = Dpc::new(
+            model.tracking,
+            reference,
+            model.solver,
+            DpcOptions {
+                delta: s.delta,
+                nu: s.nu,
+                extraction: s.extraction,
+                ..DpcOptions::default()
+            },
+        )
+        .map_err(|e| ScenarioError::Setup(format!("controller: {e}")))?;
+        if s.prefeedback {
+            let design = s.design.as_ref().ok_or_else(|| {
+                self.invalid("`prefeedback = true` needs a `[design]` table".into())
+            })?;
+            let k_n = k_n.ok_or_else(|| {
+                ScenarioError::Setup("the linear analysis built no K_n".to_string())
+            })?;
+            let nominal = &design.nominal;
+            dpc = dpc
+                .with_prefeedback(Prefeedback {
+                    k_n,
+                    nominal: Box::new(SteadyMotion {
+                        state: nominal.state.clone(),
+                        rate: nominal
+                            .rate
+                            .clone()
+                            .unwrap_or_else(|| vec![0.0; P::N_STATES]),
+                        input: nominal
+                            .input
+                            .clone()
+                            .unwrap_or_else(|| vec![0.0; P::N_INPUTS]),
+                    }),
+                })
+                .map_err(|e| ScenarioError::Setup(format!("preliminary feedback: {e}")))?;
+        }
+        let options = ClosedLoopOptions {
+            h: s.h,
+            t_end: s.t_end,
+            rtol: s.plant.rtol,
+            atol: s.plant.atol,
+            hold: s.hold,
+            state_bound: s.plant.state_bound,
+            max_consecutive_failures: s.plant.max_consecutive_failures,
+        };
+        let start = Instant::now();
+        let closed_loop = simulate(&plant, &mut dpc, &s.x0, &options)
+            .map_err(|e| ScenarioError::Setup(format!("simulation: {e}")))?;
+        let wall_time = start.elapsed().as_secs_f64();
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect();
+        Ok(RunResult {
+            label: self.label,
+            scenario: s.clone(),
+            names: Names {
+                states: names(P::STATE_NAMES),
+                inputs: names(P::INPUT_NAMES),
+                outputs: names(P::OUTPUT_NAMES),
+            },
+            design: design_report,
+            closed_loop,
+            wall_time,
+        })
+    }
+}
+
+/// Coefficients (lowest power first) of `prod (s + a_k)`.
+fn polynomial_from_negated_roots(roots: &[f64]) -> Vec<f64> {
+    let mut c = vec![1.0];
+    for a in roots {
+        let mut next = vec![0.0; c.len() + 1];
+        for (k, ck) in c.iter().enumerate() {
+            next[k] += a * ck;
+            next[k + 1] += ck;
+        }
+        c = next;
+    }
+    c
+}
+
+/// The `a_k` of a monic `prod (s + a_k)` given lowest power first, if all roots are real.
+fn negated_real_roots(coefficients: &[f64]) -> Option<Vec<f64>> {
+    let n = coefficients.len().checked_sub(1)?;
+    if n == 0 {
+        return Some(Vec::new());
+    }
+    let lead = coefficients[n];
+    // Companion matrix of the monic polynomial; its eigenvalues (Schur) are the roots.
+    let companion = DMatrix::from_fn(n, n, |i, j| {
+        if j == n - 1 {
+            -coefficients[i] / lead
+        } else if i == j + 1 {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let scale = coefficients.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
+    let mut roots = Vec::with_capacity(n);
+    for z in companion.complex_eigenvalues().iter() {
+        if z.im.abs() > 1e-9 * (1.0 + scale) {
+            return None;
+        }
+        roots.push(-z.re);
+    }
+    roots.sort_by(f64::total_cmp);
+    Some(roots)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn roots_round_trip_through_coefficients() {
+        let c = polynomial_from_negated_roots(&[2.0, 3.0]);
+        assert_eq!(c, vec![6.0, 5.0, 1.0]);
+        let r = negated_real_roots(&c).unwrap();
+        assert!(
+            (r[0] - 2.0).abs() < 1e-12 && (r[1] - 3.0).abs() < 1e-12,
+            "{r:?}"
+        );
+        assert_eq!(negated_real_roots(&[5.0, 1.0]).unwrap(), vec![5.0]);
+        // s^2 + 1 has imaginary roots.
+        assert!(negated_real_roots(&[1.0, 0.0, 1.0]).is_none());
+    }
+}

@@ -1,0 +1,576 @@
+//! Scenario files: one closed-loop DPC run described in TOML.
+//!
+//! ```toml
+//! title = "The paper's wheel (Section 5)"
+//! model = "wheel"                 # see `dpc models`
+//! x0 = [1.5707963267948966, 0.0, 0.0, 0.0, -6.0]
+//! h = 0.05                        # sampling period
+//! t_end = 20.0
+//! delta = 1e-3                    # inner implicit-Euler step of the controller
+//! extraction = "extrapolated"     # or "first-usable"
+//! hold = "input"                  # or "correction": prefeedback continuous, only v held
+//! prefeedback = true
+//!
+//! [w]                             # per output: the a_k of W(s) = prod (s + a_k)
+//! theta = [5.0]
+//! psi = [5.0]
+//!
+//! [design]                        # how K_n is built (needed when prefeedback = true)
+//! poles = [-5.0, -5.0, -5.0]      # of Abar_4 + Bbar_2 K_2; a real or [re, im] each
+//! nominal = { state = [1.5707963267948966, 0.0, 0.0, 0.0, -6.0], rate = [0.0, -6.0, 0.0, 0.0, 0.0], input = [0.0, 0.0] }
+//! ```
+//!
+//! Every key is documented on [`Scenario`]; unknown keys are errors. The reference defaults to
+//! the model's own `references` section; a `[reference]` table replaces it with a sum of
+//! terms per output. `[plant]` sets the simulated plant's tolerances and parameters (a plant
+//! that differs from the controller's model, for mismatch studies), `[controller]` the
+//! controller model's parameters.
+//!
+//! [`Overrides`] change any key from the command line (`--set h=0.1`,
+//! `--set plant.params.m=1.2`): the same mechanism runs sweeps and the comparison runs that
+//! `compare` lists.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use dpc::core::dpc::Extraction;
+use dpc::core::reference::{AtanIntegral, Constant, Polynomial, ScalarReference, Sinusoid, Sum};
+use dpc::core::simulate::Hold;
+use dpc::nalgebra::Complex;
+use serde::{Deserialize, Serialize};
+
+use crate::ScenarioError;
+
+/// One closed-loop run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// A title for plots and summaries.
+    #[serde(default)]
+    pub title: Option<String>,
+    /// The model's name (see `dpc models`).
+    pub model: String,
+    /// Initial plant state.
+    pub x0: Vec<f64>,
+    /// Sampling period `h` of the controller.
+    pub h: f64,
+    /// End time of the run.
+    pub t_end: f64,
+    /// Inner implicit-Euler step `delta` of the controller.
+    #[serde(default = "default_delta")]
+    pub delta: f64,
+    /// How the control is extracted from the inner integration.
+    #[serde(default)]
+    pub extraction: Extraction,
+    /// What the zero-order hold keeps.
+    #[serde(default)]
+    pub hold: Hold,
+    /// Override of `nu` (default: from the model's relative degrees).
+    #[serde(default)]
+    pub nu: Option<usize>,
+    /// Whether the preliminary feedback built from `[design]` is applied.
+    #[serde(default)]
+    pub prefeedback: bool,
+    /// Per output name, the numbers `a_k` of `W(s) = prod (s + a_k)`; outputs not listed keep
+    /// the model's `W`.
+    #[serde(default)]
+    pub w: BTreeMap<String, Vec<f64>>,
+    /// Per output name, a sum of reference terms; absent: the model's own references.
+    #[serde(default)]
+    pub reference: Option<BTreeMap<String, Vec<Term>>>,
+    /// The preliminary-feedback design.
+    #[serde(default)]
+    pub design: Option<Design>,
+    /// The simulated plant.
+    #[serde(default)]
+    pub plant: PlantOptions,
+    /// The controller's model.
+    #[serde(default)]
+    pub controller: ControllerOptions,
+    /// Override sets (`"key=value"`, several separated by `;`) for comparison runs drawn
+    /// beside the main run in the plots, e.g. `["prefeedback=false"]`.
+    #[serde(default)]
+    pub compare: Vec<String>,
+}
+
+fn default_delta() -> f64 {
+    1e-3
+}
+
+/// One term of a scalar reference.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Term {
+    /// A constant.
+    Constant(f64),
+    /// `sum_j c_j t^j`, coefficients lowest power first.
+    Polynomial(Vec<f64>),
+    /// `amplitude * sin(omega t + phase)`.
+    Sine {
+        /// Amplitude.
+        amplitude: f64,
+        /// Angular frequency [rad/s].
+        omega: f64,
+        /// Phase [rad].
+        #[serde(default)]
+        phase: f64,
+    },
+    /// `scale * (t atan t - ln(1 + t^2) / 2)`, the integral of `scale * atan t`.
+    AtanIntegral {
+        /// The factor.
+        scale: f64,
+    },
+}
+
+impl Term {
+    fn scalar(&self) -> Box<dyn ScalarReference + Send + Sync> {
+        match self {
+            Term::Constant(c) => Box::new(Constant(*c)),
+            Term::Polynomial(c) => Box::new(Polynomial(c.clone())),
+            Term::Sine {
+                amplitude,
+                omega,
+                phase,
+            } => Box::new(Sinusoid {
+                offset: 0.0,
+                amplitude: *amplitude,
+                omega: *omega,
+                phase: *phase,
+            }),
+            Term::AtanIntegral { scale } => Box::new(AtanIntegral { scale: *scale }),
+        }
+    }
+
+    fn is_finite(&self) -> bool {
+        match self {
+            Term::Constant(c) => c.is_finite(),
+            Term::Polynomial(c) => c.iter().all(|v| v.is_finite()),
+            Term::Sine {
+                amplitude,
+                omega,
+                phase,
+            } => amplitude.is_finite() && omega.is_finite() && phase.is_finite(),
+            Term::AtanIntegral { scale } => scale.is_finite(),
+        }
+    }
+}
+
+/// The sum of `terms` as one scalar reference.
+pub fn scalar_reference(terms: &[Term]) -> Box<dyn ScalarReference + Send + Sync> {
+    Box::new(Sum(terms.iter().map(Term::scalar).collect()))
+}
+
+/// A real pole or an `[re, im]` pair.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Pole {
+    /// A real pole.
+    Real(f64),
+    /// A complex pole (its conjugate must be listed too).
+    Complex([f64; 2]),
+}
+
+impl Pole {
+    /// As a complex number.
+    pub fn complex(self) -> Complex<f64> {
+        match self {
+            Pole::Real(r) => Complex::new(r, 0.0),
+            Pole::Complex([re, im]) => Complex::new(re, im),
+        }
+    }
+}
+
+/// How the preliminary feedback is designed: the linearisation of the controller's model
+/// along a steady motion, and the poles of `Abar_4 + Bbar_2 K_2`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Design {
+    /// Poles of `Abar_4 + Bbar_2 K_2`; absent: the analysis' default.
+    #[serde(default)]
+    pub poles: Option<Vec<Pole>>,
+    /// The nominal motion `x0(t) = state + t * rate`, `u0 = input`.
+    pub nominal: NominalMotion,
+}
+
+/// A steady nominal motion `x0(t) = state + t * rate` with constant input `u0`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NominalMotion {
+    /// `x0(0)`.
+    pub state: Vec<f64>,
+    /// `x0'`, constant (zeros: an operating point).
+    #[serde(default)]
+    pub rate: Option<Vec<f64>>,
+    /// `u0`; absent: zeros.
+    #[serde(default)]
+    pub input: Option<Vec<f64>>,
+}
+
+/// The simulated plant.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlantOptions {
+    /// Relative tolerance of the integration between samples.
+    #[serde(default = "default_rtol")]
+    pub rtol: f64,
+    /// Absolute tolerance of the integration between samples.
+    #[serde(default = "default_atol")]
+    pub atol: f64,
+    /// The run counts as diverged when some `|x_i|` exceeds this bound.
+    #[serde(default = "default_state_bound")]
+    pub state_bound: f64,
+    /// The run counts as diverged after this many consecutive failed controller updates.
+    #[serde(default = "default_failures")]
+    pub max_consecutive_failures: usize,
+    /// Parameters that differ from the model's defaults (the controller keeps its own).
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+}
+
+fn default_rtol() -> f64 {
+    1e-8
+}
+fn default_atol() -> f64 {
+    1e-10
+}
+fn default_state_bound() -> f64 {
+    1e3
+}
+fn default_failures() -> usize {
+    3
+}
+
+impl Default for PlantOptions {
+    fn default() -> Self {
+        Self {
+            rtol: default_rtol(),
+            atol: default_atol(),
+            state_bound: default_state_bound(),
+            max_consecutive_failures: default_failures(),
+            params: BTreeMap::new(),
+        }
+    }
+}
+
+/// The controller's model.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerOptions {
+    /// Parameters that differ from the model's defaults.
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+}
+
+/// `key=value` assignments to apply to a scenario before it is read: the key is a dotted path
+/// of TOML keys, the value a TOML value (a bare word that is not one is taken as a string).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides(pub Vec<(String, toml::Value)>);
+
+impl Overrides {
+    /// Parse `"key=value"` assignments.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Override`] for a missing `=` or an empty key.
+    pub fn parse<'a>(items: impl IntoIterator<Item = &'a str>) -> Result<Self, ScenarioError> {
+        let mut out = Vec::new();
+        for item in items {
+            let (key, value) = split_assignment(item)?;
+            out.push((key.to_string(), parse_value(value)));
+        }
+        Ok(Self(out))
+    }
+
+    /// A short label such as `h=0.1,prefeedback=false`.
+    pub fn label(&self) -> String {
+        self.0
+            .iter()
+            .map(|(k, v)| format!("{k}={}", value_text(v)))
+            .collect::<Vec<_>>()
+            .join(",")
+    }
+}
+
+/// `key=value` split at the first `=`, both parts trimmed.
+pub(crate) fn split_assignment(item: &str) -> Result<(&str, &str), ScenarioError> {
+    let Some((key, value)) = item.split_once('=') else {
+        return Err(ScenarioError::Override(format!(
+            "`{item}` is not of the form key=value"
+        )));
+    };
+    let key = key.trim();
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(ScenarioError::Override(format!(
+            "`{item}` has an empty key; expected a dotted path such as plant.params.m"
+        )));
+    }
+    Ok((key, value.trim()))
+}
+
+/// A TOML value from text, or the text itself as a string.
+pub(crate) fn parse_value(text: &str) -> toml::Value {
+    #[derive(Deserialize)]
+    struct Holder {
+        v: toml::Value,
+    }
+    toml::from_str::<Holder>(&format!("v = {text}"))
+        .map(|h| h.v)
+        .unwrap_or_else(|_| toml::Value::String(text.to_string()))
+}
+
+/// A value as it would be written on the command line.
+pub(crate) fn value_text(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+impl Scenario {
+    /// Read a scenario file and apply `overrides`.
+    ///
+    /// # Errors
+    /// [`ScenarioError`] naming the file, and the line where TOML gives one.
+    pub fn load(path: &Path, overrides: &Overrides) -> Result<Self, ScenarioError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Self::parse(&path.display().to_string(), &text, overrides)
+    }
+
+    /// Parse scenario text (`origin` names it in errors) and apply `overrides`.
+    ///
+    /// # Errors
+    /// [`ScenarioError`] for malformed TOML, unknown keys, wrong types or invalid values.
+    pub fn parse(origin: &str, text: &str, overrides: &Overrides) -> Result<Self, ScenarioError> {
+        let mut table: toml::Table =
+            toml::from_str(text).map_err(|e| crate::toml_error(origin, text, &e))?;
+        for (key, value) in &overrides.0 {
+            set_path(&mut table, key, value.clone())?;
+        }
+        let scenario: Scenario = if overrides.0.is_empty() {
+            toml::from_str(text).map_err(|e| crate::toml_error(origin, text, &e))?
+        } else {
+            // Re-serialise so that errors point at lines of the modified document.
+            let modified = toml::to_string(&table).map_err(|e| ScenarioError::Invalid {
+                origin: origin.to_string(),
+                message: e.to_string(),
+            })?;
+            toml::from_str(&modified).map_err(|e| {
+                let mut err = crate::toml_error(origin, &modified, &e);
+                if let ScenarioError::Invalid { message, .. } = &mut err {
+                    message.push_str(&format!(" (after --set {})", overrides.label()));
+                }
+                err
+            })?
+        };
+        scenario
+            .validate()
+            .map_err(|message| ScenarioError::Invalid {
+                origin: origin.to_string(),
+                message,
+            })?;
+        Ok(scenario)
+    }
+
+    /// Checks that need no model: finite positive times, finite vectors, a design when the
+    /// preliminary feedback is on.
+    fn validate(&self) -> Result<(), String> {
+        let positive = |name: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("`{name}` must be a positive number, found {v}"))
+            }
+        };
+        positive("h", self.h)?;
+        positive("t_end", self.t_end)?;
+        positive("delta", self.delta)?;
+        positive("plant.rtol", self.plant.rtol)?;
+        positive("plant.atol", self.plant.atol)?;
+        positive("plant.state_bound", self.plant.state_bound)?;
+        if self.delta >= self.h {
+            return Err(format!(
+                "`delta` ({}) must be smaller than the sampling period `h` ({})",
+                self.delta, self.h
+            ));
+        }
+        if self.h > self.t_end {
+            return Err(format!(
+                "the sampling period `h` ({}) exceeds `t_end` ({})",
+                self.h, self.t_end
+            ));
+        }
+        let finite = |name: &str, v: &[f64]| {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(format!("`{name}` has a non-finite entry: {v:?}"))
+            }
+        };
+        finite("x0", &self.x0)?;
+        for (name, roots) in &self.w {
+            finite(&format!("w.{name}"), roots)?;
+        }
+        for (name, value) in self.plant.params.iter().chain(&self.controller.params) {
+            finite(name, &[*value])?;
+        }
+        if let Some(reference) = &self.reference {
+            for (name, terms) in reference {
+                if terms.iter().any(|t| !t.is_finite()) {
+                    return Err(format!("`reference.{name}` has a non-finite coefficient"));
+                }
+            }
+        }
+        if self.prefeedback && self.design.is_none() {
+            return Err(
+                "`prefeedback = true` needs a `[design]` table with the nominal motion".into(),
+            );
+        }
+        if let Some(design) = &self.design {
+            finite("design.nominal.state", &design.nominal.state)?;
+            if let Some(rate) = &design.nominal.rate {
+                finite("design.nominal.rate", rate)?;
+            }
+            if let Some(input) = &design.nominal.input {
+                finite("design.nominal.input", input)?;
+            }
+            for p in design.poles.iter().flatten() {
+                let c = p.complex();
+                if !(c.re.is_finite() && c.im.is_finite()) {
+                    return Err(format!("`design.poles` has a non-finite pole {c}"));
+                }
+            }
+        }
+        for set in &self.compare {
+            for item in set.split(';') {
+                split_assignment(item).map_err(|e| e.to_string())?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The comparison runs listed in `compare`, each with its overrides.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Override`] for a malformed entry.
+    pub fn comparisons(&self) -> Result<Vec<Overrides>, ScenarioError> {
+        self.compare
+            .iter()
+            .map(|set| Overrides::parse(set.split(';')))
+            .collect()
+    }
+}
+
+/// Set `key` (a dotted path) in `table`, creating tables on the way.
+fn set_path(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), ScenarioError> {
+    let mut parts: Vec<&str> = key.split('.').collect();
+    let last = parts.pop().unwrap_or(key);
+    let mut current = table;
+    for part in parts {
+        let entry = current
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        current = match entry {
+            toml::Value::Table(t) => t,
+            _ => {
+                return Err(ScenarioError::Override(format!(
+                    "cannot set `{key}`: `{part}` is not a table"
+                )))
+            }
+        };
+    }
+    current.insert(last.to_string(), value);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+model = "wheel"
+x0 = [1.5, 0.0, 0.0, 0.0, -6.0]
+h = 0.05
+t_end = 1.0
+"#;
+
+    #[test]
+    fn defaults_fill_the_optional_keys() {
+        let s = Scenario::parse("s.toml", MINIMAL, &Overrides::default()).unwrap();
+        assert_eq!(s.delta, 1e-3);
+        assert_eq!(s.extraction, Extraction::Extrapolated);
+        assert_eq!(s.hold, Hold::Input);
+        assert!(!s.prefeedback);
+        assert!(s.reference.is_none());
+        assert_eq!(s.plant, PlantOptions::default());
+    }
+
+    #[test]
+    fn overrides_reach_nested_keys_and_parse_values() {
+        let o = Overrides::parse([
+            "h=0.1",
+            "hold=correction",
+            "plant.params.m=1.25",
+            "extraction = first-usable",
+        ])
+        .unwrap();
+        let s = Scenario::parse("s.toml", MINIMAL, &o).unwrap();
+        assert_eq!(s.h, 0.1);
+        assert_eq!(s.hold, Hold::Correction);
+        assert_eq!(s.extraction, Extraction::FirstUsable);
+        assert_eq!(s.plant.params["m"], 1.25);
+        assert_eq!(
+            o.label(),
+            "h=0.1,hold=correction,plant.params.m=1.25,extraction=first-usable"
+        );
+    }
+
+    #[test]
+    fn errors_are_one_line_and_name_the_file_and_line() {
+        let text = format!("{MINIMAL}hh = 2\n");
+        let e = Scenario::parse("s.toml", &text, &Overrides::default())
+            .unwrap_err()
+            .to_string();
+        assert!(!e.contains('\n'), "{e}");
+        assert!(e.starts_with("s.toml:6:"), "{e}");
+        assert!(e.contains("unknown field `hh`"), "{e}");
+
+        let e = Scenario::parse("s.toml", MINIMAL, &Overrides::parse(["h=-1"]).unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`h` must be a positive number"), "{e}");
+
+        let e = Overrides::parse(["h"]).unwrap_err().to_string();
+        assert!(e.contains("key=value"), "{e}");
+
+        let e = Scenario::parse(
+            "s.toml",
+            MINIMAL,
+            &Overrides::parse(["prefeedback=true"]).unwrap(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("[design]"), "{e}");
+
+        let e = Scenario::parse("s.toml", MINIMAL, &Overrides::parse(["x0.a=1"]).unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a table"), "{e}");
+    }
+
+    #[test]
+    fn reference_terms_sum() {
+        let text = format!(
+            "{MINIMAL}[reference]\ntheta = [{{ constant = 1.0 }}, {{ sine = {{ amplitude = 0.5, omega = 2.0 }} }}]\npsi = [{{ polynomial = [0.0, -6.0] }}, {{ atan-integral = {{ scale = -0.5 }} }}]\n"
+        );
+        let s = Scenario::parse("s.toml", &text, &Overrides::default()).unwrap();
+        let r = s.reference.unwrap();
+        let theta = scalar_reference(&r["theta"]);
+        let t = 0.3_f64;
+        assert!((theta.derivative(t, 0) - (1.0 + 0.5 * (2.0 * t).sin())).abs() < 1e-15);
+        assert!((theta.derivative(t, 1) - (2.0 * t).cos()).abs() < 1e-15);
+        let psi = scalar_reference(&r["psi"]);
+        assert!((psi.derivative(t, 1) - (-6.0 - 0.5 * t.atan())).abs() < 1e-15);
+    }
+}

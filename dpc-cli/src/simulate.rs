@@ -1,0 +1,140 @@
+//! `dpc simulate SCENARIO.toml --out DIR` and `dpc sweep SCENARIO.toml --set k=v1,v2 --out DIR`.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+use clap::Args;
+use dpc_cli::plot::closed_loop_figure;
+use dpc_cli::report::{write_run, Summary};
+use dpc_cli::run::{run, RunResult};
+use dpc_cli::scenario::{Overrides, Scenario};
+use dpc_cli::sweep::{self, Axis};
+
+/// Arguments of `dpc simulate`.
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// The scenario file (see scenarios/ for examples).
+    pub scenario: PathBuf,
+    /// Output directory (created if needed).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Override a scenario key, e.g. --set h=0.1 --set plant.params.m=1.2 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// Arguments of `dpc sweep`.
+#[derive(Args)]
+pub struct SweepArgs {
+    /// The scenario file.
+    pub scenario: PathBuf,
+    /// A swept key and its values, e.g. --set h=0.01,0.05,0.1 (repeatable: all combinations).
+    #[arg(long = "set", value_name = "KEY=V1,V2,...", required = true)]
+    pub set: Vec<String>,
+    /// Output directory (created if needed).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+fn describe(summary: &Summary) -> String {
+    let verdict = match (summary.t_diverged, &summary.divergence_cause) {
+        (Some(t), Some(cause)) => format!("DIVERGED at t = {t:.4}: {cause}"),
+        _ => "no divergence".to_string(),
+    };
+    let errors: Vec<String> = summary
+        .max_abs_error
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.3e}"))
+        .collect();
+    format!(
+        "{}: {verdict}; max |error| over the last quarter: {}; {} samples, {} Newton iterations, {} retries, {:.2} s",
+        summary.label,
+        errors.join(", "),
+        summary.samples,
+        summary.newton_iterations,
+        summary.retries,
+        summary.wall_time_s
+    )
+}
+
+/// Run `dpc simulate`.
+pub fn simulate(args: &SimulateArgs) -> Result<(), String> {
+    let overrides =
+        Overrides::parse(args.set.iter().map(String::as_str)).map_err(|e| e.to_string())?;
+    let scenario = Scenario::load(&args.scenario, &overrides).map_err(|e| e.to_string())?;
+    let comparisons = scenario.comparisons().map_err(|e| e.to_string())?;
+    let mut runs: Vec<RunResult> = Vec::new();
+    let main_label = if overrides.0.is_empty() {
+        "scenario".to_string()
+    } else {
+        overrides.label()
+    };
+    runs.push(run(&scenario, &main_label).map_err(|e| e.to_string())?);
+    let summary = write_run(&args.out, &runs[0]).map_err(|e| e.to_string())?;
+    if let Some(d) = &summary.linear_design {
+        println!(
+            "linear analysis of the controller's model: DPC alone predicted {}; eig(Abar_4) = [{}]",
+            if d.dpc_stable_without_prefeedback {
+                "stable"
+            } else {
+                "UNSTABLE"
+            },
+            d.abar4_eigenvalues
+                .iter()
+                .map(|[re, im]| format!("{re:.4}{im:+.4}i"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    println!("{}", describe(&summary));
+    for extra in comparisons {
+        let mut all = overrides.clone();
+        all.0.extend(extra.0.iter().cloned());
+        let s = Scenario::load(&args.scenario, &all).map_err(|e| e.to_string())?;
+        let r = run(&s, &extra.label()).map_err(|e| e.to_string())?;
+        let dir = args.out.join("compare").join(extra.label());
+        let summary = write_run(&dir, &r).map_err(|e| e.to_string())?;
+        println!("{}", describe(&summary));
+        runs.push(r);
+    }
+    let refs: Vec<&RunResult> = runs.iter().collect();
+    let [svg, png] =
+        closed_loop_figure(&args.out.join("closed-loop"), &refs).map_err(|e| e.to_string())?;
+    println!(
+        "wrote {}, {}, {} and {}",
+        args.out.join("summary.json").display(),
+        args.out.join("trajectory.csv").display(),
+        svg.display(),
+        png.display()
+    );
+    Ok(())
+}
+
+/// Run `dpc sweep`.
+pub fn sweep(args: &SweepArgs) -> Result<(), String> {
+    let axes = args
+        .set
+        .iter()
+        .map(|s| Axis::parse(s))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| e.to_string())?;
+    let rows = sweep::sweep(
+        &args.scenario,
+        &axes,
+        &args.out,
+        std::io::stderr().is_terminal(),
+    )
+    .map_err(|e| e.to_string())?;
+    for row in &rows {
+        match &row.outcome {
+            Ok(s) => println!("{}", describe(s)),
+            Err(e) => println!("{}: error: {e}", row.overrides.label()),
+        }
+    }
+    println!(
+        "wrote {} and {}",
+        args.out.join("summary.csv").display(),
+        args.out.join("sweep.svg").display()
+    );
+    Ok(())
+}
