@@ -82,6 +82,9 @@ pub enum LinearError {
         /// What is wrong.
         reason: String,
     },
+    /// An argument is out of range (a non-positive sampling period, tolerance or count).
+    #[error("invalid argument: {0}")]
+    InvalidOption(String),
     /// An iterative decomposition (SVD, Schur) did not converge.
     #[error("{what} did not converge")]
     NoConvergence {

@@ -11,6 +11,7 @@
 //! * [`zeros`]: transmission zeros;
 //! * [`place`]: multi-input pole placement (Luenberger controller form);
 //! * [`transfer`]: `H(s)`, `R_xi(s)`, the check of Theorem 3.3;
+//! * [`sampled`]: the limit law held by a zero-order hold: stability against the period `h`;
 //! * [`analysis`]: the report and the whole pipeline.
 //!
 //! ```
@@ -37,6 +38,7 @@ pub mod compress;
 mod error;
 pub mod pencil;
 pub mod place;
+pub mod sampled;
 pub mod serial;
 pub mod subspace;
 pub mod system;
