@@ -54,6 +54,22 @@ pub trait Reference {
     fn derivatives(&self, t: f64, order: usize, out: &mut [f64]) -> Result<(), ReferenceError>;
 }
 
+/// A shared reference is a reference: the controller and a preliminary feedback taken about
+/// the reference ([`crate::dpc::ReferenceNominal`]) can follow the same one.
+impl<R: Reference + ?Sized> Reference for std::sync::Arc<R> {
+    fn dimension(&self) -> usize {
+        (**self).dimension()
+    }
+
+    fn max_order(&self) -> usize {
+        (**self).max_order()
+    }
+
+    fn derivatives(&self, t: f64, order: usize, out: &mut [f64]) -> Result<(), ReferenceError> {
+        (**self).derivatives(t, order, out)
+    }
+}
+
 /// A scalar reference with exact derivatives of every order.
 pub trait ScalarReference {
     /// `d^k xi / dt^k` at `t`.
