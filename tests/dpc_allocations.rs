@@ -4,9 +4,12 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use dpc::core::dpc::{Dpc, DpcOptions, Extraction};
+use std::sync::Arc;
+
+use dpc::core::dpc::{Dpc, DpcOptions, Extraction, ReferenceNominal, ReferenceState};
 use dpc::core::linalg::NalgebraLu;
-use dpc_models::{WheelReference, WheelTracking};
+use dpc_models::wheel_design::{self, UprightRolling};
+use dpc_models::{Wheel, WheelReference, WheelTracking};
 
 struct Counting;
 
@@ -29,12 +32,32 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// How the controller of a test is set up.
+#[derive(Debug, Clone, Copy)]
+enum Feedback {
+    /// Plain DPC.
+    None,
+    /// The paper's preliminary feedback about the nominal motion.
+    AboutNominal,
+    /// The same `K_n` about the reference (shared with the controller through an `Arc`).
+    AboutReference,
+}
+
 #[test]
 fn wheel_control_updates_do_not_allocate() {
-    for extraction in [Extraction::FirstUsable, Extraction::Extrapolated] {
+    let feedbacks = [
+        Feedback::None,
+        Feedback::AboutNominal,
+        Feedback::AboutReference,
+    ];
+    for (feedback, extraction) in feedbacks
+        .into_iter()
+        .flat_map(|f| [(f, Extraction::FirstUsable), (f, Extraction::Extrapolated)])
+    {
+        let reference = Arc::new(WheelReference::default());
         let mut dpc = Dpc::new(
             WheelTracking::default(),
-            WheelReference::default(),
+            reference.clone(),
             NalgebraLu::<7>::new(),
             DpcOptions {
                 extraction,
@@ -42,6 +65,33 @@ fn wheel_control_updates_do_not_allocate() {
             },
         )
         .expect("controller");
+        let mut law = wheel_design::prefeedback(&Wheel::default()).expect("design");
+        match feedback {
+            Feedback::None => {}
+            Feedback::AboutNominal => dpc = dpc.with_prefeedback(law).expect("prefeedback"),
+            Feedback::AboutReference => {
+                let follow = |state, output, order| ReferenceState {
+                    state,
+                    output,
+                    order,
+                };
+                law.nominal = Box::new(
+                    ReferenceNominal::new(
+                        UprightRolling,
+                        reference,
+                        5,
+                        vec![
+                            follow(0, 0, 0),
+                            follow(1, 1, 0),
+                            follow(3, 0, 1),
+                            follow(4, 1, 1),
+                        ],
+                    )
+                    .expect("map"),
+                );
+                dpc = dpc.with_prefeedback(law).expect("prefeedback");
+            }
+        }
         let mut u = [0.0; 2];
         let mut x = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, -6.0];
         // The first update warms up; every later one must not allocate.
@@ -54,7 +104,11 @@ fn wheel_control_updates_do_not_allocate() {
             dpc.control(t, &x, &mut u).expect("update");
         }
         let after = ALLOCATIONS.load(Ordering::SeqCst);
-        assert_eq!(after - before, 0, "allocations during 49 control updates");
+        assert_eq!(
+            after - before,
+            0,
+            "allocations during 49 control updates ({feedback:?}, {extraction:?})"
+        );
         assert!(u.iter().all(|v| v.is_finite()));
     }
 }

@@ -15,48 +15,15 @@ use dpc::core::dpc::{
 };
 use dpc::core::linalg::NalgebraLu;
 use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
-use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearSystem};
-use dpc::core::linearize::{linearize, OperatingPoint};
+use dpc::core::linear::{Analysis, LinearSystem};
 use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions, Hold};
-use dpc::nalgebra::Complex;
+use dpc_models::wheel_design::{self, UprightRolling};
 use dpc_models::{Wheel, WheelReference, WheelTracking};
 use std::f64::consts::FRAC_PI_2;
 
-/// The nominal motion `x0(t) = [pi/2, -6t, 0, 0, -6]`, `u0 = 0`.
-struct Upright;
-
-impl Nominal for Upright {
-    fn state(&self, t: f64, x0: &mut [f64]) {
-        x0.copy_from_slice(&[FRAC_PI_2, -6.0 * t, 0.0, 0.0, -6.0]);
-    }
-    fn input(&self, _t: f64, u0: &mut [f64]) {
-        u0.fill(0.0);
-    }
-}
-
-/// The linearisation about the nominal motion and its analysis with `W = s + 5` and the
-/// poles of `Abar_4 + Bbar_2 K_2` at -5.
+/// The paper's linearisation and analysis (`dpc_models::wheel_design`).
 fn linear_design() -> (LinearSystem, Analysis) {
-    let sys = linearize(
-        &Wheel::default(),
-        OperatingPoint {
-            t: 0.0,
-            x: &[FRAC_PI_2, 0.0, 0.0, 0.0, -6.0],
-            xdot: &[0.0, -6.0, 0.0, 0.0, 0.0],
-            z: &[],
-            u: &[0.0, 0.0],
-        },
-    )
-    .expect("linearisation");
-    let analysis = analyze(
-        &sys,
-        &AnalysisOptions {
-            w: Some(vec![vec![5.0], vec![5.0]]),
-            poles: Some(vec![Complex::new(-5.0, 0.0); 3]),
-            ..AnalysisOptions::default()
-        },
-    )
-    .expect("analysis");
+    let (sys, analysis) = wheel_design::design(&Wheel::default()).expect("design");
     assert!(
         !analysis.dpc_stable,
         "the linear analysis predicts DPC alone unstable"
@@ -75,7 +42,7 @@ enum About {
 
 fn prefeedback(about: About) -> Prefeedback {
     let nominal: Box<dyn Nominal + Send + Sync> = match about {
-        About::Nominal => Box::new(Upright),
+        About::Nominal => Box::new(UprightRolling),
         About::Reference => {
             let follow = |state, output, order| ReferenceState {
                 state,
@@ -84,7 +51,7 @@ fn prefeedback(about: About) -> Prefeedback {
             };
             Box::new(
                 ReferenceNominal::new(
-                    Upright,
+                    UprightRolling,
                     WheelReference::default(),
                     5,
                     vec![

@@ -7,6 +7,9 @@
 //! * [`FlexibleJoint`]: a flexible-joint robot arm of relative degree 4, with two
 //!   stabilised Hirschorn steps in [`FlexibleJointTracking`].
 //!
+//! [`wheel_design`] holds the paper's nominal motion, linear analysis and preliminary feedback
+//! for the wheel.
+//!
 //! [`registry`] finds the tracked models by name for programs that pick a plant at run time.
 //!
 //! The source files are also read by the snapshot tests of `dpc-codegen`, which store the
@@ -16,6 +19,7 @@ mod flexible_joint;
 mod pendulum;
 pub mod registry;
 mod wheel;
+pub mod wheel_design;
 
 pub use flexible_joint::{
     FlexibleJoint, FlexibleJointParams, FlexibleJointReference, FlexibleJointTracking,
