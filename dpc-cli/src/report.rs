@@ -43,6 +43,10 @@ pub struct Summary {
     pub retried_samples: usize,
     /// Samples on which the controller failed (the previous control was held).
     pub failed_samples: usize,
+    /// The largest round-off level `eps * delta^-nu` of a control update over the run: the
+    /// relative rounding error of the extracted control, which grows as `delta` shrinks
+    /// while the truncation error falls; compare it with the accuracy wanted.
+    pub roundoff_level: f64,
     /// Wall-clock time of the simulation [s].
     pub wall_time_s: f64,
     /// The linear analysis of the controller's model, when the scenario has a `[design]`.
@@ -87,6 +91,7 @@ impl Summary {
             retries: cl.retries,
             retried_samples: cl.retried_samples,
             failed_samples: cl.failed_samples,
+            roundoff_level: cl.max_roundoff,
             wall_time_s: run.wall_time,
             linear_design: run.design.clone(),
             scenario: run.scenario.clone(),

@@ -141,6 +141,11 @@ pub struct UpdateReport {
     pub delta: f64,
     /// Largest scaled residual accepted over the inner steps.
     pub residual: f64,
+    /// The relative round-off level of the extracted control, `eps * delta^-nu` with the
+    /// `delta` that succeeded: the inconsistent start amplifies rounding errors by
+    /// `delta^-nu`, while the truncation error falls like `delta` (first usable) or
+    /// `delta^2` (extrapolated). A value near the accuracy wanted means `delta` is too small.
+    pub roundoff: f64,
 }
 
 /// Outcome of one inner integration.
@@ -581,6 +586,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                     report.retries = attempt;
                     report.delta = delta;
                     report.residual = residual;
+                    report.roundoff = roundoff_level(delta, self.nu);
                     self.have_warm = true;
                     match self.opts.extraction {
                         Extraction::FirstUsable => u.copy_from_slice(&self.u_first),
@@ -713,6 +719,12 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     }
 }
 
+/// `eps * delta^-nu`, the relative size of rounding errors in a control extracted after `nu`
+/// inconsistent implicit-Euler steps of size `delta`.
+pub fn roundoff_level(delta: f64, nu: usize) -> f64 {
+    f64::EPSILON * delta.powi(-i32::try_from(nu).unwrap_or(i32::MAX))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -742,6 +754,13 @@ mod tests {
             ],
         )
         .unwrap()
+    }
+
+    #[test]
+    fn roundoff_grows_like_delta_to_the_minus_nu() {
+        assert_eq!(roundoff_level(1e-3, 0), f64::EPSILON);
+        let r = roundoff_level(1e-3, 2) / f64::EPSILON;
+        assert!((r - 1e6).abs() < 1e-6, "{r}");
     }
 
     #[test]

@@ -135,6 +135,9 @@ pub struct ClosedLoop {
     pub retries: usize,
     /// Samples on which the controller failed (the previous control was held).
     pub failed_samples: usize,
+    /// The largest round-off level `eps * delta^-nu` of an update over the run (see
+    /// [`crate::dpc::UpdateReport::roundoff`]).
+    pub max_roundoff: f64,
 }
 
 /// The plant with its inputs given by the hold: constant `u`, or the preliminary feedback
@@ -323,6 +326,7 @@ where
         retried_samples: 0,
         retries: 0,
         failed_samples: 0,
+        max_roundoff: 0.0,
     };
     let mut y = vec![0.0; nx + nz];
     y[..nx].copy_from_slice(x0);
@@ -356,6 +360,7 @@ where
             Ok(report) => {
                 consecutive_failures = 0;
                 result.newton_iterations += report.newton_iterations;
+                result.max_roundoff = result.max_roundoff.max(report.roundoff);
                 if report.retries > 0 {
                     result.retried_samples += 1;
                     result.retries += report.retries;
