@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
 
+use dpc::core::simulate::ControllerEvent;
 use serde::Serialize;
 
 use crate::run::{DesignReport, RunResult};
@@ -43,6 +44,8 @@ pub struct Summary {
     pub retried_samples: usize,
     /// Samples on which the controller failed (the previous control was held).
     pub failed_samples: usize,
+    /// Every sample at which the controller retried with a larger `delta` or failed.
+    pub controller_events: Vec<ControllerEvent>,
     /// The largest round-off level `eps * delta^-nu` of a control update over the run: the
     /// relative rounding error of the extracted control, which grows as `delta` shrinks
     /// while the truncation error falls; compare it with the accuracy wanted.
@@ -89,8 +92,9 @@ impl Summary {
             samples: cl.samples.len(),
             newton_iterations: cl.newton_iterations,
             retries: cl.retries,
-            retried_samples: cl.retried_samples,
-            failed_samples: cl.failed_samples,
+            retried_samples: cl.retried_samples(),
+            failed_samples: cl.failed_samples(),
+            controller_events: cl.events.clone(),
             roundoff_level: cl.max_roundoff,
             wall_time_s: run.wall_time,
             linear_design: run.design.clone(),

@@ -120,6 +120,28 @@ pub struct Sample {
     pub error: Vec<f64>,
 }
 
+/// A sample at which the controller did not succeed at its first `delta`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(rename_all = "kebab-case", tag = "event")]
+pub enum ControllerEvent {
+    /// The inner integration failed and succeeded after `retries` retries with `delta`.
+    Retried {
+        /// Sample time.
+        t: f64,
+        /// Retries needed.
+        retries: usize,
+        /// The `delta` that succeeded.
+        delta: f64,
+    },
+    /// Every `delta` tried failed; the previous control was held.
+    Failed {
+        /// Sample time.
+        t: f64,
+        /// The controller's error.
+        message: String,
+    },
+}
+
 /// The result of a closed-loop run.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ClosedLoop {
@@ -129,15 +151,31 @@ pub struct ClosedLoop {
     pub divergence: Option<Divergence>,
     /// Newton iterations of the controller, over all samples.
     pub newton_iterations: usize,
-    /// Samples on which the controller retried with a larger `delta`.
-    pub retried_samples: usize,
-    /// Retries with a larger `delta`, over all samples.
+    /// Successful retries with a larger `delta`, over all samples.
     pub retries: usize,
-    /// Samples on which the controller failed (the previous control was held).
-    pub failed_samples: usize,
+    /// Every sample at which the controller retried or failed, in time order.
+    pub events: Vec<ControllerEvent>,
     /// The largest round-off level `eps * delta^-nu` of an update over the run (see
     /// [`crate::dpc::UpdateReport::roundoff`]).
     pub max_roundoff: f64,
+}
+
+impl ClosedLoop {
+    /// Samples on which the controller needed a larger `delta` and then succeeded.
+    pub fn retried_samples(&self) -> usize {
+        self.events
+            .iter()
+            .filter(|e| matches!(e, ControllerEvent::Retried { .. }))
+            .count()
+    }
+
+    /// Samples on which the controller failed (the previous control was held).
+    pub fn failed_samples(&self) -> usize {
+        self.events
+            .iter()
+            .filter(|e| matches!(e, ControllerEvent::Failed { .. }))
+            .count()
+    }
 }
 
 /// The plant with its inputs given by the hold: constant `u`, or the preliminary feedback
@@ -323,9 +361,8 @@ where
         samples: Vec::new(),
         divergence: None,
         newton_iterations: 0,
-        retried_samples: 0,
         retries: 0,
-        failed_samples: 0,
+        events: Vec::new(),
         max_roundoff: 0.0,
     };
     let mut y = vec![0.0; nx + nz];
@@ -362,12 +399,19 @@ where
                 result.newton_iterations += report.newton_iterations;
                 result.max_roundoff = result.max_roundoff.max(report.roundoff);
                 if report.retries > 0 {
-                    result.retried_samples += 1;
                     result.retries += report.retries;
+                    result.events.push(ControllerEvent::Retried {
+                        t,
+                        retries: report.retries,
+                        delta: report.delta,
+                    });
                 }
             }
             Err(err) => {
-                result.failed_samples += 1;
+                result.events.push(ControllerEvent::Failed {
+                    t,
+                    message: err.to_string(),
+                });
                 consecutive_failures += 1;
                 if consecutive_failures > opts.max_consecutive_failures
                     || !matches!(err, DpcError::NoSolution { .. } | DpcError::Singular { .. })
