@@ -268,11 +268,15 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
             &mut s.f_z,
             &mut s.f_u,
         );
-        // u depends on x through K_n: dF/dx gains dF/du K_n.
-        let j_x = &s.f_x + &s.f_xdot * c + &s.f_u * &pf.k_n;
+        // u depends on x through K_n: dF/dx gains dF/du K_n (summed in place: a Jacobian
+        // evaluation inside the integrator allocates nothing).
         for j in 0..nx {
             for i in 0..M::N_EQUATIONS {
-                out.set(i, j, j_x[(i, j)]);
+                let mut v = s.f_x[(i, j)] + c * s.f_xdot[(i, j)];
+                for k in 0..M::N_INPUTS {
+                    v += s.f_u[(i, k)] * pf.k_n[(k, j)];
+                }
+                out.set(i, j, v);
             }
         }
         for j in 0..M::N_ALGEBRAIC {
