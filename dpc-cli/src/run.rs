@@ -3,9 +3,12 @@
 
 use std::time::Instant;
 
-use dpc::core::dpc::{Dpc, DpcOptions, Nominal, Prefeedback};
+use std::sync::Arc;
+
+use dpc::core::dpc::{Dpc, DpcOptions, Nominal, Prefeedback, ReferenceNominal, ReferenceState};
 use dpc::core::linalg::LinearSolver;
-use dpc::core::linear::{analyze, AnalysisOptions};
+use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
+use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
 use dpc::core::linearize::{linearize, OperatingPoint};
 use dpc::core::model::DaeModel;
 use dpc::core::reference::{Components, Reference, ReferenceError};
@@ -15,7 +18,7 @@ use dpc::nalgebra::DMatrix;
 use dpc_models::registry::{self, Tracked, VisitTracked};
 use serde::Serialize;
 
-use crate::scenario::{scalar_reference, NominalMotion, Scenario};
+use crate::scenario::{scalar_reference, About, NominalMotion, Scenario};
 use crate::ScenarioError;
 
 /// Names of the model's variables, in order.
@@ -40,6 +43,19 @@ pub struct DesignReport {
     pub dpc_stable_with_prefeedback: Option<bool>,
     /// `K_n`, row by row (inputs x states), when built.
     pub k_n: Option<Vec<Vec<f64>>>,
+    /// The linear sampled-data prediction for the scenario's `h`, hold and feedback.
+    pub sampled: SampledPrediction,
+}
+
+/// DPC's limit law on the linearisation, held by the scenario's zero-order hold
+/// ([`dpc::core::linear::sampled`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SampledPrediction {
+    /// Spectral radius of the transition matrix over one period `h` (stable below 1).
+    pub spectral_radius: f64,
+    /// Where the predicted loop first loses stability as `h` grows (searched up to
+    /// `min(t_end, 100 h)`).
+    pub critical_period: CriticalPeriod,
 }
 
 /// The result of one run.
@@ -268,8 +284,92 @@ impl Runner<'_> {
             k_n: k_n
                 .as_ref()
                 .map(|k| k.row_iter().map(|r| r.iter().copied().collect()).collect()),
+            sampled: self.sampled_prediction(&sys, &analysis)?,
         };
         Ok((report, k_n))
+    }
+}
+
+impl Runner<'_> {
+    /// The sampled-data prediction of the linearised loop for this scenario: with the
+    /// preliminary feedback only when the scenario applies it.
+    fn sampled_prediction(
+        &self,
+        sys: &LinearSystem,
+        analysis: &Analysis,
+    ) -> Result<SampledPrediction, ScenarioError> {
+        let s = self.scenario;
+        let failed = |e: LinearError| ScenarioError::Setup(format!("sampled-data prediction: {e}"));
+        let sampled = if s.prefeedback {
+            SampledLoop::from_analysis(sys, analysis, s.hold)
+        } else {
+            SampledLoop::new(&sys.a, &sys.b, None, &analysis.k_j, s.hold)
+        }
+        .map_err(failed)?;
+        Ok(SampledPrediction {
+            spectral_radius: sampled.spectral_radius(s.h).map_err(failed)?,
+            critical_period: sampled
+                .critical_period(s.t_end.min(100.0 * s.h), 500, 1e-4)
+                .map_err(failed)?,
+        })
+    }
+
+    /// The nominal of the preliminary feedback: the designed motion, or, about the
+    /// reference, that motion with the mapped states following the reference.
+    fn feedback_nominal<P: DaeModel>(
+        &self,
+        motion: SteadyMotion,
+        reference: Arc<ScenarioReference>,
+    ) -> Result<Box<dyn Nominal + Send + Sync>, ScenarioError> {
+        let Some(design) = &self.scenario.design else {
+            return Ok(Box::new(motion));
+        };
+        if design.about == About::Nominal {
+            return Ok(Box::new(motion));
+        }
+        let (states, outputs) = (P::STATE_NAMES, P::OUTPUT_NAMES);
+        let map = match &design.reference_state {
+            Some(entries) => entries
+                .iter()
+                .map(|(state, target)| {
+                    let state_index = states.iter().position(|s| s == state).ok_or_else(|| {
+                        self.invalid(format!(
+                            "`design.reference_state.{state}`: model `{}` has no state `{state}`; its states are {}",
+                            self.scenario.model,
+                            states.join(", ")
+                        ))
+                    })?;
+                    let name = target.trim_end_matches('\'');
+                    let order = target.len() - name.len();
+                    let output = self.output_index("design.reference_state", name, outputs)?;
+                    Ok(ReferenceState {
+                        state: state_index,
+                        output,
+                        order,
+                    })
+                })
+                .collect::<Result<Vec<_>, ScenarioError>>()?,
+            None => outputs
+                .iter()
+                .enumerate()
+                .filter_map(|(output, name)| {
+                    states.iter().position(|s| s == name).map(|state| ReferenceState {
+                        state,
+                        output,
+                        order: 0,
+                    })
+                })
+                .collect(),
+        };
+        if map.is_empty() {
+            return Err(self.invalid(format!(
+                "`design.about = \"reference\"` needs `design.reference_state`: no output of model `{}` is a state",
+                self.scenario.model
+            )));
+        }
+        let nominal = ReferenceNominal::new(motion, reference, P::N_STATES, map)
+            .map_err(|e| self.invalid(format!("`design.reference_state`: {e}")))?;
+        Ok(Box::new(nominal))
     }
 }
 
@@ -309,7 +409,7 @@ impl VisitTracked for Runner<'_> {
                 )));
             }
         }
-        let reference = self.reference(model.reference, outputs)?;
+        let reference = Arc::new(self.reference(model.reference, outputs)?);
         let plant = model.plant;
         let controller_model = plant.clone();
 
@@ -322,7 +422,7 @@ impl VisitTracked for Runner<'_> {
         }
         let mut dpc = Dpc::new(
             model.tracking,
-            reference,
+            reference.clone(),
             model.solver,
             DpcOptions {
                 delta: s.delta,
@@ -340,20 +440,21 @@ impl VisitTracked for Runner<'_> {
                 ScenarioError::Setup("the linear analysis built no K_n".to_string())
             })?;
             let nominal = &design.nominal;
+            let motion = SteadyMotion {
+                state: nominal.state.clone(),
+                rate: nominal
+                    .rate
+                    .clone()
+                    .unwrap_or_else(|| vec![0.0; P::N_STATES]),
+                input: nominal
+                    .input
+                    .clone()
+                    .unwrap_or_else(|| vec![0.0; P::N_INPUTS]),
+            };
             dpc = dpc
                 .with_prefeedback(Prefeedback {
                     k_n,
-                    nominal: Box::new(SteadyMotion {
-                        state: nominal.state.clone(),
-                        rate: nominal
-                            .rate
-                            .clone()
-                            .unwrap_or_else(|| vec![0.0; P::N_STATES]),
-                        input: nominal
-                            .input
-                            .clone()
-                            .unwrap_or_else(|| vec![0.0; P::N_INPUTS]),
-                    }),
+                    nominal: self.feedback_nominal::<P>(motion, reference)?,
                 })
                 .map_err(|e| ScenarioError::Setup(format!("preliminary feedback: {e}")))?;
         }

@@ -18,6 +18,8 @@
 //! [design]                        # how K_n is built (needed when prefeedback = true)
 //! poles = [-5.0, -5.0, -5.0]      # of Abar_4 + Bbar_2 K_2; a real or [re, im] each
 //! nominal = { state = [1.5707963267948966, 0.0, 0.0, 0.0, -6.0], rate = [0.0, -6.0, 0.0, 0.0, 0.0], input = [0.0, 0.0] }
+//! about = "reference"             # or "nominal" (default): where x - x0(t) is taken
+//! reference_state = { theta = "theta", psi = "psi", dtheta = "theta'", dpsi = "psi'" }
 //! ```
 //!
 //! Every key is documented on [`Scenario`]; unknown keys are errors. The reference defaults to
@@ -190,6 +192,25 @@ pub struct Design {
     pub poles: Option<Vec<Pole>>,
     /// The nominal motion `x0(t) = state + t * rate`, `u0 = input`.
     pub nominal: NominalMotion,
+    /// Where the deviation coordinates `x - x0(t)` of the feedback are taken.
+    #[serde(default)]
+    pub about: About,
+    /// Used with `about = "reference"` (ignored otherwise): per state name, the output whose reference it follows,
+    /// with one `'` per derivative (`dtheta = "theta'"`). Absent: every output that is also
+    /// a state follows its own reference.
+    #[serde(default)]
+    pub reference_state: Option<BTreeMap<String, String>>,
+}
+
+/// Where the preliminary feedback `u = u0 + K_n (x - x0(t)) + v` takes its deviation.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum About {
+    /// `x0(t)` is the nominal motion the feedback was designed on (the paper's choice).
+    #[default]
+    Nominal,
+    /// The states listed in `reference_state` follow the reference and its derivatives.
+    Reference,
 }
 
 /// A steady nominal motion `x0(t) = state + t * rate` with constant input `u0`.

@@ -4,6 +4,7 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use clap::Args;
+use dpc::core::linear::sampled::CriticalPeriod;
 use dpc_cli::plot::closed_loop_figure;
 use dpc_cli::report::{write_run, Summary};
 use dpc_cli::run::{run, RunResult};
@@ -84,6 +85,17 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), String> {
                 .map(|[re, im]| format!("{re:.4}{im:+.4}i"))
                 .collect::<Vec<_>>()
                 .join(", ")
+        );
+    }
+    if let Some(d) = &summary.linear_design {
+        let critical = match d.sampled.critical_period {
+            CriticalPeriod::At(h) => format!("loses stability at h = {h:.4}"),
+            CriticalPeriod::StableUpTo(h) => format!("stable for every h up to {h}"),
+            CriticalPeriod::UnstableAtAnyPeriod => "unstable at every period".to_string(),
+        };
+        println!(
+            "linear sampled-data prediction ({:?} hold): spectral radius {:.4} at h = {}, {critical}",
+            summary.scenario.hold, d.sampled.spectral_radius, summary.scenario.h
         );
     }
     println!("{}", describe(&summary));

@@ -1,0 +1,224 @@
+//! End-to-end tests of `dpc simulate` and `dpc sweep` on the scenario files of the
+//! repository: what they write, the linear verdict they report, and one clear error line
+//! (never a panic) for a bad scenario.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn scenarios() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("scenarios")
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir()
+        .join(format!("dpc-cli-scenarios-{}", std::process::id()))
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn dpc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dpc"))
+        .args(args)
+        .output()
+        .expect("dpc runs")
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("valid JSON")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn the_wheel_scenario_writes_summary_trajectory_and_plots() {
+    let out = out_dir("wheel");
+    let file = scenarios().join("wheel.toml");
+    let o = dpc(&[
+        "simulate",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "t_end=2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["diverged"], false);
+    assert_eq!(s["samples"], 41);
+    let design = &s["linear_design"];
+    assert_eq!(design["dpc_stable_without_prefeedback"], false);
+    assert_eq!(design["dpc_stable_with_prefeedback"], true);
+    let h_star = design["sampled"]["critical_period"]["at"].as_f64().unwrap();
+    assert!((h_star - 0.1333).abs() < 1e-3, "{h_star}");
+    for key in ["final_error", "max_abs_error"] {
+        assert!(
+            s[key]["theta"].is_number() && s[key]["psi"].is_number(),
+            "{key}"
+        );
+    }
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    assert_eq!(
+        header,
+        "t,theta,psi,dphi,dtheta,dpsi,u1,u2,ref_theta,ref_psi,err_theta,err_psi"
+    );
+    assert_eq!(csv.lines().count(), 42);
+    for f in ["closed-loop.svg", "closed-loop.png"] {
+        assert!(std::fs::metadata(out.join(f)).unwrap().len() > 1000, "{f}");
+    }
+    // The comparison run without preliminary feedback has its own summary.
+    let compare = summary(&out.join("compare").join("prefeedback=false"));
+    assert_eq!(
+        compare["linear_design"]["sampled"]["critical_period"],
+        "unstable-at-any-period"
+    );
+}
+
+#[test]
+fn the_correction_hold_about_the_reference_is_far_more_accurate_than_about_the_nominal() {
+    let out = out_dir("hold-correction");
+    let file = scenarios().join("wheel-hold-correction.toml");
+    let o = dpc(&[
+        "simulate",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "t_end=8",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let psi = |s: &serde_json::Value| s["max_abs_error"]["psi"].as_f64().unwrap();
+    let about_reference = summary(&out);
+    let about_nominal = summary(&out.join("compare").join("design.about=nominal"));
+    assert!(
+        psi(&about_reference) < 0.01 * psi(&about_nominal),
+        "{} vs {}",
+        psi(&about_reference),
+        psi(&about_nominal)
+    );
+}
+
+#[test]
+fn a_sweep_writes_one_row_per_combination() {
+    let out = out_dir("sweep");
+    let file = scenarios().join("wheel.toml");
+    let o = dpc(&[
+        "sweep",
+        file.to_str().unwrap(),
+        "--set",
+        "h=0.05,0.2",
+        "--set",
+        "prefeedback=true,false",
+        "--set",
+        "t_end=3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    let rows: Vec<&str> = table.lines().collect();
+    assert_eq!(rows.len(), 5, "{table}");
+    assert!(rows[0].starts_with("h,prefeedback,t_end,status,t_diverged"));
+    // h = 0.05 with the feedback tracks; h = 0.2 (beyond the predicted 0.133) diverges.
+    assert!(rows[1].starts_with("0.05,true,3,ok,"), "{}", rows[1]);
+    assert!(rows[3].starts_with("0.2,true,3,diverged,"), "{}", rows[3]);
+    for f in ["sweep.svg", "sweep.png"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+}
+
+#[test]
+fn bad_scenarios_give_one_error_line() {
+    let dir = out_dir("bad");
+    std::fs::create_dir_all(&dir).unwrap();
+    let wheel = std::fs::read_to_string(scenarios().join("wheel.toml")).unwrap();
+    let cases: Vec<(&str, String, Vec<&str>, &str)> = vec![
+        (
+            "model.toml",
+            wheel.replace("model = \"wheel\"", "model = \"bicycle\""),
+            vec![],
+            "unknown model `bicycle`; the known models are: wheel",
+        ),
+        (
+            "syntax.toml",
+            "model = \"wheel\nh = 1\n".into(),
+            vec![],
+            "syntax.toml:1:",
+        ),
+        (
+            "key.toml",
+            format!("colour = \"red\"\n{wheel}"),
+            vec![],
+            "unknown field `colour`",
+        ),
+        (
+            "x0.toml",
+            wheel.clone(),
+            vec!["--set", "x0=[1.0, 2.0]"],
+            "`x0` has 2 entries, but model `wheel` has 5",
+        ),
+        (
+            "delta.toml",
+            wheel.clone(),
+            vec!["--set", "delta=0.1"],
+            "must be smaller than the sampling period",
+        ),
+        (
+            "state.toml",
+            wheel.clone(),
+            vec![
+                "--set",
+                "design.about=reference",
+                "--set",
+                "design.reference_state.spin=\"theta\"",
+            ],
+            "model `wheel` has no state `spin`",
+        ),
+        (
+            "output.toml",
+            wheel.clone(),
+            vec![
+                "--set",
+                "design.about=reference",
+                "--set",
+                "design.reference_state.dtheta=\"phi'\"",
+            ],
+            "has no output `phi`",
+        ),
+    ];
+    for (name, text, extra, expected) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let mut args = vec![
+            "simulate",
+            path.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let o = dpc(&args);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{name} should fail");
+        assert_eq!(err.lines().count(), 1, "{name}: {err}");
+        assert!(err.starts_with("error: "), "{name}: {err}");
+        assert!(err.contains(expected), "{name}: {err}");
+    }
+    let o = dpc(&[
+        "simulate",
+        "no/such/file.toml",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(
+        err.starts_with("error: cannot read no/such/file.toml"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+}
