@@ -3,7 +3,7 @@
 //! of the flexible-joint arm integrated from hand-written equations, differentiated in time
 //! by high-order finite differences.
 
-use dpc::core::model::DaeModel;
+use dpc::core::model::{parameter_by_name, set_parameter_by_name, DaeModel};
 use dpc::core::reference::{AtanIntegral, ScalarReference, Sinusoid};
 use dpc::core::{Reference, TrackingDae};
 use dpc::nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
@@ -273,4 +273,73 @@ fn tracking_matrix_types_are_fixed_size() {
     );
     // The iteration matrix of the tracking DAE is regular at the nominal point.
     assert!(g.determinant().abs() > 1e-8);
+}
+
+// Parameters set at run time, by name.
+
+dpc::model! {
+    /// A cart on a hardening spring; W = (s + 5)(s + 1) on a nonlinear position output.
+    pub CartA {
+        params { m = 2.0, k = 3.0, c = 0.4 }
+        states { x, v }
+        inputs { f }
+        equations {
+            der(x) = v;
+            m * der(v) == -k * x - 0.5 * k * x.powi(3) - c * v + f;
+        }
+        outputs { p = x + 0.1 * x.powi(2) }
+        tracking CartATracking { p: [5.0, 1.0] }
+    }
+}
+
+#[test]
+fn parameters_set_by_name_change_the_residual_as_the_parameter_would() {
+    assert_eq!(CartA::PARAM_NAMES, &["m", "k", "c"]);
+    let mut params = CartAParams::default();
+    set_parameter_by_name::<CartA>(&mut params, "k", 7.5).unwrap();
+    assert_eq!(
+        params,
+        CartAParams {
+            k: 7.5,
+            ..CartAParams::default()
+        }
+    );
+    assert_eq!(parameter_by_name::<CartA>(&params, "k"), Ok(7.5));
+    assert_eq!(CartA::parameter(&params, 0), Some(2.0));
+    assert_eq!(CartA::parameter(&params, 3), None);
+    assert!(!CartA::set_parameter(&mut params, 3, 1.0));
+
+    let (x, xdot, u) = ([0.7, -0.3], [0.1, 0.4], [0.25]);
+    let mut r = [0.0; 2];
+    CartA::from_params(params).residual(0.0, &x, &xdot, &[], &u, &mut r);
+    // m v' + k x + k x^3 / 2 + c v - f with k = 7.5.
+    let k = 7.5;
+    let expected = 2.0 * 0.4 - (-k * 0.7 - 0.5 * k * 0.7_f64.powi(3) - 0.4 * -0.3 + 0.25);
+    assert!((r[1] - expected).abs() < 1e-14, "{r:?} vs {expected}");
+    let mut r0 = [0.0; 2];
+    CartA::default().residual(0.0, &x, &xdot, &[], &u, &mut r0);
+    assert!((r[1] - r0[1]).abs() > 1.0);
+
+    // The tracking DAE shares the parameters: the controller's model changes the same way.
+    let mut cp = CartATracking::default().params;
+    set_parameter_by_name::<CartATracking>(&mut cp, "m", 3.0).unwrap();
+    let controller = CartATracking::from_params(cp);
+    let mut g = [0.0; 3];
+    controller.residual(0.0, &x, &xdot, &u, &[0.0], &mut g);
+    let mut plant = [0.0; 2];
+    CartA::from_params(CartAParams {
+        m: 3.0,
+        ..CartAParams::default()
+    })
+    .residual(0.0, &x, &xdot, &[], &u, &mut plant);
+    assert_eq!(&g[..2], &plant);
+
+    let e = set_parameter_by_name::<CartA>(&mut params, "nope", 1.0).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "model `CartA` has no parameter `nope`; its parameters are m, k, c"
+    );
+    assert_eq!(params.k, 7.5, "unchanged after an error");
+    let e = parameter_by_name::<Wheel>(&Wheel::default().params, "mass").unwrap_err();
+    assert!(e.to_string().contains("m, r, i_r, i_n, g"), "{e}");
 }

@@ -5,7 +5,8 @@
 //! * `NameParams`, the parameter struct with `Default` from the declared defaults;
 //! * `Name`, the model type, with inherent fixed-size conveniences (nalgebra `SVector` /
 //!   `SMatrix`) and an implementation of `dpc::core::DaeModel` whose routines take slices
-//!   and write Jacobian entries into `MatrixSink`s.
+//!   and write Jacobian entries into `MatrixSink`s, and parameter access by index as
+//!   `match`es.
 //!
 //! Each routine is one straight-line block: every root it needs (residual rows and Jacobian
 //! entries) is scheduled together, so subexpressions are shared across the residual and all
@@ -662,6 +663,18 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
         h_x.pattern(),
     );
     let model_name = name.to_string();
+    let (param_get, param_set): (Vec<TokenStream>, Vec<TokenStream>) = model
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let n = &p.name;
+            (
+                quote!(#i => ::core::option::Option::Some(params.#n),),
+                quote!(#i => { params.#n = value; true }),
+            )
+        })
+        .unzip();
     let listing_text = ty.listing.clone();
     let listing_doc = doc_lines(&format!("```text\n{listing_text}```"));
     let na = quote!(::dpc::nalgebra);
@@ -803,6 +816,20 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
                 &self.params
             }
 
+            fn parameter(params: &Self::Params, index: usize) -> ::core::option::Option<f64> {
+                match index {
+                    #(#param_get)*
+                    _ => ::core::option::Option::None,
+                }
+            }
+
+            fn set_parameter(params: &mut Self::Params, index: usize, value: f64) -> bool {
+                match index {
+                    #(#param_set)*
+                    _ => false,
+                }
+            }
+
             fn residual(&self, __t: f64, __x: &[f64], __xdot: &[f64], __z: &[f64], __u: &[f64], __out: &mut [f64]) {
                 #residual_code
             }
@@ -862,5 +889,62 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
                 #output_jac_code
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+
+    fn generated(tokens: proc_macro2::TokenStream) -> String {
+        let out = crate::try_expand(tokens).expect("model expands");
+        prettyplease::unparse(&syn::parse2(out).expect("valid Rust"))
+    }
+
+    const CART: &str = "
+        Cart {
+            params { m = 2.0, k = 0.5 }
+            states { x, v }
+            inputs { f }
+            equations {
+                der(x) = v;
+                m * der(v) == -k * x + f;
+            }
+            outputs { x }
+            tracking CartTracking { x: [3.0, 0.0] }
+        }";
+
+    #[test]
+    fn parameters_are_reachable_by_index() {
+        let code = generated(CART.parse().unwrap());
+        for ty in ["Cart", "CartTracking"] {
+            let from = code
+                .find(&format!("impl ::dpc::core::DaeModel for {ty} "))
+                .expect("impl present");
+            let body = &code[from..];
+            assert!(
+                body.contains("fn parameter(params: &Self::Params, index: usize)"),
+                "{body}"
+            );
+            assert!(
+                body.contains("0usize => ::core::option::Option::Some(params.m)"),
+                "{body}"
+            );
+            assert!(
+                body.contains("1usize => ::core::option::Option::Some(params.k)"),
+                "{body}"
+            );
+            assert!(body.contains("params.k = value;"), "{body}");
+        }
+    }
+
+    #[test]
+    fn a_model_without_parameters_matches_nothing() {
+        let code = generated(
+            "Free { states { x } inputs { u } equations { der(x) = u; } outputs { x } }"
+                .parse()
+                .unwrap(),
+        );
+        assert!(code.contains("_ => ::core::option::Option::None"), "{code}");
+        assert!(!code.contains("w_coefficients"), "{code}");
     }
 }
