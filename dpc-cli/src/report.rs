@@ -7,7 +7,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use crate::run::{DesignReport, RunResult};
+use crate::run::{DesignReport, ModelInUse, RunResult};
 use crate::scenario::Scenario;
 use crate::ScenarioError;
 
@@ -45,6 +45,8 @@ pub struct Summary {
     pub failed_samples: usize,
     /// Wall-clock time of the simulation [s].
     pub wall_time_s: f64,
+    /// The parameters of the plant and of the controller, and the controller's `W`, as run.
+    pub in_use: ModelInUse,
     /// The linear analysis of the controller's model, when the scenario has a `[design]`.
     pub linear_design: Option<DesignReport>,
     /// The scenario as run.
@@ -88,6 +90,7 @@ impl Summary {
             retried_samples: cl.retried_samples,
             failed_samples: cl.failed_samples,
             wall_time_s: run.wall_time,
+            in_use: run.model.clone(),
             linear_design: run.design.clone(),
             scenario: run.scenario.clone(),
         }
