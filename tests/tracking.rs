@@ -1,10 +1,12 @@
 //! The generated tracking DAEs (stabilised Hirschorn steps, paper Section 2) against
 //! independent computations: the paper's linear example, and trajectories of the wheel and
 //! of the flexible-joint arm integrated from hand-written equations, differentiated in time
-//! by high-order finite differences.
+//! by high-order finite differences. Also: `W` and parameters changed at run time against
+//! models compiled with the new values.
 
-use dpc::core::model::DaeModel;
-use dpc::core::reference::{AtanIntegral, ScalarReference, Sinusoid};
+use dpc::core::model::{parameter_by_name, set_parameter_by_name, DaeModel};
+use dpc::core::reference::{AtanIntegral, Components, ScalarReference, Sinusoid};
+use dpc::core::tracking::TrackingError;
 use dpc::core::{Reference, TrackingDae};
 use dpc::nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use dpc_models::{
@@ -253,7 +255,9 @@ fn dsl_references_match_closed_forms() {
     // w = W(d/dt) xi: 5 xi + xi'.
     let mut scratch = [0.0; 4];
     let mut w = [0.0; 2];
-    WheelTracking::tracking_inputs(&r, 1.0, &mut scratch, &mut w).unwrap();
+    WheelTracking::default()
+        .tracking_inputs(&r, 1.0, &mut scratch, &mut w)
+        .unwrap();
     let mut d = [0.0; 4];
     r.derivatives(1.0, 1, &mut d).unwrap();
     assert!((w[0] - (5.0 * d[0] + d[2])).abs() < 1e-14);
@@ -273,4 +277,293 @@ fn tracking_matrix_types_are_fixed_size() {
     );
     // The iteration matrix of the tracking DAE is regular at the nominal point.
     assert!(g.determinant().abs() > 1e-8);
+}
+
+// Run-time W and parameters: the same plant compiled twice with different W.
+
+dpc::model! {
+    /// A cart on a hardening spring; W = (s + 5)(s + 1) on a nonlinear position output.
+    pub CartA {
+        params { m = 2.0, k = 3.0, c = 0.4 }
+        states { x, v }
+        inputs { f }
+        equations {
+            der(x) = v;
+            m * der(v) == -k * x - 0.5 * k * x.powi(3) - c * v + f;
+        }
+        outputs { p = x + 0.1 * x.powi(2) }
+        tracking CartATracking { p: [5.0, 1.0] }
+    }
+}
+
+dpc::model! {
+    /// The same cart with W = s (s + 3): one root 0, a plain derivative.
+    pub CartB {
+        params { m = 2.0, k = 3.0, c = 0.4 }
+        states { x, v }
+        inputs { f }
+        equations {
+            der(x) = v;
+            m * der(v) == -k * x - 0.5 * k * x.powi(3) - c * v + f;
+        }
+        outputs { p = x + 0.1 * x.powi(2) }
+        tracking CartBTracking { p: [3.0, 0.0] }
+    }
+}
+
+/// Deterministic pseudo-random numbers in `[-1, 1)` (xorshift).
+fn uniform(state: &mut u64) -> f64 {
+    *state ^= *state << 13;
+    *state ^= *state >> 7;
+    *state ^= *state << 17;
+    2.0 * ((*state >> 11) as f64 / (1u64 << 53) as f64) - 1.0
+}
+
+/// Residual, all Jacobian blocks and the iteration matrix at a point, as dense matrices.
+fn everything<M: DaeModel>(
+    m: &M,
+    t: f64,
+    x: &[f64],
+    xdot: &[f64],
+    z: &[f64],
+    u: &[f64],
+    c: f64,
+) -> Vec<DMatrix<f64>> {
+    let ne = M::N_EQUATIONS;
+    let mut r = vec![0.0; ne];
+    let (mut fxd, mut fx, mut fz, mut fu) = (
+        DMatrix::zeros(ne, M::N_STATES),
+        DMatrix::zeros(ne, M::N_STATES),
+        DMatrix::zeros(ne, M::N_ALGEBRAIC),
+        DMatrix::zeros(ne, M::N_INPUTS),
+    );
+    m.evaluate(
+        t, x, xdot, z, u, &mut r, &mut fxd, &mut fx, &mut fz, &mut fu,
+    );
+    let mut r2 = vec![0.0; ne];
+    m.residual(t, x, xdot, z, u, &mut r2);
+    let mut it = DMatrix::zeros(ne, ne);
+    m.iteration_matrix(t, x, xdot, z, u, c, &mut it);
+    vec![
+        DMatrix::from_column_slice(ne, 1, &r),
+        DMatrix::from_column_slice(ne, 1, &r2),
+        fxd,
+        fx,
+        fz,
+        fu,
+        it,
+    ]
+}
+
+fn assert_same_at_random_points<A: DaeModel, B: DaeModel>(a: &A, b: &B) {
+    assert_eq!(A::N_EQUATIONS, B::N_EQUATIONS);
+    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+    for _ in 0..50 {
+        let mut draw = |n: usize| {
+            (0..n)
+                .map(|_| 3.0 * uniform(&mut state))
+                .collect::<Vec<_>>()
+        };
+        let (t, c) = (draw(1)[0], 10.0 * draw(1)[0]);
+        let (x, xdot) = (draw(A::N_STATES), draw(A::N_STATES));
+        let (z, u) = (draw(A::N_ALGEBRAIC), draw(A::N_INPUTS));
+        let ea = everything(a, t, &x, &xdot, &z, &u, c);
+        let eb = everything(b, t, &x, &xdot, &z, &u, c);
+        for (k, (ma, mb)) in ea.iter().zip(&eb).enumerate() {
+            let scale = 1.0 + ma.amax();
+            assert!(
+                (ma - mb).amax() <= 1e-13 * scale,
+                "block {k} differs at x = {x:?}: {ma} vs {mb}"
+            );
+        }
+    }
+}
+
+#[test]
+fn w_roots_set_at_run_time_give_the_model_compiled_with_them() {
+    assert_eq!(CartATracking::W_COEFFICIENTS, &[&[5.0, 6.0, 1.0][..]]);
+    assert_eq!(CartBTracking::W_COEFFICIENTS, &[&[0.0, 3.0, 1.0][..]]);
+    // The entries the coefficients multiply are structural, whatever their defaults: the
+    // root 0 of CartB does not drop the column of x from its constraint row.
+    assert_eq!(CartATracking::PATTERN_F_X, CartBTracking::PATTERN_F_X);
+    assert_eq!(CartATracking::PATTERN_F_XDOT, CartBTracking::PATTERN_F_XDOT);
+    assert_eq!(CartATracking::PATTERN_F_Z, CartBTracking::PATTERN_F_Z);
+    assert!(CartBTracking::PATTERN_F_X.contains(&(2, 0)));
+
+    let mut a = CartATracking::default();
+    assert_eq!(a.w_coefficients(0), &[5.0, 6.0, 1.0]);
+    a.set_w_roots(0, &[3.0, 0.0]).unwrap();
+    assert_eq!(a.w_coefficients(0), &[0.0, 3.0, 1.0]);
+    assert_same_at_random_points(&a, &CartBTracking::default());
+
+    let mut b = CartBTracking::default();
+    b.set_w_roots(0, &[1.0, 5.0]).unwrap();
+    assert_same_at_random_points(&CartATracking::default(), &b);
+
+    // The tracking inputs w = W(d/dt) xi use the coefficients in use.
+    let reference = Components::new(
+        1,
+        vec![Box::new(Sinusoid {
+            offset: 0.2,
+            amplitude: 0.5,
+            omega: 1.3,
+            phase: 0.1,
+        })],
+    )
+    .unwrap();
+    let (mut wa, mut wb) = ([0.0], [0.0]);
+    let mut scratch = [0.0; 3];
+    a.tracking_inputs(&reference, 0.7, &mut scratch, &mut wa)
+        .unwrap();
+    CartBTracking::default()
+        .tracking_inputs(&reference, 0.7, &mut scratch, &mut wb)
+        .unwrap();
+    assert!((wa[0] - wb[0]).abs() < 1e-14, "{wa:?} vs {wb:?}");
+    let mut d = [0.0; 3];
+    reference.derivatives(0.7, 2, &mut d).unwrap();
+    assert!((wa[0] - (3.0 * d[1] + d[2])).abs() < 1e-14);
+
+    // from_params starts from the compiled W again.
+    assert_eq!(
+        CartATracking::from_params(a.params).w_coefficients(0),
+        &[5.0, 6.0, 1.0]
+    );
+    assert_eq!(a.w_coefficients(1), &[] as &[f64]);
+}
+
+#[test]
+fn bad_w_gives_typed_errors_and_leaves_w_unchanged() {
+    let mut a = CartATracking::default();
+    let name = |e: &TrackingError| e.to_string();
+    let e = a.set_w_roots(1, &[1.0, 2.0]).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            TrackingError::UnknownOutput {
+                output: 1,
+                outputs: 1,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let e = a.set_w_roots(0, &[1.0]).unwrap_err();
+    assert_eq!(
+        e,
+        TrackingError::WrongDegree {
+            model: "CartATracking",
+            output: "p",
+            expected: 2,
+            found: 1
+        }
+    );
+    assert!(name(&e).contains("tracking"), "{e}");
+    let e = a.set_w_roots(0, &[1.0, 2.0, 3.0]).unwrap_err();
+    assert!(
+        matches!(e, TrackingError::WrongDegree { found: 3, .. }),
+        "{e:?}"
+    );
+    let e = a.set_w_roots(0, &[1.0, f64::NAN]).unwrap_err();
+    assert!(
+        matches!(e, TrackingError::NonFinite { index: 1, .. }),
+        "{e:?}"
+    );
+    let e = a.set_w_roots(0, &[f64::INFINITY, 1.0]).unwrap_err();
+    assert!(
+        matches!(e, TrackingError::NonFinite { index: 0, .. }),
+        "{e:?}"
+    );
+    let e = a.set_w_roots(0, &[2.0, -0.5]).unwrap_err();
+    assert!(
+        matches!(e, TrackingError::UnstableRoot { value, .. } if value == -0.5),
+        "{e:?}"
+    );
+    assert!(name(&e).contains("right half plane"), "{e}");
+
+    let e = a.set_w_coefficients(0, &[1.0, 1.0]).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            TrackingError::WrongLength {
+                expected: 3,
+                found: 2,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let e = a.set_w_coefficients(0, &[1.0, 2.0, 2.0]).unwrap_err();
+    assert!(
+        matches!(e, TrackingError::NotMonic { leading, .. } if leading == 2.0),
+        "{e:?}"
+    );
+    // s^2 - 1 and s^2 + 1.
+    for c in [[-1.0, 0.0, 1.0], [1.0, 0.0, 1.0]] {
+        let e = a.set_w_coefficients(0, &c).unwrap_err();
+        assert!(matches!(e, TrackingError::Unstable { .. }), "{c:?}: {e:?}");
+    }
+    assert_eq!(
+        a.w_coefficients(0),
+        &[5.0, 6.0, 1.0],
+        "unchanged after errors"
+    );
+
+    // Complex stable roots are fine as coefficients: s^2 + 0.4 s + 4.
+    a.set_w_coefficients(0, &[4.0, 0.4, 1.0]).unwrap();
+    assert_eq!(a.w_coefficients(0), &[4.0, 0.4, 1.0]);
+    // Two plain derivatives: W = s^2.
+    a.set_w_roots(0, &[0.0, 0.0]).unwrap();
+    assert_eq!(a.w_coefficients(0), &[0.0, 0.0, 1.0]);
+}
+
+#[test]
+fn parameters_set_by_name_change_the_residual_as_the_parameter_would() {
+    assert_eq!(CartA::PARAM_NAMES, &["m", "k", "c"]);
+    let mut params = CartAParams::default();
+    set_parameter_by_name::<CartA>(&mut params, "k", 7.5).unwrap();
+    assert_eq!(
+        params,
+        CartAParams {
+            k: 7.5,
+            ..CartAParams::default()
+        }
+    );
+    assert_eq!(parameter_by_name::<CartA>(&params, "k"), Ok(7.5));
+    assert_eq!(CartA::parameter(&params, 0), Some(2.0));
+    assert_eq!(CartA::parameter(&params, 3), None);
+    assert!(!CartA::set_parameter(&mut params, 3, 1.0));
+
+    let (x, xdot, u) = ([0.7, -0.3], [0.1, 0.4], [0.25]);
+    let mut r = [0.0; 2];
+    CartA::from_params(params).residual(0.0, &x, &xdot, &[], &u, &mut r);
+    // m v' + k x + k x^3 / 2 + c v - f with k = 7.5.
+    let k = 7.5;
+    let expected = 2.0 * 0.4 - (-k * 0.7 - 0.5 * k * 0.7_f64.powi(3) - 0.4 * -0.3 + 0.25);
+    assert!((r[1] - expected).abs() < 1e-14, "{r:?} vs {expected}");
+    let mut r0 = [0.0; 2];
+    CartA::default().residual(0.0, &x, &xdot, &[], &u, &mut r0);
+    assert!((r[1] - r0[1]).abs() > 1.0);
+
+    // The tracking DAE shares the parameters: the controller's model changes the same way.
+    let mut cp = CartATracking::default().params;
+    set_parameter_by_name::<CartATracking>(&mut cp, "m", 3.0).unwrap();
+    let controller = CartATracking::from_params(cp);
+    let mut g = [0.0; 3];
+    controller.residual(0.0, &x, &xdot, &u, &[0.0], &mut g);
+    let mut plant = [0.0; 2];
+    CartA::from_params(CartAParams {
+        m: 3.0,
+        ..CartAParams::default()
+    })
+    .residual(0.0, &x, &xdot, &[], &u, &mut plant);
+    assert_eq!(&g[..2], &plant);
+
+    let e = set_parameter_by_name::<CartA>(&mut params, "nope", 1.0).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "model `CartA` has no parameter `nope`; its parameters are m, k, c"
+    );
+    assert_eq!(params.k, 7.5, "unchanged after an error");
+    let e = parameter_by_name::<Wheel>(&Wheel::default().params, "mass").unwrap_err();
+    assert!(e.to_string().contains("m, r, i_r, i_n, g"), "{e}");
 }

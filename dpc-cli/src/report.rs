@@ -8,7 +8,7 @@ use std::path::Path;
 use dpc::core::simulate::ControllerEvent;
 use serde::Serialize;
 
-use crate::run::{DesignReport, RunResult};
+use crate::run::{DesignReport, ModelInUse, RunResult};
 use crate::scenario::Scenario;
 use crate::ScenarioError;
 
@@ -52,6 +52,8 @@ pub struct Summary {
     pub roundoff_level: f64,
     /// Wall-clock time of the simulation [s].
     pub wall_time_s: f64,
+    /// The parameters of the plant and of the controller, and the controller's `W`, as run.
+    pub in_use: ModelInUse,
     /// The linear analysis of the controller's model, when the scenario has a `[design]`.
     pub linear_design: Option<DesignReport>,
     /// The scenario as run.
@@ -97,6 +99,7 @@ impl Summary {
             controller_events: cl.events.clone(),
             roundoff_level: cl.max_roundoff,
             wall_time_s: run.wall_time,
+            in_use: run.model.clone(),
             linear_design: run.design.clone(),
             scenario: run.scenario.clone(),
         }

@@ -1,6 +1,8 @@
-//! One closed-loop run of a scenario: look the model up, set `W`, parameters and reference,
-//! design the preliminary feedback, build the controller and simulate.
+//! One closed-loop run of a scenario: look the model up, set the plant's and the controller's
+//! parameters by name and the roots of `W` at run time, build the reference, design the
+//! preliminary feedback on the controller's model, build the controller and simulate.
 
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 use std::sync::Arc;
@@ -10,9 +12,10 @@ use dpc::core::linalg::LinearSolver;
 use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
 use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
 use dpc::core::linearize::{linearize, OperatingPoint};
-use dpc::core::model::DaeModel;
+use dpc::core::model::{parameter_index, set_parameter_by_name, DaeModel};
 use dpc::core::reference::{Components, Reference, ReferenceError};
 use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions};
+use dpc::core::tracking::TrackingError;
 use dpc::core::TrackingDae;
 use dpc::nalgebra::DMatrix;
 use dpc_models::registry::{self, Tracked, VisitTracked};
@@ -30,6 +33,17 @@ pub struct Names {
     pub inputs: Vec<String>,
     /// Outputs.
     pub outputs: Vec<String>,
+}
+
+/// The parameters and `W` a run actually used, after the scenario's changes.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelInUse {
+    /// Every parameter of the simulated plant, by name.
+    pub plant_params: BTreeMap<String, f64>,
+    /// Every parameter of the controller's model, by name.
+    pub controller_params: BTreeMap<String, f64>,
+    /// Per output, the coefficients of `W_i(s)` in the controller, lowest power first.
+    pub w_coefficients: BTreeMap<String, Vec<f64>>,
 }
 
 /// What the linear analysis of the controller's model said.
@@ -67,6 +81,8 @@ pub struct RunResult {
     pub scenario: Scenario,
     /// Variable names.
     pub names: Names,
+    /// The model as run: parameters of the plant and of the controller, and `W`.
+    pub model: ModelInUse,
     /// The linear analysis, when the scenario has a `[design]`.
     pub design: Option<DesignReport>,
     /// The closed loop.
@@ -207,14 +223,53 @@ impl Runner<'_> {
         Ok(ScenarioReference::Terms(c))
     }
 
-    /// The per-output roots of `W` for the analysis: the scenario's, else the model's.
-    fn w_roots<T: TrackingDae>(&self, outputs: &[&str]) -> Result<Vec<Vec<f64>>, ScenarioError> {
+    /// `params` with the scenario's values for `what` (`plant.params` or
+    /// `controller.params`) set by name.
+    fn params<P: DaeModel>(
+        &self,
+        what: &str,
+        mut params: P::Params,
+        values: &BTreeMap<String, f64>,
+    ) -> Result<P::Params, ScenarioError> {
+        for (name, value) in values {
+            set_parameter_by_name::<P>(&mut params, name, *value)
+                .map_err(|e| self.invalid(format!("`{what}.{name}`: {e}")))?;
+        }
+        Ok(params)
+    }
+
+    /// Set the roots of `W` for each output the scenario lists.
+    fn set_w<T: TrackingDae>(
+        &self,
+        tracking: &mut T,
+        outputs: &[&str],
+    ) -> Result<(), ScenarioError> {
+        for (name, roots) in &self.scenario.w {
+            let i = self.output_index("w", name, outputs)?;
+            tracking.set_w_roots(i, roots).map_err(|e| match e {
+                TrackingError::WrongDegree { expected, found, .. } => self.invalid(format!(
+                    "`w.{name}` has {found} root(s), but model `{}` is compiled with deg W = {expected} for `{name}` (the degree decides the symbolic derivatives); only the roots can change at run time, more or fewer Hirschorn steps need a change of the model's `tracking` section",
+                    self.scenario.model
+                )),
+                other => self.invalid(format!("`w.{name}` = {roots:?}: {other}")),
+            })?;
+        }
+        Ok(())
+    }
+
+    /// The per-output roots of the `W` in use, for the analysis: the scenario's where given,
+    /// else those of the controller's coefficients.
+    fn w_roots<T: TrackingDae>(
+        &self,
+        tracking: &T,
+        outputs: &[&str],
+    ) -> Result<Vec<Vec<f64>>, ScenarioError> {
         let mut roots = Vec::with_capacity(outputs.len());
         for (i, name) in outputs.iter().enumerate() {
             match self.scenario.w.get(*name) {
                 Some(r) => roots.push(r.clone()),
                 None => roots.push(
-                    negated_real_roots(T::W_COEFFICIENTS[i]).ok_or_else(|| {
+                    negated_real_roots(tracking.w_coefficients(i)).ok_or_else(|| {
                         self.invalid(format!(
                             "the model's W for `{name}` has complex roots, which the linear design cannot take; give `w.{name}`"
                         ))
@@ -385,43 +440,53 @@ impl VisitTracked for Runner<'_> {
         let s = self.scenario;
         let outputs = P::OUTPUT_NAMES;
         self.check_length("x0", &s.x0, P::STATE_NAMES)?;
-        if !s.plant.params.is_empty() || !s.controller.params.is_empty() {
-            return Err(
-                self.invalid("parameter overrides are not supported by this build".to_string())
-            );
+        // The registry's values are the starting point (a model may be registered with
+        // non-default parameters); the scenario changes them by name.
+        let plant_params = self.params::<P>(
+            "plant.params",
+            model.plant.params().clone(),
+            &s.plant.params,
+        )?;
+        let controller_params = self.params::<T>(
+            "controller.params",
+            model.tracking.params().clone(),
+            &s.controller.params,
+        )?;
+        let plant = P::from_params(plant_params);
+        let mut tracking = T::from_params(controller_params);
+        for i in 0..outputs.len() {
+            tracking
+                .set_w_coefficients(i, model.tracking.w_coefficients(i))
+                .map_err(|e| ScenarioError::Setup(format!("the registered model's W: {e}")))?;
         }
-        for name in s.w.keys() {
-            self.output_index("w", name, outputs)?;
-        }
-        let w = self.w_roots::<T>(outputs)?;
-        for (i, roots) in w.iter().enumerate() {
-            let wanted = polynomial_from_negated_roots(roots);
-            let compiled = T::W_COEFFICIENTS[i];
-            let same = wanted.len() == compiled.len()
-                && wanted
-                    .iter()
-                    .zip(compiled)
-                    .all(|(a, b)| (a - b).abs() <= 1e-12 * (1.0 + b.abs()));
-            if !same {
-                return Err(self.invalid(format!(
-                    "`w.{}` = {roots:?} differs from the model's compiled W ({compiled:?}); this build cannot change W at run time",
-                    outputs[i]
-                )));
-            }
-        }
+        self.set_w(&mut tracking, outputs)?;
+        let in_use = ModelInUse {
+            plant_params: named_params::<P>(plant.params()),
+            controller_params: named_params::<T>(tracking.params()),
+            w_coefficients: outputs
+                .iter()
+                .enumerate()
+                .map(|(i, name)| (name.to_string(), tracking.w_coefficients(i).to_vec()))
+                .collect(),
+        };
         let reference = Arc::new(self.reference(model.reference, outputs)?);
-        let plant = model.plant;
-        let controller_model = plant.clone();
 
         let mut design_report = None;
         let mut k_n = None;
         if let Some(design) = &s.design {
+            // The controller's model: the plant type with the controller's parameters, and
+            // the W in use.
+            let controller_model = P::from_params(copy_params::<T, P>(
+                tracking.params(),
+                model.plant.params().clone(),
+            ));
+            let w = self.w_roots(&tracking, outputs)?;
             let (report, k) = self.design(&controller_model, &design.nominal, w)?;
             design_report = Some(report);
             k_n = k;
         }
         let mut dpc = Dpc::new(
-            model.tracking,
+            tracking,
             reference.clone(),
             model.solver,
             DpcOptions {
@@ -480,6 +545,7 @@ impl VisitTracked for Runner<'_> {
                 inputs: names(P::INPUT_NAMES),
                 outputs: names(P::OUTPUT_NAMES),
             },
+            model: in_use,
             design: design_report,
             closed_loop,
             wall_time,
@@ -487,18 +553,24 @@ impl VisitTracked for Runner<'_> {
     }
 }
 
-/// Coefficients (lowest power first) of `prod (s + a_k)`.
-fn polynomial_from_negated_roots(roots: &[f64]) -> Vec<f64> {
-    let mut c = vec![1.0];
-    for a in roots {
-        let mut next = vec![0.0; c.len() + 1];
-        for (k, ck) in c.iter().enumerate() {
-            next[k] += a * ck;
-            next[k + 1] += ck;
+/// `into` with every parameter of `from` copied by name. A tracking DAE shares its plant's
+/// parameter type, but generic code cannot name that equality, so values go by name.
+fn copy_params<A: DaeModel, B: DaeModel>(from: &A::Params, mut into: B::Params) -> B::Params {
+    for (i, name) in A::PARAM_NAMES.iter().enumerate() {
+        if let (Some(value), Some(j)) = (A::parameter(from, i), parameter_index::<B>(name)) {
+            B::set_parameter(&mut into, j, value);
         }
-        c = next;
     }
-    c
+    into
+}
+
+/// Every parameter of a model by name.
+fn named_params<P: DaeModel>(params: &P::Params) -> BTreeMap<String, f64> {
+    P::PARAM_NAMES
+        .iter()
+        .enumerate()
+        .filter_map(|(i, name)| Some((name.to_string(), P::parameter(params, i)?)))
+        .collect()
 }
 
 /// The `a_k` of a monic `prod (s + a_k)` given lowest power first, if all roots are real.
@@ -533,10 +605,11 @@ fn negated_real_roots(coefficients: &[f64]) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use dpc::core::tracking::monic_from_negated_roots;
 
     #[test]
     fn roots_round_trip_through_coefficients() {
-        let c = polynomial_from_negated_roots(&[2.0, 3.0]);
+        let c = monic_from_negated_roots(&[2.0, 3.0]);
         assert_eq!(c, vec![6.0, 5.0, 1.0]);
         let r = negated_real_roots(&c).unwrap();
         assert!(

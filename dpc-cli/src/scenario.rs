@@ -73,7 +73,9 @@ pub struct Scenario {
     /// Whether the preliminary feedback built from `[design]` is applied.
     #[serde(default)]
     pub prefeedback: bool,
-    /// Per output name, the numbers `a_k` of `W(s) = prod (s + a_k)`; outputs not listed keep
+    /// Per output name, the numbers `a_k` of `W(s) = prod (s + a_k)`, set at run time: as
+    /// many as the model's compiled degree of `W` for that output (only the roots can change;
+    /// the degree is the model's `tracking` section), each `>= 0`. Outputs not listed keep
     /// the model's `W`.
     #[serde(default)]
     pub w: BTreeMap<String, Vec<f64>>,
@@ -243,7 +245,8 @@ pub struct PlantOptions {
     /// The run counts as diverged after this many consecutive failed controller updates.
     #[serde(default = "default_failures")]
     pub max_consecutive_failures: usize,
-    /// Parameters that differ from the model's defaults (the controller keeps its own).
+    /// Parameters of the simulated plant that differ from the model's, by name (the
+    /// controller keeps its own); an unknown name is an error listing the model's parameters.
     #[serde(default)]
     pub params: BTreeMap<String, f64>,
 }
@@ -277,7 +280,8 @@ impl Default for PlantOptions {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ControllerOptions {
-    /// Parameters that differ from the model's defaults.
+    /// Parameters of the controller's model (its tracking DAE and the linear design) that
+    /// differ from the model's, by name.
     #[serde(default)]
     pub params: BTreeMap<String, f64>,
 }

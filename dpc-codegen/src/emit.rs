@@ -5,7 +5,11 @@
 //! * `NameParams`, the parameter struct with `Default` from the declared defaults;
 //! * `Name`, the model type, with inherent fixed-size conveniences (nalgebra `SVector` /
 //!   `SMatrix`) and an implementation of `dpc::core::DaeModel` whose routines take slices
-//!   and write Jacobian entries into `MatrixSink`s.
+//!   and write Jacobian entries into `MatrixSink`s, and parameter access by index as
+//!   `match`es;
+//! * with a `tracking` section, the tracking DAE type, which also holds the coefficients of
+//!   `W` in use in a fixed-size array (read in the routines' preludes, so nothing allocates)
+//!   and implements `dpc::core::TrackingDae`.
 //!
 //! Each routine is one straight-line block: every root it needs (residual rows and Jacobian
 //! entries) is scheduled together, so subexpressions are shared across the residual and all
@@ -62,6 +66,9 @@ fn local_ident(model: &Model, symbol: Symbol) -> Ident {
         Symbol::Param(i) => model.params[i].name.clone(),
         Symbol::IterationCoefficient => Ident::new("__c", span),
         Symbol::TrackingInput(i) => format_ident!("w__{}", model.outputs[i].name),
+        Symbol::TrackingCoefficient { output, power } => {
+            format_ident!("coef__{}__{}", model.outputs[output].name, power)
+        }
     }
 }
 
@@ -132,10 +139,15 @@ fn routine(model: &Model, layout: &Layout, roots: &[ExprId]) -> Routine {
     let mut prelude = TokenStream::new();
     let mut symbols: Vec<Symbol> = used.iter().map(|v| model.symbols.symbol(*v)).collect();
     symbols.sort();
+    let degrees = crate::hirschorn::w_degrees(model);
     for s in symbols {
         let local = local_ident(model, s);
         match s {
             Symbol::Param(_) => prelude.extend(quote!(let #local: f64 = self.params.#local;)),
+            Symbol::TrackingCoefficient { output, power } => {
+                let k = crate::hirschorn::coefficient_index(&degrees, output, power);
+                prelude.extend(quote!(let #local: f64 = self.w_coefficients[#k];));
+            }
             Symbol::IterationCoefficient => {}
             _ => {
                 let src = layout.source_of(s);
@@ -227,6 +239,9 @@ pub struct DaeType {
     pub outputs: Vec<(String, ExprId)>,
     /// Readable listing of the type's equations.
     pub listing: String,
+    /// For a tracking DAE, per output the compiled monic coefficients of `W_i` (lowest power
+    /// first): the type then holds the coefficients in use in a field `w_coefficients`.
+    pub w_defaults: Option<Vec<Vec<f64>>>,
 }
 
 /// Emit all items for a lowered model: the parameter struct, the plant type, and, with a
@@ -246,6 +261,7 @@ pub fn emit_model(model: &mut Model, rows: Option<&[TrackingRow]>) -> TokenStrea
             .map(|o| (o.name.to_string(), o.expr))
             .collect(),
         listing: listing(model),
+        w_defaults: None,
     };
     let plant_tokens = emit_dae_type(model, &plant);
     let relative_degrees = crate::hirschorn::relative_degrees(model);
@@ -333,7 +349,7 @@ fn emit_tracking(
     }
     let plant_name = model.name.clone();
     let doc = format!(
-        " The tracking DAE of [`{plant_name}`]: its equations plus `W_i(d/dt) h_i = w_i` per output, in the unknowns (states, algebraic unknowns and inputs of the plant); the inputs are `w_i = W_i(d/dt) xi_i` (see `dpc::core::TrackingDae`)."
+        " The tracking DAE of [`{plant_name}`]: its equations plus `W_i(d/dt) h_i = w_i` per output, in the unknowns (states, algebraic unknowns and inputs of the plant); the inputs are `w_i = W_i(d/dt) xi_i` (see `dpc::core::TrackingDae`). The degrees of the `W_i` are fixed at compile time; their coefficients are read from the value, start as the compiled ones and can be changed with `dpc::core::TrackingDae::set_w_roots`."
     );
     let ty = DaeType {
         name: tracking.type_name.clone(),
@@ -347,6 +363,7 @@ fn emit_tracking(
             .map(|o| (o.name.to_string(), o.expr))
             .collect(),
         listing: listing_text,
+        w_defaults: Some(rows.iter().map(|r| r.coefficients.clone()).collect()),
     };
     let tokens = emit_dae_type(model, &ty);
     let name = &tracking.type_name;
@@ -355,13 +372,47 @@ fn emit_tracking(
         quote!(&[#(#c),*])
     });
     let degrees = option_list(relative_degrees);
+    // Output i owns w_coefficients[start..end]: its monic coefficients, lowest power first.
+    let mut start = 0;
+    let ranges: Vec<TokenStream> = rows
+        .iter()
+        .map(|r| {
+            let (i, end) = (r.output, start + r.coefficients.len());
+            let arm = quote!(#i => #start..#end,);
+            start = end;
+            arm
+        })
+        .collect();
     quote! {
         #tokens
 
+        #[allow(clippy::all, clippy::pedantic)]
         impl ::dpc::core::TrackingDae for #name {
             type Plant = #plant_name;
             const W_COEFFICIENTS: &'static [&'static [f64]] = &[#(#coeffs),*];
             const RELATIVE_DEGREES: &'static [::core::option::Option<usize>] = #degrees;
+
+            fn w_coefficients(&self, output: usize) -> &[f64] {
+                let range = match output {
+                    #(#ranges)*
+                    _ => 0..0,
+                };
+                &self.w_coefficients[range]
+            }
+
+            fn set_w_coefficients(
+                &mut self,
+                output: usize,
+                coefficients: &[f64],
+            ) -> ::core::result::Result<(), ::dpc::core::tracking::TrackingError> {
+                ::dpc::core::tracking::check_w_coefficients::<Self>(output, coefficients)?;
+                let range = match output {
+                    #(#ranges)*
+                    _ => 0..0,
+                };
+                self.w_coefficients[range].copy_from_slice(coefficients);
+                ::core::result::Result::Ok(())
+            }
         }
     }
 }
@@ -662,6 +713,50 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
         h_x.pattern(),
     );
     let model_name = name.to_string();
+    let (param_get, param_set): (Vec<TokenStream>, Vec<TokenStream>) = model
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let n = &p.name;
+            (
+                quote!(#i => ::core::option::Option::Some(params.#n),),
+                quote!(#i => { params.#n = value; true }),
+            )
+        })
+        .unzip();
+    // A tracking DAE carries the coefficients of W in use; a plant only its parameters.
+    let (w_field, w_init, default_impl, derives, new_doc) = match &ty.w_defaults {
+        Some(per_output) => {
+            let all: Vec<f64> = per_output.iter().flatten().copied().collect();
+            let n = all.len();
+            (
+                quote! {
+                    /// The coefficients of `W_i` in use, all outputs concatenated (lowest power
+                    /// first, each monic); read and set through `dpc::core::TrackingDae`.
+                    w_coefficients: [f64; #n],
+                },
+                quote!(w_coefficients: [#(#all),*],),
+                quote! {
+                    impl ::core::default::Default for #name {
+                        /// Default parameters and the compiled `W`.
+                        fn default() -> Self {
+                            Self::new(::core::default::Default::default())
+                        }
+                    }
+                },
+                quote!(#[derive(Debug, Clone, Copy, PartialEq)]),
+                " The tracking DAE with the given parameters and the compiled `W`.",
+            )
+        }
+        None => (
+            TokenStream::new(),
+            TokenStream::new(),
+            TokenStream::new(),
+            quote!(#[derive(Debug, Clone, Copy, PartialEq, Default)]),
+            " The model with the given parameters.",
+        ),
+    };
     let listing_text = ty.listing.clone();
     let listing_doc = doc_lines(&format!("```text\n{listing_text}```"));
     let na = quote!(::dpc::nalgebra);
@@ -672,11 +767,14 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
         /// Generated by `dpc::model!` from:
         ///
         #listing_doc
-        #[derive(Debug, Clone, Copy, PartialEq, Default)]
+        #derives
         #vis struct #name {
             /// The model's parameters.
             pub params: #params_name,
+            #w_field
         }
+
+        #default_impl
 
         #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens, non_snake_case)]
         impl #name {
@@ -693,9 +791,9 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
             /// The declared model, equations and outputs as readable text.
             pub const LISTING: &'static str = #listing_text;
 
-            /// The model with the given parameters.
+            #[doc = #new_doc]
             pub const fn new(params: #params_name) -> Self {
-                Self { params }
+                Self { params, #w_init }
             }
 
             /// Residual `F(t, x, x', z, u)` in fixed-size types.
@@ -796,11 +894,25 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
             const PATTERN_H_X: ::dpc::core::model::Pattern = #p_hx;
 
             fn from_params(params: Self::Params) -> Self {
-                Self { params }
+                Self::new(params)
             }
 
             fn params(&self) -> &Self::Params {
                 &self.params
+            }
+
+            fn parameter(params: &Self::Params, index: usize) -> ::core::option::Option<f64> {
+                match index {
+                    #(#param_get)*
+                    _ => ::core::option::Option::None,
+                }
+            }
+
+            fn set_parameter(params: &mut Self::Params, index: usize, value: f64) -> bool {
+                match index {
+                    #(#param_set)*
+                    _ => false,
+                }
             }
 
             fn residual(&self, __t: f64, __x: &[f64], __xdot: &[f64], __z: &[f64], __u: &[f64], __out: &mut [f64]) {
@@ -862,5 +974,111 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
                 #output_jac_code
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+
+    fn generated(tokens: proc_macro2::TokenStream) -> String {
+        let out = crate::try_expand(tokens).expect("model expands");
+        prettyplease::unparse(&syn::parse2(out).expect("valid Rust"))
+    }
+
+    /// The text of `const NAME: ... = VALUE;` in the impl block that follows `marker`.
+    fn constant_after<'a>(code: &'a str, marker: &str, name: &str) -> &'a str {
+        let from = code.find(marker).expect("marker present");
+        let rest = &code[from..];
+        let start = rest
+            .find(&format!("const {name}:"))
+            .expect("constant present");
+        let rest = &rest[start..];
+        &rest[..rest.find(';').expect("constant ends")]
+    }
+
+    const CART: &str = "
+        Cart {
+            params { m = 2.0, k = 0.5 }
+            states { x, v }
+            inputs { f }
+            equations {
+                der(x) = v;
+                m * der(v) == -k * x + f;
+            }
+            outputs { x }
+            tracking CartTracking { x: [3.0, 0.0] }
+        }";
+
+    #[test]
+    fn tracking_rows_read_w_from_the_value() {
+        let code = generated(CART.parse().unwrap());
+        // W = s^2 + 3 s + 0: both non-leading coefficients are read, the leading 1 is not.
+        assert!(
+            code.contains("let coef__x__0: f64 = self.w_coefficients[0usize];"),
+            "{code}"
+        );
+        assert!(
+            code.contains("let coef__x__1: f64 = self.w_coefficients[1usize];"),
+            "{code}"
+        );
+        assert!(!code.contains("self.w_coefficients[2usize]"), "{code}");
+        // The field holds the compiled W, and the plant has no such field.
+        assert!(code.contains("w_coefficients: [f64; 3usize]"), "{code}");
+        assert!(
+            code.contains("w_coefficients: [0f64, 3f64, 1f64]"),
+            "{code}"
+        );
+        assert_eq!(code.matches("w_coefficients: [f64;").count(), 1, "{code}");
+        assert!(code.contains("0usize => 0usize..3usize"), "{code}");
+        assert!(
+            code.contains("check_w_coefficients::<Self>(output, coefficients)?"),
+            "{code}"
+        );
+        // The entry of x in the constraint row (row 2) is structural although its default
+        // coefficient is 0.
+        let pattern = constant_after(
+            &code,
+            "impl ::dpc::core::DaeModel for CartTracking",
+            "PATTERN_F_X",
+        );
+        assert!(pattern.contains("(2usize, 0usize)"), "{pattern}");
+        // The compiled value still shows in the listing and the equation text.
+        assert!(code.contains("\"der(v) + 3 * v == w_x\""), "{code}");
+        assert!(code.contains("output x: W(s) = (s + 3.0)s"), "{code}");
+    }
+
+    #[test]
+    fn parameters_are_reachable_by_index() {
+        let code = generated(CART.parse().unwrap());
+        for ty in ["Cart", "CartTracking"] {
+            let from = code
+                .find(&format!("impl ::dpc::core::DaeModel for {ty} "))
+                .expect("impl present");
+            let body = &code[from..];
+            assert!(
+                body.contains("fn parameter(params: &Self::Params, index: usize)"),
+                "{body}"
+            );
+            assert!(
+                body.contains("0usize => ::core::option::Option::Some(params.m)"),
+                "{body}"
+            );
+            assert!(
+                body.contains("1usize => ::core::option::Option::Some(params.k)"),
+                "{body}"
+            );
+            assert!(body.contains("params.k = value;"), "{body}");
+        }
+    }
+
+    #[test]
+    fn a_model_without_parameters_matches_nothing() {
+        let code = generated(
+            "Free { states { x } inputs { u } equations { der(x) = u; } outputs { x } }"
+                .parse()
+                .unwrap(),
+        );
+        assert!(code.contains("_ => ::core::option::Option::None"), "{code}");
+        assert!(!code.contains("w_coefficients"), "{code}");
     }
 }

@@ -13,6 +13,11 @@
 //! unknowns are matched to the implicit equations (a maximum bipartite matching, as in
 //! Pantelides' algorithm), and each depends on everything its block of equations contains.
 //! The structural value is the generic one; it is exact unless coefficients cancel.
+//!
+//! The degree of each `W_i` is fixed here, at compile time: it decides which derivatives are
+//! generated. Its non-leading coefficients enter the emitted rows as variables
+//! ([`Symbol::TrackingCoefficient`]) read from the tracking value, so the roots can change at
+//! run time; the compiled values remain the defaults and appear in the listing.
 
 use crate::ctxt::Ctxt;
 use crate::ir::{Model, Symbol};
@@ -63,7 +68,10 @@ pub fn total_derivative(model: &mut Model, e: ExprId) -> Result<ExprId, Obstacle
                 let one = model.graph.constant(1.0);
                 dirs.push((v, one));
             }
-            Symbol::Param(_) | Symbol::IterationCoefficient | Symbol::TrackingInput(_) => {}
+            Symbol::Param(_)
+            | Symbol::IterationCoefficient
+            | Symbol::TrackingInput(_)
+            | Symbol::TrackingCoefficient { .. } => {}
             Symbol::StateDot(j) => return Err(Obstacle::ImplicitDerivative(j)),
             Symbol::Algebraic(i) => return Err(Obstacle::Algebraic(i)),
             Symbol::Input(i) | Symbol::InputDot(i) => return Err(Obstacle::Input(i)),
@@ -298,14 +306,38 @@ pub fn polynomial_from_negated_roots(roots: &[f64]) -> Vec<f64> {
 pub struct TrackingRow {
     /// Index of the output.
     pub output: usize,
-    /// Coefficients of `W_i`, lowest power first.
+    /// Compiled default coefficients of `W_i`, lowest power first (monic).
     pub coefficients: Vec<f64>,
     /// `h_i, h_i', ..., h_i^(deg W_i)`.
     pub derivatives: Vec<ExprId>,
-    /// `W_i(d/dt) h_i`.
+    /// `W_i(d/dt) h_i` with the compiled coefficients folded in, for the listing and the
+    /// equation text.
     pub combination: ExprId,
-    /// `W_i(d/dt) h_i - w_i`.
+    /// `W_i(d/dt) h_i - w_i` with the coefficients of `s^0 .. s^(deg W_i - 1)` as
+    /// [`Symbol::TrackingCoefficient`] variables (the leading 1 stays a constant): the row
+    /// that is emitted, so that `W` can change at run time and every entry a coefficient
+    /// multiplies is in the sparsity pattern, even where its default is 0.
     pub row: ExprId,
+}
+
+/// Per output, the compiled degree of `W_i` (0 for an output without an entry).
+pub fn w_degrees(model: &Model) -> Vec<usize> {
+    (0..model.outputs.len())
+        .map(|i| {
+            model
+                .tracking
+                .as_ref()
+                .and_then(|t| t.entries.iter().find(|e| e.output == i))
+                .map_or(0, |e| e.roots.len())
+        })
+        .collect()
+}
+
+/// Where coefficient `power` of `W_output` sits in the tracking value's coefficient array:
+/// all outputs' monic coefficient lists concatenated, lowest power first, so output `i`
+/// starts at `sum_{j < i} (deg W_j + 1)`.
+pub fn coefficient_index(degrees: &[usize], output: usize, power: usize) -> usize {
+    degrees[..output].iter().map(|d| d + 1).sum::<usize>() + power
 }
 
 /// The constraint rows of the tracking DAE, one per output (outputs without an entry get
@@ -379,9 +411,21 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
             let term = model.graph.mul(cc, d);
             sum = model.graph.add(sum, term);
         }
+        let degree = roots.len();
+        let mut runtime = model.graph.constant(0.0);
+        for (power, &d) in derivatives.iter().enumerate() {
+            let term = if power == degree {
+                d
+            } else {
+                let cv = model.var(Symbol::TrackingCoefficient { output: i, power });
+                let c = model.graph.var(cv);
+                model.graph.mul(c, d)
+            };
+            runtime = model.graph.add(runtime, term);
+        }
         let wv = model.var(Symbol::TrackingInput(i));
         let w = model.graph.var(wv);
-        let row = model.graph.sub(sum, w);
+        let row = model.graph.sub(runtime, w);
         rows.push(TrackingRow {
             output: i,
             coefficients,
@@ -414,6 +458,59 @@ mod tests {
             polynomial_from_negated_roots(&[0.0, 0.0]),
             vec![0.0, 0.0, 1.0]
         );
+    }
+
+    #[test]
+    fn tracking_rows_read_the_non_leading_coefficients_as_variables() {
+        let mut m = model(quote! {
+            Cart {
+                states { x, v, y }
+                inputs { f, g }
+                equations {
+                    der(x) = v;
+                    der(v) = f;
+                    der(y) = g;
+                }
+                outputs { x, y }
+                tracking CartTracking { x: [2.0, 0.0] }
+            }
+        });
+        let mut cx = Ctxt::new();
+        let rows = tracking_rows(&mut m, &mut cx).expect("steps can be taken");
+        cx.check().expect("no errors");
+        assert_eq!(w_degrees(&m), vec![2, 0]);
+        let coefficient_vars = |m: &Model, e: ExprId| -> Vec<Symbol> {
+            m.graph
+                .vars(e)
+                .into_iter()
+                .map(|v| m.symbols.symbol(v))
+                .filter(|s| matches!(s, Symbol::TrackingCoefficient { .. }))
+                .collect()
+        };
+        // W = s^2 + 2 s + 0: both non-leading coefficients are variables, even the zero one.
+        assert_eq!(
+            coefficient_vars(&m, rows[0].row),
+            vec![
+                Symbol::TrackingCoefficient {
+                    output: 0,
+                    power: 0
+                },
+                Symbol::TrackingCoefficient {
+                    output: 0,
+                    power: 1
+                },
+            ]
+        );
+        assert_eq!(rows[0].coefficients, vec![0.0, 2.0, 1.0]);
+        // The listing form folds the compiled values in.
+        assert!(coefficient_vars(&m, rows[0].combination).is_empty());
+        assert_eq!(m.display(rows[0].combination), "f + 2 * v");
+        // W = 1 on y: no coefficient at all.
+        assert!(coefficient_vars(&m, rows[1].row).is_empty());
+        // The coefficient array: [x: c0, c1, 1 | y: 1].
+        assert_eq!(coefficient_index(&[2, 0], 0, 1), 1);
+        assert_eq!(coefficient_index(&[2, 0], 1, 0), 3);
+        assert_eq!(coefficient_index(&[1, 2, 1], 2, 0), 5);
     }
 
     #[test]

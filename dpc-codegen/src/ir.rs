@@ -31,6 +31,16 @@ pub enum Symbol {
     IterationCoefficient,
     /// Run-time input of a tracking DAE: `w_i = W_i(d/dt) xi_i` for output `i`.
     TrackingInput(usize),
+    /// Coefficient of `s^power` in `W_output(s)` of a tracking DAE (`power < deg W`; the
+    /// leading coefficient is the constant 1). Read at run time from the tracking value, so
+    /// the roots of `W` can change without recompiling; a parameter of the tracking rows, not
+    /// an unknown.
+    TrackingCoefficient {
+        /// Index of the output.
+        output: usize,
+        /// The power of `s` it multiplies.
+        power: usize,
+    },
 }
 
 /// The bijection between [`Symbol`]s and graph [`Var`]s.
@@ -202,6 +212,9 @@ impl Model {
             Symbol::Param(i) => self.params[i].name.to_string(),
             Symbol::IterationCoefficient => "c".into(),
             Symbol::TrackingInput(i) => format!("w_{}", self.outputs[i].name),
+            Symbol::TrackingCoefficient { output, power } => {
+                format!("W_{}[{power}]", self.outputs[output].name)
+            }
         }
     }
 

@@ -640,7 +640,8 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         let mut worst = 0.0_f64;
         for j in 1..=steps {
             let tj = t + j as f64 * delta;
-            T::tracking_inputs(&self.reference, tj, &mut self.scratch, &mut self.w)?;
+            self.model
+                .tracking_inputs(&self.reference, tj, &mut self.scratch, &mut self.w)?;
             // Initial guess: the previous sample's solution at this inner step, shifted to
             // start from the new measurement; else the previous inner step.
             if self.have_warm {

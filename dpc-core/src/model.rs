@@ -7,6 +7,7 @@
 
 use crate::dae::ImplicitDae;
 use crate::sink::MatrixSink;
+use thiserror::Error;
 
 /// Whether an unknown is differentiated (`der(x)` appears) or algebraic.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -70,6 +71,17 @@ pub trait DaeModel {
     fn from_params(params: Self::Params) -> Self;
     /// The model's parameters.
     fn params(&self) -> &Self::Params;
+
+    /// The value of parameter `index` (into [`PARAM_NAMES`](Self::PARAM_NAMES)) in `params`,
+    /// or `None` when there is no such parameter.
+    fn parameter(params: &Self::Params, index: usize) -> Option<f64>;
+
+    /// Set parameter `index` (into [`PARAM_NAMES`](Self::PARAM_NAMES)) of `params` to
+    /// `value`; `false` (and `params` unchanged) when there is no such parameter.
+    ///
+    /// Any value is stored as given: whether it makes sense for the model (a positive mass,
+    /// say) is the caller's business. See [`set_parameter_by_name`] for lookup by name.
+    fn set_parameter(params: &mut Self::Params, index: usize, value: f64) -> bool;
 
     /// Residual `F(t, x, x', z, u)` into `out` (length `N_EQUATIONS`).
     fn residual(&self, t: f64, x: &[f64], xdot: &[f64], z: &[f64], u: &[f64], out: &mut [f64]);
@@ -211,6 +223,70 @@ impl<M: DaeModel, U: Fn(f64, &mut [f64])> ImplicitDae for ModelDae<M, U> {
 
     fn unknown_name(&self, i: usize) -> String {
         unknown_name::<M>(i)
+    }
+}
+
+/// A parameter name that a model does not declare.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("model `{model}` has no parameter `{name}`; {}", known_parameters(.known))]
+pub struct UnknownParameter {
+    /// The model's name ([`DaeModel::NAME`]).
+    pub model: &'static str,
+    /// The name asked for.
+    pub name: String,
+    /// The parameters the model declares ([`DaeModel::PARAM_NAMES`]).
+    pub known: &'static [&'static str],
+}
+
+fn known_parameters(known: &[&str]) -> String {
+    if known.is_empty() {
+        "it declares no parameters".to_string()
+    } else {
+        format!("its parameters are {}", known.join(", "))
+    }
+}
+
+/// The index of parameter `name` of model `M` in [`DaeModel::PARAM_NAMES`].
+pub fn parameter_index<M: DaeModel>(name: &str) -> Option<usize> {
+    M::PARAM_NAMES.iter().position(|p| *p == name)
+}
+
+/// The value of parameter `name` of model `M` in `params`.
+///
+/// # Errors
+/// [`UnknownParameter`] when `M` declares no parameter of that name.
+pub fn parameter_by_name<M: DaeModel>(
+    params: &M::Params,
+    name: &str,
+) -> Result<f64, UnknownParameter> {
+    parameter_index::<M>(name)
+        .and_then(|i| M::parameter(params, i))
+        .ok_or_else(|| unknown_parameter::<M>(name))
+}
+
+/// Set parameter `name` of model `M` in `params` to `value`, e.g. to simulate a plant whose
+/// mass differs from the controller's model. A tracking DAE shares its plant's `Params`, so
+/// the same call sets the controller's parameters.
+///
+/// # Errors
+/// [`UnknownParameter`], naming the model and listing its parameters, when `M` declares no
+/// parameter of that name; `params` is then unchanged.
+pub fn set_parameter_by_name<M: DaeModel>(
+    params: &mut M::Params,
+    name: &str,
+    value: f64,
+) -> Result<(), UnknownParameter> {
+    match parameter_index::<M>(name) {
+        Some(i) if M::set_parameter(params, i, value) => Ok(()),
+        _ => Err(unknown_parameter::<M>(name)),
+    }
+}
+
+fn unknown_parameter<M: DaeModel>(name: &str) -> UnknownParameter {
+    UnknownParameter {
+        model: M::NAME,
+        name: name.to_string(),
+        known: M::PARAM_NAMES,
     }
 }
 
