@@ -105,6 +105,36 @@ fn the_correction_hold_about_the_reference_is_far_more_accurate_than_about_the_n
 }
 
 #[test]
+fn every_scenario_in_the_repository_runs() {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(scenarios())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 3, "{files:?}");
+    for file in files {
+        let name = file.file_stem().unwrap().to_str().unwrap().to_string();
+        let out = out_dir(&format!("all-{name}"));
+        let o = dpc(&[
+            "simulate",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--set",
+            "t_end=1",
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let s = summary(&out);
+        assert!(s["samples"].as_u64().unwrap() > 1, "{name}");
+        assert!(
+            s["linear_design"]["sampled"]["spectral_radius"].is_number(),
+            "{name}"
+        );
+    }
+}
+
+#[test]
 fn a_sweep_writes_one_row_per_combination() {
     let out = out_dir("sweep");
     let file = scenarios().join("wheel.toml");
