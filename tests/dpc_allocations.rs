@@ -6,9 +6,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use std::sync::Arc;
 
-use dpc::core::dpc::{Dpc, DpcOptions, Extraction, ReferenceNominal, ReferenceState};
+use dpc::core::dpc::{Dpc, DpcOptions, Extraction};
 use dpc::core::linalg::NalgebraLu;
-use dpc_models::wheel_design::{self, UprightRolling};
+use dpc_models::wheel_design;
 use dpc_models::{Wheel, WheelReference, WheelTracking};
 
 struct Counting;
@@ -70,25 +70,7 @@ fn wheel_control_updates_do_not_allocate() {
             Feedback::None => {}
             Feedback::AboutNominal => dpc = dpc.with_prefeedback(law).expect("prefeedback"),
             Feedback::AboutReference => {
-                let follow = |state, output, order| ReferenceState {
-                    state,
-                    output,
-                    order,
-                };
-                law.nominal = Box::new(
-                    ReferenceNominal::new(
-                        UprightRolling,
-                        reference,
-                        5,
-                        vec![
-                            follow(0, 0, 0),
-                            follow(1, 1, 0),
-                            follow(3, 0, 1),
-                            follow(4, 1, 1),
-                        ],
-                    )
-                    .expect("map"),
-                );
+                law.nominal = Box::new(wheel_design::about_reference(reference).expect("map"));
                 dpc = dpc.with_prefeedback(law).expect("prefeedback");
             }
         }

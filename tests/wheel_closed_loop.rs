@@ -10,9 +10,7 @@
 //! (`dpc_core::linear::sampled`). The bisection itself is an ignored test:
 //! `cargo test --release --test wheel_closed_loop -- --ignored --nocapture`.
 
-use dpc::core::dpc::{
-    Dpc, DpcOptions, Extraction, Nominal, Prefeedback, ReferenceNominal, ReferenceState,
-};
+use dpc::core::dpc::{Dpc, DpcOptions, Extraction, Nominal, Prefeedback};
 use dpc::core::linalg::NalgebraLu;
 use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
 use dpc::core::linear::{Analysis, LinearSystem};
@@ -43,27 +41,9 @@ enum About {
 fn prefeedback(about: About) -> Prefeedback {
     let nominal: Box<dyn Nominal + Send + Sync> = match about {
         About::Nominal => Box::new(UprightRolling),
-        About::Reference => {
-            let follow = |state, output, order| ReferenceState {
-                state,
-                output,
-                order,
-            };
-            Box::new(
-                ReferenceNominal::new(
-                    UprightRolling,
-                    WheelReference::default(),
-                    5,
-                    vec![
-                        follow(0, 0, 0),
-                        follow(1, 1, 0),
-                        follow(3, 0, 1),
-                        follow(4, 1, 1),
-                    ],
-                )
-                .expect("reference map"),
-            )
-        }
+        About::Reference => Box::new(
+            wheel_design::about_reference(WheelReference::default()).expect("reference map"),
+        ),
     };
     Prefeedback {
         k_n: linear_design().1.k_n.expect("K_n"),

@@ -26,6 +26,19 @@ fn dpc(args: &[&str]) -> Output {
         .expect("dpc runs")
 }
 
+/// `dpc simulate FILE --out OUT --set T_END`, which must succeed.
+fn simulate(file: &Path, out: &Path, t_end: &str) {
+    let o = dpc(&[
+        "simulate",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        t_end,
+    ]);
+    assert!(o.status.success(), "{}: {}", file.display(), stderr(&o));
+}
+
 fn summary(dir: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
     serde_json::from_str(&text).expect("valid JSON")
@@ -39,15 +52,7 @@ fn stderr(o: &Output) -> String {
 fn the_wheel_scenario_writes_summary_trajectory_and_plots() {
     let out = out_dir("wheel");
     let file = scenarios().join("wheel.toml");
-    let o = dpc(&[
-        "simulate",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--set",
-        "t_end=2",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    simulate(&file, &out, "t_end=2");
     let s = summary(&out);
     assert_eq!(s["diverged"], false);
     assert_eq!(s["samples"], 41);
@@ -84,15 +89,7 @@ fn the_wheel_scenario_writes_summary_trajectory_and_plots() {
 fn the_correction_hold_about_the_reference_is_far_more_accurate_than_about_the_nominal() {
     let out = out_dir("hold-correction");
     let file = scenarios().join("wheel-hold-correction.toml");
-    let o = dpc(&[
-        "simulate",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--set",
-        "t_end=8",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    simulate(&file, &out, "t_end=8");
     let psi = |s: &serde_json::Value| s["max_abs_error"]["psi"].as_f64().unwrap();
     let about_reference = summary(&out);
     let about_nominal = summary(&out.join("compare").join("design.about=nominal"));
@@ -116,15 +113,7 @@ fn every_scenario_in_the_repository_runs() {
     for file in files {
         let name = file.file_stem().unwrap().to_str().unwrap().to_string();
         let out = out_dir(&format!("all-{name}"));
-        let o = dpc(&[
-            "simulate",
-            file.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--set",
-            "t_end=1",
-        ]);
-        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        simulate(&file, &out, "t_end=1");
         let s = summary(&out);
         assert!(s["samples"].as_u64().unwrap() > 1, "{name}");
         assert!(

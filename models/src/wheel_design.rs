@@ -9,9 +9,10 @@
 
 use std::f64::consts::FRAC_PI_2;
 
-use dpc::core::dpc::{Nominal, Prefeedback};
+use dpc::core::dpc::{Nominal, Prefeedback, ReferenceNominal, ReferenceState};
 use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
 use dpc::core::linearize::{linearize, LinearizeError, OperatingPoint};
+use dpc::core::reference::Reference;
 use dpc::nalgebra::Complex;
 
 use crate::Wheel;
@@ -50,6 +51,9 @@ pub enum DesignError {
     /// The linear analysis failed.
     #[error("linear analysis of the wheel: {0}")]
     Analysis(#[from] LinearError),
+    /// The reference does not fit the map of [`reference_states`].
+    #[error("reference of the preliminary feedback: {0}")]
+    Reference(String),
     /// The analysis built no `K_n`.
     #[error("the linear analysis built no preliminary feedback: {0}")]
     NoPrefeedback(String),
@@ -95,6 +99,35 @@ pub fn prefeedback(wheel: &Wheel) -> Result<Prefeedback, DesignError> {
         k_n,
         nominal: Box::new(UprightRolling),
     })
+}
+
+/// The states that follow the reference when the feedback is taken about it:
+/// `theta, psi <- theta_ref, psi_ref` and `dtheta, dpsi <- theta_ref', psi_ref'`.
+pub fn reference_states() -> Vec<ReferenceState> {
+    let follow = |state, output, order| ReferenceState {
+        state,
+        output,
+        order,
+    };
+    vec![
+        follow(0, 0, 0),
+        follow(1, 1, 0),
+        follow(3, 0, 1),
+        follow(4, 1, 1),
+    ]
+}
+
+/// The nominal motion with [`reference_states`] following `reference` (the wheel's
+/// `theta` and `psi` references, e.g. [`crate::WheelReference`]).
+///
+/// # Errors
+/// [`DesignError::Reference`] when the reference has fewer than two components or no first
+/// derivative.
+pub fn about_reference<R: Reference>(
+    reference: R,
+) -> Result<ReferenceNominal<UprightRolling, R>, DesignError> {
+    ReferenceNominal::new(UprightRolling, reference, 5, reference_states())
+        .map_err(|e| DesignError::Reference(e.to_string()))
 }
 
 #[cfg(test)]
