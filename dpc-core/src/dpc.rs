@@ -416,6 +416,12 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// input is [`Prefeedback::input`] of it (held as a whole, or with the feedback applied
     /// continuously and only `v` held).
     ///
+    /// The term `dG/du K_n` fills the columns of the states in the rows where an input
+    /// appears, beyond the generated pattern of `dG/dX`: use a dense solver
+    /// ([`NalgebraLu`](crate::linalg::NalgebraLu), [`FaerDenseLu`](crate::linalg::FaerDenseLu));
+    /// a sparse one built on the generated pattern reports the first such entry as
+    /// [`FactorError::OutsidePattern`] through [`DpcError::Singular`] instead of dropping it.
+    ///
     /// # Errors
     /// [`DpcError::Dimension`] when `K_n` is not `inputs x states`.
     pub fn with_prefeedback(mut self, law: Prefeedback) -> Result<Self, DpcError> {
