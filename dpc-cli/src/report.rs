@@ -50,7 +50,7 @@ pub struct Summary {
     /// relative rounding error of the extracted control, which grows as `delta` shrinks
     /// while the truncation error falls; compare it with the accuracy wanted.
     pub roundoff_level: f64,
-    /// Wall-clock time of the simulation [s].
+    /// Wall-clock time of the simulation, in seconds.
     pub wall_time_s: f64,
     /// The parameters of the plant and of the controller, and the controller's `W`, as run.
     pub in_use: ModelInUse,

@@ -87,7 +87,7 @@ pub struct RunResult {
     pub design: Option<DesignReport>,
     /// The closed loop.
     pub closed_loop: ClosedLoop,
-    /// Wall-clock time of the simulation [s].
+    /// Wall-clock time of the simulation, in seconds.
     pub wall_time: f64,
 }
 

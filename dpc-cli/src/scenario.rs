@@ -113,9 +113,9 @@ pub enum Term {
     Sine {
         /// Amplitude.
         amplitude: f64,
-        /// Angular frequency [rad/s].
+        /// Angular frequency, in rad/s.
         omega: f64,
-        /// Phase [rad].
+        /// Phase, in rad.
         #[serde(default)]
         phase: f64,
     },

@@ -113,9 +113,9 @@ pub struct Sinusoid {
     pub offset: f64,
     /// Amplitude.
     pub amplitude: f64,
-    /// Angular frequency [rad/s].
+    /// Angular frequency, in rad/s.
     pub omega: f64,
-    /// Phase [rad].
+    /// Phase, in rad.
     pub phase: f64,
 }
 
