@@ -59,6 +59,10 @@ pub struct DesignReport {
     pub k_n: Option<Vec<Vec<f64>>>,
     /// The linear sampled-data prediction for the scenario's `h`, hold and feedback.
     pub sampled: SampledPrediction,
+    /// `max |[A B](t_end) - [A B](0)| / max |[A B](0)|` along the nominal motion: zero when
+    /// one linearisation (and so one constant `K_n`) serves the whole run, as for a steady
+    /// motion in a cyclic coordinate.
+    pub linearisation_drift: f64,
 }
 
 /// DPC's limit law on the linearisation, held by the scenario's zero-order hold
@@ -312,6 +316,35 @@ impl Runner<'_> {
             },
         )
         .map_err(|e| ScenarioError::Setup(format!("linearisation about the nominal: {e}")))?;
+        // K_n is designed at t = 0; how much the linearisation changes along the motion up
+        // to t_end tells whether one constant K_n fits the whole run.
+        let t_end = self.scenario.t_end;
+        let x_end: Vec<f64> = nominal
+            .state
+            .iter()
+            .zip(&rate)
+            .map(|(x, r)| x + t_end * r)
+            .collect();
+        let sys_end = linearize(
+            model,
+            OperatingPoint {
+                t: t_end,
+                x: &x_end,
+                xdot: &rate,
+                z: &[],
+                u: &input,
+            },
+        )
+        .map_err(|e| {
+            ScenarioError::Setup(format!(
+                "linearisation along the nominal at t = {t_end}: {e}"
+            ))
+        })?;
+        let scale = sys.a.amax().max(sys.b.amax()).max(f64::MIN_POSITIVE);
+        let linearisation_drift = (&sys_end.a - &sys.a)
+            .amax()
+            .max((&sys_end.b - &sys.b).amax())
+            / scale;
         let poles = self
             .scenario
             .design
@@ -340,12 +373,11 @@ impl Runner<'_> {
                 .as_ref()
                 .map(|k| k.row_iter().map(|r| r.iter().copied().collect()).collect()),
             sampled: self.sampled_prediction(&sys, &analysis)?,
+            linearisation_drift,
         };
         Ok((report, k_n))
     }
-}
 
-impl Runner<'_> {
     /// The sampled-data prediction of the linearised loop for this scenario: with the
     /// preliminary feedback only when the scenario applies it.
     fn sampled_prediction(

@@ -98,6 +98,16 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), String> {
             summary.scenario.hold, d.sampled.spectral_radius, summary.scenario.h
         );
     }
+    if let Some(d) = summary
+        .linear_design
+        .as_ref()
+        .filter(|d| d.linearisation_drift > 1e-6)
+    {
+        println!(
+            "note: the linearisation changes along the nominal motion by {:.2e} (relative) up to t_end; K_n is designed at t = 0",
+            d.linearisation_drift
+        );
+    }
     println!("{}", describe(&summary));
     for extra in comparisons {
         let mut all = overrides.clone();

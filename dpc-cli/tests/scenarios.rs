@@ -59,6 +59,8 @@ fn the_wheel_scenario_writes_summary_trajectory_and_plots() {
     let design = &s["linear_design"];
     assert_eq!(design["dpc_stable_without_prefeedback"], false);
     assert_eq!(design["dpc_stable_with_prefeedback"], true);
+    // psi is cyclic: the linearisation is the same all along x0(t) = [pi/2, -6t, 0, 0, -6].
+    assert_eq!(design["linearisation_drift"], 0.0);
     let h_star = design["sampled"]["critical_period"]["at"].as_f64().unwrap();
     assert!((h_star - 0.1333).abs() < 1e-3, "{h_star}");
     for key in ["final_error", "max_abs_error"] {
@@ -98,6 +100,34 @@ fn the_correction_hold_about_the_reference_is_far_more_accurate_than_about_the_n
         "{} vs {}",
         psi(&about_reference),
         psi(&about_nominal)
+    );
+}
+
+#[test]
+fn a_nominal_along_which_the_linearisation_changes_is_reported() {
+    let out = out_dir("drift");
+    let file = scenarios().join("wheel.toml");
+    let o = dpc(&[
+        "simulate",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "t_end=1",
+        "--set",
+        "compare=[]",
+        "--set",
+        "design.nominal.rate=[0.05, -6.0, 0.0, 0.0, 0.0]",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let drift = summary(&out)["linear_design"]["linearisation_drift"]
+        .as_f64()
+        .unwrap();
+    assert!(drift > 1e-4, "{drift}");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("the linearisation changes along the nominal"),
+        "{stdout}"
     );
 }
 
