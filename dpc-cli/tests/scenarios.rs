@@ -26,17 +26,20 @@ fn dpc(args: &[&str]) -> Output {
         .expect("dpc runs")
 }
 
-/// `dpc simulate FILE --out OUT --set T_END`, which must succeed.
-fn simulate(file: &Path, out: &Path, t_end: &str) {
-    let o = dpc(&[
+/// `dpc simulate FILE --out OUT --set S ...` for each of `sets`, which must succeed.
+fn simulate(file: &Path, out: &Path, sets: &[&str]) -> Output {
+    let mut args = vec![
         "simulate",
         file.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-        "--set",
-        t_end,
-    ]);
+    ];
+    for set in sets {
+        args.extend(["--set", set]);
+    }
+    let o = dpc(&args);
     assert!(o.status.success(), "{}: {}", file.display(), stderr(&o));
+    o
 }
 
 fn summary(dir: &Path) -> serde_json::Value {
@@ -52,7 +55,7 @@ fn stderr(o: &Output) -> String {
 fn the_wheel_scenario_writes_summary_trajectory_and_plots() {
     let out = out_dir("wheel");
     let file = scenarios().join("wheel.toml");
-    simulate(&file, &out, "t_end=2");
+    simulate(&file, &out, &["t_end=2"]);
     let s = summary(&out);
     assert_eq!(s["diverged"], false);
     assert_eq!(s["samples"], 41);
@@ -91,7 +94,7 @@ fn the_wheel_scenario_writes_summary_trajectory_and_plots() {
 fn the_correction_hold_about_the_reference_is_far_more_accurate_than_about_the_nominal() {
     let out = out_dir("hold-correction");
     let file = scenarios().join("wheel-hold-correction.toml");
-    simulate(&file, &out, "t_end=8");
+    simulate(&file, &out, &["t_end=8"]);
     let psi = |s: &serde_json::Value| s["max_abs_error"]["psi"].as_f64().unwrap();
     let about_reference = summary(&out);
     let about_nominal = summary(&out.join("compare").join("design.about=nominal"));
@@ -107,19 +110,15 @@ fn the_correction_hold_about_the_reference_is_far_more_accurate_than_about_the_n
 fn a_nominal_along_which_the_linearisation_changes_is_reported() {
     let out = out_dir("drift");
     let file = scenarios().join("wheel.toml");
-    let o = dpc(&[
-        "simulate",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--set",
-        "t_end=1",
-        "--set",
-        "compare=[]",
-        "--set",
-        "design.nominal.rate=[0.05, -6.0, 0.0, 0.0, 0.0]",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let o = simulate(
+        &file,
+        &out,
+        &[
+            "t_end=1",
+            "compare=[]",
+            "design.nominal.rate=[0.05, -6.0, 0.0, 0.0, 0.0]",
+        ],
+    );
     let drift = summary(&out)["linear_design"]["linearisation_drift"]
         .as_f64()
         .unwrap();
@@ -143,7 +142,7 @@ fn every_scenario_in_the_repository_runs() {
     for file in files {
         let name = file.file_stem().unwrap().to_str().unwrap().to_string();
         let out = out_dir(&format!("all-{name}"));
-        simulate(&file, &out, "t_end=1");
+        simulate(&file, &out, &["t_end=1"]);
         let s = summary(&out);
         assert!(s["samples"].as_u64().unwrap() > 1, "{name}");
         assert!(
