@@ -91,13 +91,8 @@ fn run(
 /// Largest |error| per output over the last quarter of the run.
 fn late_error(run: &ClosedLoop) -> [f64; 2] {
     let t_end = run.samples.last().unwrap().t;
-    let mut m = [0.0_f64; 2];
-    for s in run.samples.iter().filter(|s| s.t >= 0.75 * t_end) {
-        for (mi, e) in m.iter_mut().zip(&s.error) {
-            *mi = mi.max(e.abs());
-        }
-    }
-    m
+    let m = run.max_abs_error_since(0.75 * t_end);
+    [m[0], m[1]]
 }
 
 #[test]

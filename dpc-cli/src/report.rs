@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
 
+use dpc::core::numeric::max_or_nan;
 use dpc::core::simulate::ControllerEvent;
 use serde::Serialize;
 
@@ -67,19 +68,13 @@ impl Summary {
         let t_final = cl.samples.last().map_or(0.0, |s| s.t);
         let mut final_error = BTreeMap::new();
         let mut max_abs_error = BTreeMap::new();
+        // The last quarter of the scheduled run; a run that stopped early is judged on the
+        // samples it has, which then include the divergence.
+        let late = cl.max_abs_error_since(0.75 * run.scenario.t_end.min(t_final.max(0.0)));
         for (i, name) in run.names.outputs.iter().enumerate() {
             let last = cl.samples.last().map_or(f64::NAN, |s| s.error[i]);
             final_error.insert(name.clone(), last);
-            // The last quarter of the scheduled run; a run that stopped early is judged on
-            // the samples it has, which then include the divergence.
-            let from = 0.75 * run.scenario.t_end.min(t_final.max(0.0));
-            let m = cl
-                .samples
-                .iter()
-                .filter(|s| s.t >= from)
-                .map(|s| s.error[i].abs())
-                .fold(0.0_f64, |m, e| if e.is_nan() { f64::NAN } else { m.max(e) });
-            max_abs_error.insert(name.clone(), m);
+            max_abs_error.insert(name.clone(), late.get(i).copied().unwrap_or(f64::NAN));
         }
         Self {
             title: run.scenario.title.clone(),
@@ -107,10 +102,7 @@ impl Summary {
 
     /// The largest late error over the outputs (NaN if any is NaN).
     pub fn worst_late_error(&self) -> f64 {
-        self.max_abs_error.values().fold(
-            0.0_f64,
-            |m, e| if e.is_nan() { f64::NAN } else { m.max(*e) },
-        )
+        max_or_nan(self.max_abs_error.values().copied())
     }
 }
 

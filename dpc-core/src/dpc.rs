@@ -26,6 +26,7 @@
 //! [`NalgebraLu`](crate::linalg::NalgebraLu) back end an update allocates nothing.
 
 use crate::linalg::{FactorError, LinearSolver};
+use crate::numeric::max_or_nan;
 use crate::reference::{Reference, ReferenceError};
 use crate::sink::MatrixSink;
 use crate::tracking::TrackingDae;
@@ -675,14 +676,15 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                     self.xdot[i] = (self.y[i] - self.x_prev[i]) / delta;
                 }
                 self.evaluate_residual(tj);
-                let scale = 1.0 + self.y[..nx].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-                residual = self
-                    .res
-                    .iter()
-                    .zip(&self.dynamic_row)
-                    .map(|(r, &dynamic)| if dynamic { (r * delta).abs() } else { r.abs() })
-                    .fold(0.0_f64, |m, v| if v.is_nan() { f64::NAN } else { m.max(v) })
-                    / scale;
+                let scale = 1.0 + max_or_nan(self.y[..nx].iter().map(|v| v.abs()));
+                residual =
+                    max_or_nan(self.res.iter().zip(&self.dynamic_row).map(|(r, &dynamic)| {
+                        if dynamic {
+                            (r * delta).abs()
+                        } else {
+                            r.abs()
+                        }
+                    })) / scale;
                 if residual.is_nan() {
                     break;
                 }

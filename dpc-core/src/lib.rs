@@ -13,6 +13,7 @@
 //! * [`linear`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
 //!   verdict, preliminary feedback `K_n`);
 //! * [`linearize`]: state-space linearisation of a generated model from its Jacobians;
+//! * [`numeric`]: floating-point helpers (a maximum that keeps NaN);
 //! * [`reference`](mod@reference): reference trajectories with exact derivatives;
 //! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model;
 //! * [`simulate`]: the sampled closed loop, with the plant integrated accurately between samples.
@@ -24,6 +25,7 @@ pub mod linalg;
 pub mod linear;
 pub mod linearize;
 pub mod model;
+pub mod numeric;
 pub mod reference;
 pub mod simulate;
 pub mod sink;

@@ -18,6 +18,7 @@ use crate::dae::ImplicitDae;
 use crate::dpc::{Dpc, DpcError, Prefeedback};
 use crate::linalg::{FaerDenseLu, LinearSolver};
 use crate::model::DaeModel;
+use crate::numeric::max_or_nan;
 use crate::reference::Reference;
 use crate::sink::MatrixSink;
 use crate::tracking::TrackingDae;
@@ -161,6 +162,22 @@ pub struct ClosedLoop {
 }
 
 impl ClosedLoop {
+    /// Per output, the largest `|y - xi|` over the samples at `t >= from` (NaN if one is
+    /// NaN, 0 without samples).
+    pub fn max_abs_error_since(&self, from: f64) -> Vec<f64> {
+        let outputs = self.samples.first().map_or(0, |s| s.error.len());
+        (0..outputs)
+            .map(|i| {
+                max_or_nan(
+                    self.samples
+                        .iter()
+                        .filter(|s| s.t >= from)
+                        .map(|s| s.error[i].abs()),
+                )
+            })
+            .collect()
+    }
+
     /// Samples on which the controller needed a larger `delta` and then succeeded.
     pub fn retried_samples(&self) -> usize {
         self.events
