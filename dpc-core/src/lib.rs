@@ -4,8 +4,8 @@
 //!
 //! * [`sink`]: where generated code writes Jacobian entries (dense nalgebra, faer, sparse);
 //! * [`model`]: the trait that `dpc::model!` implements for every declared plant
-//!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`), and the adapter
-//!   that turns a model with given inputs into an [`dae::ImplicitDae`];
+//!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`, and its
+//!   [`Structure`]: names, dimensions, sparsity);
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
 //! * [`dpc`]: one sampled update of the Descriptor Predictive Controller;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
@@ -32,7 +32,7 @@ pub mod sink;
 pub mod tracking;
 
 pub use dae::ImplicitDae;
-pub use model::{DaeModel, ModelDae};
+pub use model::{DaeModel, Structure};
 pub use reference::Reference;
 pub use sink::MatrixSink;
 pub use tracking::TrackingDae;
