@@ -9,6 +9,7 @@
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
 //! * [`dpc`]: one sampled update of the Descriptor Predictive Controller;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
+//! * [`radau`]: the Radau IIA integrator (order 5) for DAEs of index up to 3 as declared;
 //! * [`linalg`]: the linear solvers behind the integrator's Newton iteration;
 //! * [`linear`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
 //!   verdict, preliminary feedback `K_n`);
@@ -26,6 +27,7 @@ pub mod linear;
 pub mod linearize;
 pub mod model;
 pub mod numeric;
+pub mod radau;
 pub mod reference;
 pub mod simulate;
 pub mod sink;
