@@ -176,7 +176,7 @@ fn bad_inputs_are_typed_errors() {
 /// The origin as nominal trajectory.
 struct Origin;
 
-impl dpc::core::dpc::Nominal for Origin {
+impl dpc::core::prefeedback::Nominal for Origin {
     fn state(&self, _t: f64, x0: &mut [f64]) {
         x0.fill(0.0);
     }
@@ -212,7 +212,7 @@ fn with_prefeedback_the_update_converges_to_the_prefed_law() {
         },
     )
     .unwrap()
-    .with_prefeedback(dpc::core::dpc::Prefeedback {
+    .with_prefeedback(dpc::core::prefeedback::Prefeedback {
         k_n: k_n.clone(),
         nominal: Box::new(Origin),
     })

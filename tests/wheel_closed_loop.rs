@@ -10,18 +10,20 @@
 //! (`dpc_core::linear::sampled`). The bisection itself is an ignored test:
 //! `cargo test --release --test wheel_closed_loop -- --ignored --nocapture`.
 
-use dpc::core::dpc::{Dpc, DpcOptions, Extraction, Nominal, Prefeedback};
+use dpc::core::dpc::{Dpc, DpcOptions, Extraction};
 use dpc::core::linalg::NalgebraLu;
 use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
 use dpc::core::linear::{Analysis, LinearSystem};
+use dpc::core::prefeedback::{Nominal, Prefeedback};
 use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions, ControllerEvent, Hold};
-use dpc_models::wheel_design::{self, UprightRolling};
+use dpc_models::wheel_design;
 use dpc_models::{Wheel, WheelReference, WheelTracking};
 use std::f64::consts::FRAC_PI_2;
 
 /// The paper's linearisation and analysis (`dpc_models::wheel_design`).
 fn linear_design() -> (LinearSystem, Analysis) {
-    let (sys, analysis) = wheel_design::design(&Wheel::default()).expect("design");
+    let design = wheel_design::design(&Wheel::default()).expect("design");
+    let (sys, analysis) = (design.system, design.analysis);
     assert!(
         !analysis.dpc_stable,
         "the linear analysis predicts DPC alone unstable"
@@ -40,7 +42,7 @@ enum About {
 
 fn prefeedback(about: About) -> Prefeedback {
     let nominal: Box<dyn Nominal + Send + Sync> = match about {
-        About::Nominal => Box::new(UprightRolling),
+        About::Nominal => Box::new(wheel_design::nominal()),
         About::Reference => Box::new(
             wheel_design::about_reference(WheelReference::default()).expect("reference map"),
         ),

@@ -7,12 +7,13 @@ use std::time::Instant;
 
 use std::sync::Arc;
 
-use dpc::core::dpc::{Dpc, DpcOptions, Nominal, Prefeedback, ReferenceNominal, ReferenceState};
+use dpc::core::dpc::{Dpc, DpcOptions};
 use dpc::core::linalg::LinearSolver;
 use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
 use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
 use dpc::core::linearize::{linearize, OperatingPoint};
 use dpc::core::model::{self, set_parameter_by_name, DaeModel};
+use dpc::core::prefeedback::{Nominal, Prefeedback, ReferenceNominal, ReferenceState};
 use dpc::core::reference::{Components, Reference, ReferenceError};
 use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions};
 use dpc::core::tracking::TrackingError;

@@ -27,6 +27,7 @@
 
 use crate::linalg::{FactorError, LinearSolver};
 use crate::numeric::max_or_nan;
+use crate::prefeedback::Prefeedback;
 use crate::reference::{Reference, ReferenceError};
 use crate::sink::MatrixSink;
 use crate::tracking::TrackingDae;
@@ -187,143 +188,6 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     u_first: Vec<f64>,
     u_second: Vec<f64>,
     prefeedback: Option<PrefeedbackWork>,
-}
-
-/// A nominal trajectory `(x0(t), u0(t))` about which a preliminary feedback acts.
-pub trait Nominal {
-    /// `x0(t)` into `x0` (length = number of states).
-    fn state(&self, t: f64, x0: &mut [f64]);
-    /// `u0(t)` into `u0` (length = number of inputs).
-    fn input(&self, t: f64, u0: &mut [f64]);
-}
-
-/// Which state component of a [`ReferenceNominal`] follows which derivative of the reference.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ReferenceState {
-    /// Index of the state in `x`.
-    pub state: usize,
-    /// Index of the reference component (output).
-    pub output: usize,
-    /// Derivative order: `x0_state(t) = xi_output^(order)(t)`.
-    pub order: usize,
-}
-
-/// A preliminary feedback taken *about the reference* instead of about the nominal motion it
-/// was designed on: `x0(t)` is the base nominal with the listed states replaced by the
-/// reference and its derivatives (for the wheel: `theta`, `psi` by `theta_ref`, `psi_ref`, and
-/// `dtheta`, `dpsi` by their derivatives), while `u0(t)` stays the base nominal's.
-///
-/// For a linear plant the choice does not matter (DPC absorbs any affine offset of the
-/// feedback into `v`). For a nonlinear plant whose reference drifts away from the nominal,
-/// the feedback about the nominal pulls the plant back to the nominal between samples, which
-/// the held `v` can only correct at the next sample; about the reference it pulls towards
-/// the path instead.
-///
-/// If the reference fails at some `t`, the replaced components are NaN, so that the failure
-/// surfaces as a non-finite control instead of a plausible wrong one.
-pub struct ReferenceNominal<N: Nominal, R: Reference> {
-    base: N,
-    reference: R,
-    map: Vec<ReferenceState>,
-    order: usize,
-    /// Reference derivatives `(order + 1) * dimension`, allocated once.
-    scratch: std::sync::Mutex<Vec<f64>>,
-}
-
-impl<N: Nominal, R: Reference> ReferenceNominal<N, R> {
-    /// `base` with the states in `map` following `reference`.
-    ///
-    /// # Errors
-    /// [`DpcError::Dimension`] when a map entry names a state beyond `n_states` or an output
-    /// beyond the reference's dimension; [`DpcError::Reference`] when an order exceeds what
-    /// the reference provides.
-    pub fn new(
-        base: N,
-        reference: R,
-        n_states: usize,
-        map: Vec<ReferenceState>,
-    ) -> Result<Self, DpcError> {
-        let m = reference.dimension();
-        for e in &map {
-            if e.state >= n_states {
-                return Err(DpcError::Dimension {
-                    what: "reference-state map: state index",
-                    expected: n_states,
-                    found: e.state + 1,
-                });
-            }
-            if e.output >= m {
-                return Err(DpcError::Dimension {
-                    what: "reference-state map: output index",
-                    expected: m,
-                    found: e.output + 1,
-                });
-            }
-        }
-        let order = map.iter().map(|e| e.order).max().unwrap_or(0);
-        if order > reference.max_order() {
-            return Err(DpcError::Reference(ReferenceError::OrderTooHigh {
-                name: "reference of the preliminary feedback".into(),
-                max: reference.max_order(),
-                requested: order,
-            }));
-        }
-        Ok(Self {
-            base,
-            reference,
-            map,
-            order,
-            scratch: std::sync::Mutex::new(vec![0.0; (order + 1) * m]),
-        })
-    }
-}
-
-impl<N: Nominal, R: Reference> Nominal for ReferenceNominal<N, R> {
-    fn state(&self, t: f64, x0: &mut [f64]) {
-        self.base.state(t, x0);
-        let m = self.reference.dimension();
-        // A poisoned lock only means another thread panicked mid-write of plain numbers.
-        let mut d = self
-            .scratch
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let ok = self.reference.derivatives(t, self.order, &mut d).is_ok();
-        for e in &self.map {
-            x0[e.state] = if ok {
-                d[e.order * m + e.output]
-            } else {
-                f64::NAN
-            };
-        }
-    }
-
-    fn input(&self, t: f64, u0: &mut [f64]) {
-        self.base.input(t, u0);
-    }
-}
-
-/// A preliminary feedback `u = u0(t) + K_n (x - x0(t)) + v` (paper, Section 3.1), applied in
-/// deviation coordinates about a nominal trajectory.
-pub struct Prefeedback {
-    /// `K_n` (`inputs x states`), from [`crate::linear::analyze`] on the linearisation.
-    pub k_n: nalgebra::DMatrix<f64>,
-    /// The nominal trajectory.
-    pub nominal: Box<dyn Nominal + Send + Sync>,
-}
-
-impl Prefeedback {
-    /// `u = u0(t) + K_n (x - x0(t)) + v`, using the scratch buffers `x0` and `u0`.
-    pub fn input(&self, t: f64, x: &[f64], v: &[f64], x0: &mut [f64], u: &mut [f64]) {
-        self.nominal.state(t, x0);
-        self.nominal.input(t, u);
-        for (i, ui) in u.iter_mut().enumerate() {
-            let mut s = v[i];
-            for (j, (xj, x0j)) in x.iter().zip(x0.iter()).enumerate() {
-                s += self.k_n[(i, j)] * (xj - x0j);
-            }
-            *ui += s;
-        }
-    }
 }
 
 /// Buffers for evaluating the tracking DAE under a preliminary feedback.
@@ -515,29 +379,16 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             &mut pf.f_z,
             &mut pf.f_w,
         );
-        let ne = self.model.structure().n_equations();
         let nz_all = self.model.structure().n_algebraic();
         let n_u = pf.law.k_n.nrows();
-        let u_col = nz_all - n_u;
-        for j in 0..nx {
-            for i in 0..ne {
-                let mut v = pf.f_x[(i, j)] + c * pf.f_xdot[(i, j)];
-                for k in 0..n_u {
-                    v += pf.f_z[(i, u_col + k)] * pf.law.k_n[(k, j)];
-                }
-                if v != 0.0 {
-                    matrix.set(i, j, v);
-                }
-            }
-        }
-        for j in 0..nz_all {
-            for i in 0..ne {
-                let v = pf.f_z[(i, j)];
-                if v != 0.0 {
-                    matrix.set(i, nx + j, v);
-                }
-            }
-        }
+        pf.law.iteration_matrix(
+            c,
+            &pf.f_x,
+            &pf.f_xdot,
+            pf.f_z.columns(nz_all - n_u, n_u),
+            pf.f_z.columns(0, nz_all),
+            matrix,
+        );
     }
 
     /// The `nu` in use.
@@ -745,124 +596,11 @@ pub fn roundoff_level(delta: f64, nu: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reference::{Components, Polynomial, Sinusoid};
-
-    struct Steady;
-    impl Nominal for Steady {
-        fn state(&self, t: f64, x0: &mut [f64]) {
-            x0.copy_from_slice(&[1.0, -6.0 * t, 0.0, 0.0, -6.0]);
-        }
-        fn input(&self, _t: f64, u0: &mut [f64]) {
-            u0.copy_from_slice(&[0.5, 0.25]);
-        }
-    }
-
-    fn reference() -> Components {
-        Components::new(
-            2,
-            vec![
-                Box::new(Sinusoid {
-                    offset: 1.0,
-                    amplitude: 0.1,
-                    omega: 1.0,
-                    phase: 0.0,
-                }),
-                Box::new(Polynomial(vec![0.0, -7.0])),
-            ],
-        )
-        .unwrap()
-    }
 
     #[test]
     fn roundoff_grows_like_delta_to_the_minus_nu() {
         assert_eq!(roundoff_level(1e-3, 0), f64::EPSILON);
         let r = roundoff_level(1e-3, 2) / f64::EPSILON;
         assert!((r - 1e6).abs() < 1e-6, "{r}");
-    }
-
-    #[test]
-    fn reference_nominal_replaces_the_mapped_states_only() {
-        let map = vec![
-            ReferenceState {
-                state: 0,
-                output: 0,
-                order: 0,
-            },
-            ReferenceState {
-                state: 3,
-                output: 0,
-                order: 1,
-            },
-            ReferenceState {
-                state: 1,
-                output: 1,
-                order: 0,
-            },
-            ReferenceState {
-                state: 4,
-                output: 1,
-                order: 1,
-            },
-        ];
-        let n = ReferenceNominal::new(Steady, reference(), 5, map).unwrap();
-        let t = 0.7_f64;
-        let mut x0 = [0.0; 5];
-        n.state(t, &mut x0);
-        let want = [1.0 + 0.1 * t.sin(), -7.0 * t, 0.0, 0.1 * t.cos(), -7.0];
-        for (a, b) in x0.iter().zip(&want) {
-            assert!((a - b).abs() < 1e-15, "{x0:?} vs {want:?}");
-        }
-        let mut u0 = [0.0; 2];
-        n.input(t, &mut u0);
-        assert_eq!(u0, [0.5, 0.25]);
-    }
-
-    #[test]
-    fn reference_nominal_checks_its_map() {
-        let bad_state = vec![ReferenceState {
-            state: 5,
-            output: 0,
-            order: 0,
-        }];
-        assert!(matches!(
-            ReferenceNominal::new(Steady, reference(), 5, bad_state),
-            Err(DpcError::Dimension { .. })
-        ));
-        let bad_output = vec![ReferenceState {
-            state: 0,
-            output: 2,
-            order: 0,
-        }];
-        assert!(matches!(
-            ReferenceNominal::new(Steady, reference(), 5, bad_output),
-            Err(DpcError::Dimension { .. })
-        ));
-        struct Shallow;
-        impl Reference for Shallow {
-            fn dimension(&self) -> usize {
-                1
-            }
-            fn max_order(&self) -> usize {
-                0
-            }
-            fn derivatives(
-                &self,
-                _t: f64,
-                _order: usize,
-                out: &mut [f64],
-            ) -> Result<(), ReferenceError> {
-                out.fill(1.0);
-                Ok(())
-            }
-        }
-        let too_deep = vec![ReferenceState {
-            state: 0,
-            output: 0,
-            order: 1,
-        }];
-        assert!(matches!(
-            ReferenceNominal::new(Steady, Shallow, 5, too_deep),
-            Err(DpcError::Reference(ReferenceError::OrderTooHigh { .. }))
-        ));
     }
 }

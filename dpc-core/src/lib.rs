@@ -7,6 +7,8 @@
 //!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`, and its
 //!   [`Structure`]: names, dimensions, sparsity);
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
+//! * [`design`]: the design chain of a preliminary feedback (trim, linearise, analyse, `K_n`)
+//!   and the check of the relative degrees at the nominal;
 //! * [`dpc`]: one sampled update of the Descriptor Predictive Controller;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
 //! * [`radau`]: the Radau IIA integrator (order 5) for DAEs of index up to 3 as declared;
@@ -15,18 +17,21 @@
 //!   verdict, preliminary feedback `K_n`);
 //! * [`linearize`]: state-space linearisation of a generated model from its Jacobians;
 //! * [`numeric`]: floating-point helpers (a maximum that keeps NaN);
+//! * [`prefeedback`]: the preliminary feedback law and the nominal motions it acts about;
 //! * [`reference`](mod@reference): reference trajectories with exact derivatives;
 //! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model;
 //! * [`simulate`]: the sampled closed loop, with the plant integrated accurately between samples.
 
 pub mod bdf;
 pub mod dae;
+pub mod design;
 pub mod dpc;
 pub mod linalg;
 pub mod linear;
 pub mod linearize;
 pub mod model;
 pub mod numeric;
+pub mod prefeedback;
 pub mod radau;
 pub mod reference;
 pub mod simulate;

@@ -55,7 +55,7 @@ pub trait Reference {
 }
 
 /// A shared reference is a reference: the controller and a preliminary feedback taken about
-/// the reference ([`crate::dpc::ReferenceNominal`]) can follow the same one.
+/// the reference ([`crate::prefeedback::ReferenceNominal`]) can follow the same one.
 impl<R: Reference + ?Sized> Reference for std::sync::Arc<R> {
     fn dimension(&self) -> usize {
         (**self).dimension()

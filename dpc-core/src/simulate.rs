@@ -15,10 +15,11 @@ use std::cell::RefCell;
 
 use crate::bdf::{consistent_initial_values, Bdf, BdfError, Options};
 use crate::dae::ImplicitDae;
-use crate::dpc::{Dpc, DpcError, Prefeedback};
+use crate::dpc::{Dpc, DpcError};
 use crate::linalg::{FaerDenseLu, LinearSolver};
 use crate::model::DaeModel;
 use crate::numeric::max_or_nan;
+use crate::prefeedback::Prefeedback;
 use crate::reference::Reference;
 use crate::sink::MatrixSink;
 use crate::tracking::TrackingDae;
@@ -294,20 +295,14 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
         );
         // u depends on x through K_n: dF/dx gains dF/du K_n (summed in place: a Jacobian
         // evaluation inside the integrator allocates nothing).
-        for j in 0..nx {
-            for i in 0..self.model.structure().n_equations() {
-                let mut v = s.f_x[(i, j)] + c * s.f_xdot[(i, j)];
-                for k in 0..self.model.structure().n_inputs() {
-                    v += s.f_u[(i, k)] * pf.k_n[(k, j)];
-                }
-                out.set(i, j, v);
-            }
-        }
-        for j in 0..self.model.structure().n_algebraic() {
-            for i in 0..self.model.structure().n_equations() {
-                out.set(i, nx + j, s.f_z[(i, j)]);
-            }
-        }
+        pf.iteration_matrix(
+            c,
+            &s.f_x,
+            &s.f_xdot,
+            s.f_u.columns(0, s.f_u.ncols()),
+            s.f_z.columns(0, s.f_z.ncols()),
+            out,
+        );
     }
 
     fn is_differential(&self, i: usize) -> bool {

@@ -1,17 +1,19 @@
 //! The paper's design for the wheel (Sections 4 and 5): the nominal motion
 //! `x0(t) = [pi/2, -6t, 0, 0, -6]`, `u0 = 0` (upright, rolling at a constant heading rate),
-//! the linearisation of [`Wheel`] about it from the generated Jacobians, the linear DPC
-//! analysis with `W = s + 5` on both outputs, and the preliminary feedback with the poles of
-//! `Abar_4 + Bbar_2 K_2` at -5.
+//! the linear DPC analysis with `W = s + 5` on both outputs, and the preliminary feedback with
+//! the poles of `Abar_4 + Bbar_2 K_2` at -5, all through the design chain of
+//! [`dpc::core::design`].
 //!
 //! Along this motion the linearisation does not depend on `t` (`psi` does not enter the
 //! equations), so one linearisation at `t = 0` serves the whole trajectory.
 
 use std::f64::consts::FRAC_PI_2;
 
-use dpc::core::dpc::{Nominal, Prefeedback, ReferenceNominal, ReferenceState};
-use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
-use dpc::core::linearize::{linearize, LinearizeError, OperatingPoint};
+use dpc::core::design::{self, Design, DesignError, DesignOptions};
+use dpc::core::linear::AnalysisOptions;
+use dpc::core::prefeedback::{
+    NominalError, Prefeedback, ReferenceNominal, ReferenceState, SteadyMotion,
+};
 use dpc::core::reference::Reference;
 use dpc::nalgebra::Complex;
 
@@ -27,62 +29,33 @@ pub const W_ROOTS: [f64; 2] = [5.0, 5.0];
 pub const POLE: f64 = -5.0;
 
 /// The nominal motion `x0(t) = [pi/2, -6t, 0, 0, -6]`, `u0 = 0`.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct UprightRolling;
-
-impl Nominal for UprightRolling {
-    fn state(&self, t: f64, x0: &mut [f64]) {
-        for ((x, s), r) in x0.iter_mut().zip(&NOMINAL_STATE).zip(&NOMINAL_RATE) {
-            *x = s + t * r;
-        }
-    }
-
-    fn input(&self, _t: f64, u0: &mut [f64]) {
-        u0.fill(0.0);
+pub fn nominal() -> SteadyMotion {
+    SteadyMotion {
+        state: NOMINAL_STATE.to_vec(),
+        rate: NOMINAL_RATE.to_vec(),
+        algebraic: Vec::new(),
+        input: vec![0.0, 0.0],
     }
 }
 
-/// Why the design could not be computed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum DesignError {
-    /// The linearisation failed.
-    #[error("linearisation of the wheel: {0}")]
-    Linearize(#[from] LinearizeError),
-    /// The linear analysis failed.
-    #[error("linear analysis of the wheel: {0}")]
-    Analysis(#[from] LinearError),
-    /// The reference does not fit the map of [`reference_states`].
-    #[error("reference of the preliminary feedback: {0}")]
-    Reference(String),
-    /// The analysis built no `K_n`.
-    #[error("the linear analysis built no preliminary feedback: {0}")]
-    NoPrefeedback(String),
+/// The paper's design options: `W = s + 5` on both outputs, the three poles at -5.
+pub fn options() -> DesignOptions {
+    DesignOptions {
+        analysis: AnalysisOptions {
+            w: Some(W_ROOTS.iter().map(|a| vec![*a]).collect()),
+            poles: Some(vec![Complex::new(POLE, 0.0); 3]),
+            ..AnalysisOptions::default()
+        },
+        horizon: 0.0,
+    }
 }
 
 /// The linearisation of `wheel` about the nominal motion, and its analysis.
 ///
 /// # Errors
 /// [`DesignError`] when the linearisation or the analysis fails.
-pub fn design(wheel: &Wheel) -> Result<(LinearSystem, Analysis), DesignError> {
-    let sys = linearize(
-        wheel,
-        OperatingPoint {
-            t: 0.0,
-            x: &NOMINAL_STATE,
-            xdot: &NOMINAL_RATE,
-            z: &[],
-            u: &[0.0, 0.0],
-        },
-    )?;
-    let analysis = analyze(
-        &sys,
-        &AnalysisOptions {
-            w: Some(W_ROOTS.iter().map(|a| vec![*a]).collect()),
-            poles: Some(vec![Complex::new(POLE, 0.0); 3]),
-            ..AnalysisOptions::default()
-        },
-    )?;
-    Ok((sys, analysis))
+pub fn design(wheel: &Wheel) -> Result<Design, DesignError> {
+    design::design(wheel, &nominal(), &options())
 }
 
 /// The preliminary feedback `u = K_n (x - x0(t)) + v` of the paper's design for `wheel`,
@@ -91,14 +64,7 @@ pub fn design(wheel: &Wheel) -> Result<(LinearSystem, Analysis), DesignError> {
 /// # Errors
 /// [`DesignError`] when the design fails.
 pub fn prefeedback(wheel: &Wheel) -> Result<Prefeedback, DesignError> {
-    let (_, analysis) = design(wheel)?;
-    let k_n = analysis.k_n.ok_or_else(|| {
-        DesignError::NoPrefeedback(analysis.prefeedback_error.unwrap_or_default())
-    })?;
-    Ok(Prefeedback {
-        k_n,
-        nominal: Box::new(UprightRolling),
-    })
+    design(wheel)?.prefeedback()
 }
 
 /// The states that follow the reference when the feedback is taken about it:
@@ -121,26 +87,73 @@ pub fn reference_states() -> Vec<ReferenceState> {
 /// `theta` and `psi` references, e.g. [`crate::WheelReference`]).
 ///
 /// # Errors
-/// [`DesignError::Reference`] when the reference has fewer than two components or no first
+/// [`NominalError`] when the reference has fewer than two components or no first
 /// derivative.
 pub fn about_reference<R: Reference>(
     reference: R,
-) -> Result<ReferenceNominal<UprightRolling, R>, DesignError> {
-    ReferenceNominal::new(UprightRolling, reference, 5, reference_states())
-        .map_err(|e| DesignError::Reference(e.to_string()))
+) -> Result<ReferenceNominal<SteadyMotion, R>, NominalError> {
+    ReferenceNominal::new(nominal(), reference, 5, reference_states())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use dpc::core::design::{trim, TrimOptions, TrimProblem, TrimValue};
+    use dpc::core::DaeModel;
 
     #[test]
     fn the_design_reproduces_the_papers_verdict() {
-        let (_, a) = design(&Wheel::default()).unwrap();
-        assert!(!a.dpc_stable);
-        assert_eq!(a.dpc_stable_prefeedback, Some(true));
-        let mut x0 = [0.0; 5];
-        UprightRolling.state(2.0, &mut x0);
-        assert_eq!(x0, [FRAC_PI_2, -12.0, 0.0, 0.0, -6.0]);
+        let d = design(&Wheel::default()).unwrap();
+        assert!(!d.analysis.dpc_stable);
+        assert_eq!(d.analysis.dpc_stable_prefeedback, Some(true));
+        assert_eq!(d.motion.state_at(2.0), [FRAC_PI_2, -12.0, 0.0, 0.0, -6.0]);
+    }
+
+    /// Upright at a heading rate of -6 with no torque: the trim solver finds the spin rate
+    /// and the heading's rate that the paper's nominal gives by hand.
+    #[test]
+    fn the_trim_solver_finds_the_nominal_from_a_partial_specification() {
+        let wheel = Wheel::default();
+        let s = wheel.structure();
+        let mut p = TrimProblem::equilibrium(s);
+        for (name, v) in [
+            ("theta", TrimValue::Fixed(FRAC_PI_2)),
+            ("psi", TrimValue::Fixed(0.0)),
+            ("dtheta", TrimValue::Fixed(0.0)),
+            ("dpsi", TrimValue::Fixed(-6.0)),
+            ("dphi", TrimValue::Free(0.7)),
+            ("der(psi)", TrimValue::Free(1.0)),
+            ("u1", TrimValue::Fixed(0.0)),
+            ("u2", TrimValue::Fixed(0.0)),
+        ] {
+            p.set(s, name, v).unwrap();
+        }
+        p.horizon = Some(400.0);
+        let t = trim(&wheel, &p, &TrimOptions::default()).unwrap();
+        let n = nominal();
+        for (a, b) in t.motion.state.iter().zip(&n.state) {
+            assert!((a - b).abs() < 1e-12, "{:?}", t.motion);
+        }
+        for (a, b) in t.motion.rate.iter().zip(&n.rate) {
+            assert!((a - b).abs() < 1e-12, "{:?}", t.motion);
+        }
+        assert_eq!((t.unknowns, t.rank, t.free_directions()), (2, 2, 0));
+    }
+
+    /// A lean rate cannot be steady: `der(theta) = dtheta` with both fixed apart is
+    /// inconsistent, and the message names the equation.
+    #[test]
+    fn an_inconsistent_trim_names_the_equation() {
+        let wheel = Wheel::default();
+        let s = wheel.structure();
+        let mut p = TrimProblem::equilibrium(s);
+        p.set(s, "dtheta", TrimValue::Fixed(1.0)).unwrap();
+        p.set(s, "theta", TrimValue::Fixed(FRAC_PI_2)).unwrap();
+        let err = trim(&wheel, &p, &TrimOptions::default()).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("der(theta) = dtheta"), "{msg}");
+        assert!(msg.contains("unsatisfiable"), "{msg}");
+        let err = p.set(s, "speed", TrimValue::Fixed(1.0)).unwrap_err();
+        assert!(err.to_string().contains("no variable `speed`"), "{err}");
     }
 }
