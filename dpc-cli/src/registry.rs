@@ -17,7 +17,7 @@
 //!         .listing(WheelTracking::LISTING),
 //! );
 //! assert_eq!(registry.get("wheel").unwrap().name(), "wheel");
-//! let err = registry.get("bicycle").unwrap_err().to_string();
+//! let err = registry.get("bicycle").err().unwrap().to_string();
 //! assert_eq!(err, "unknown model `bicycle`; the known models are: wheel");
 //! ```
 
