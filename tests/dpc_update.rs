@@ -152,6 +152,14 @@ fn bad_inputs_are_typed_errors() {
         }),
         Err(DpcError::InvalidOption(_))
     ));
+    assert!(matches!(
+        make(DpcOptions {
+            delta: 1e-3,
+            max_delta: 1e-4,
+            ..DpcOptions::default()
+        }),
+        Err(DpcError::InvalidOption(_))
+    ));
     let mut dpc = make(DpcOptions::default()).unwrap();
     let mut u = [0.0; 2];
     assert!(matches!(

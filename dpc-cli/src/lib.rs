@@ -1,17 +1,46 @@
-//! The library behind the `dpc` command line: scenario files, closed-loop runs of the models
-//! in `dpc-models`, their summaries, trajectories and plots, and parameter sweeps.
+//! The library behind the `dpc` command line, for any registry of models: scenario files,
+//! closed-loop runs, their summaries, trajectories and plots, parameter sweeps, and the
+//! command line itself ([`main`]).
 //!
-//! Data flow: [`scenario::Scenario`] (TOML + overrides) -> [`run::run`] (model looked up by
-//! name, controller built, closed loop simulated) -> [`report`] (summary.json,
-//! trajectory.csv) and [`plot`] (SVG and PNG figures); [`sweep`] runs many scenarios in
-//! parallel.
+//! Data flow: [`scenario::Scenario`] (TOML + overrides) -> [`registry::Registry::run`] (model
+//! looked up by name) -> [`run::run`] (monomorphised for the model: controller built, closed
+//! loop simulated) -> [`report`] (summary.json, trajectory.csv) and [`plot`] (SVG and PNG
+//! figures); [`sweep`] runs many scenarios in parallel.
+//!
+//! A crate that declares its own plants with `dpc::model!` gets the whole command line
+//! (`simulate`, `sweep`, `analyze`, `models`, `model NAME`) for them in a few lines:
+//!
+//! ```no_run
+//! use dpc_cli::registry::{Entry, Registry};
+//! use dpc_models::{FlexibleJoint, FlexibleJointReference, FlexibleJointTracking};
+//!
+//! fn main() -> std::process::ExitCode {
+//!     dpc_cli::main(Registry::new().model(
+//!         Entry::new(
+//!             "arm",
+//!             "a flexible-joint arm",
+//!             FlexibleJoint::default(),
+//!             FlexibleJointTracking::default(),
+//!         )
+//!         .reference(FlexibleJointReference::default()),
+//!     ))
+//! }
+//! ```
 
+pub mod cli;
 pub mod plot;
+pub mod registry;
 pub mod report;
 pub mod run;
 pub mod scenario;
 pub mod sweep;
 
+pub use cli::main;
+
+use dpc::core::dpc::DpcError;
+use dpc::core::reference::ReferenceError;
+use dpc::core::simulate::SimulateError;
+use dpc::core::tracking::TrackingError;
 use thiserror::Error;
 
 /// Everything that can go wrong between a scenario file and its outputs. Each message is one
@@ -39,10 +68,28 @@ pub enum ScenarioError {
     Override(String),
     /// The model does not exist.
     #[error(transparent)]
-    UnknownModel(#[from] dpc_models::registry::UnknownModel),
-    /// The controller or the simulation could not be set up.
+    UnknownModel(#[from] registry::UnknownModel),
+    /// The design of the preliminary feedback could not be made.
     #[error("{0}")]
     Setup(String),
+    /// The reference assembled from the scenario's terms does not fit the model.
+    #[error(transparent)]
+    Reference(ReferenceError),
+    /// The `W` the model was registered with is not accepted by a fresh tracking DAE.
+    #[error("the registered model's W: {0}")]
+    RegisteredW(TrackingError),
+    /// The controller could not be built.
+    #[error("controller: {0}")]
+    Controller(DpcError),
+    /// The preliminary feedback does not fit the controller.
+    #[error("preliminary feedback: {0}")]
+    Prefeedback(DpcError),
+    /// The linear analysis gave no `K_n` although the preliminary feedback is on.
+    #[error("the linear analysis built no K_n")]
+    NoFeedbackGain,
+    /// The closed loop could not start.
+    #[error("simulation: {0}")]
+    Simulation(SimulateError),
     /// Writing results failed.
     #[error("cannot write {path}: {message}")]
     Write {

@@ -1,51 +1,59 @@
-//! The `dpc` command line. Each subcommand lives in its own module with its own argument
-//! struct and `run` function; `main` only dispatches and turns errors into one stderr line.
-
-mod analyze;
-mod simulate;
+//! The `dpc` command line for the models of this repository (`dpc-models`): the registry of
+//! their entries, handed to the library's entry point [`dpc_cli::main`]. A crate with its own
+//! plants writes the same few lines with its own entries.
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use dpc::core::linalg::NalgebraLu;
+use dpc_cli::registry::{Entry, Registry};
+use dpc_models::{
+    FlexibleJoint, FlexibleJointReference, FlexibleJointTracking, Wheel, WheelLinear,
+    WheelLinearParams, WheelLinearTracking, WheelReference, WheelTracking,
+};
 
-/// Descriptor Predictive Control toolkit.
-#[derive(Parser)]
-#[command(name = "dpc", version, about)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand)]
-enum Command {
-    /// Linear DPC analysis (paper, Section 3) of a square system given in a TOML file.
-    Analyze(analyze::AnalyzeArgs),
-    /// Run a closed-loop scenario: summary.json, trajectory.csv and plots in --out.
-    Simulate(simulate::SimulateArgs),
-    /// Run every combination of --set values of a scenario in parallel.
-    Sweep(simulate::SweepArgs),
-    /// List the models scenarios can name.
-    Models,
+/// The repository's tracked models, in the order `dpc models` lists them.
+fn registry() -> Registry {
+    // The linearised wheel with the Appendix input gains.
+    let linear = WheelLinearParams {
+        b1: 2.0,
+        b2: 0.8,
+        ..WheelLinearParams::default()
+    };
+    Registry::new()
+        .model(
+            Entry::new(
+                "wheel",
+                "the paper's nonlinear rolling wheel (Appendix); outputs theta, psi; W = s + 5 on both",
+                Wheel::default(),
+                WheelTracking::default(),
+            )
+            .reference(WheelReference::default())
+            .listing(WheelTracking::LISTING)
+            .solver(NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new),
+        )
+        .model(
+            Entry::new(
+                "wheel-linear",
+                "the wheel linearised about x0(t) = [pi/2, -6t, 0, 0, -6] ((4.1) with the Appendix input gains 2, 0.8); no built-in reference",
+                WheelLinear::new(linear),
+                WheelLinearTracking::new(linear),
+            )
+            .listing(WheelLinearTracking::LISTING)
+            .solver(NalgebraLu::<{ WheelLinearTracking::N_EQUATIONS }>::new),
+        )
+        .model(
+            Entry::new(
+                "flexible-joint",
+                "a flexible-joint robot arm of relative degree 4; output q_link; W = (s + 2)(s + 3)",
+                FlexibleJoint::default(),
+                FlexibleJointTracking::default(),
+            )
+            .reference(FlexibleJointReference::default())
+            .listing(FlexibleJointTracking::LISTING)
+            .solver(NalgebraLu::<{ FlexibleJointTracking::N_EQUATIONS }>::new),
+        )
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    let result = match cli.command {
-        Command::Analyze(args) => analyze::run(&args),
-        Command::Simulate(args) => simulate::simulate(&args),
-        Command::Sweep(args) => simulate::sweep(&args),
-        Command::Models => {
-            for m in dpc_models::registry::MODELS {
-                println!("{:<16} {}", m.name, m.summary);
-            }
-            Ok(())
-        }
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(msg) => {
-            eprintln!("error: {msg}");
-            ExitCode::FAILURE
-        }
-    }
+    dpc_cli::main(registry())
 }

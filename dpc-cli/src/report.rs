@@ -82,7 +82,7 @@ impl Summary {
             label: run.label.clone(),
             diverged: cl.divergence.is_some(),
             t_diverged: cl.divergence.as_ref().map(|d| d.t),
-            divergence_cause: cl.divergence.as_ref().map(|d| d.cause.clone()),
+            divergence_cause: cl.divergence.as_ref().map(|d| d.cause.to_string()),
             t_final,
             final_error,
             max_abs_error,

@@ -1,6 +1,12 @@
-//! One closed-loop run of a scenario: look the model up, set the plant's and the controller's
-//! parameters by name and the roots of `W` at run time, build the reference, design the
-//! preliminary feedback on the controller's model, build the controller and simulate.
+//! One closed-loop run of a scenario on a registered model ([`crate::registry::Entry`]): set
+//! the plant's and the controller's parameters by name and the roots of `W` at run time,
+//! build the reference, design the preliminary feedback on the controller's model, build the
+//! controller and simulate. [`run`] is generic over the plant, the tracking DAE and the linear
+//! solver, so each model gets its own monomorphised copy of the loop.
+//!
+//! The design of the preliminary feedback (`SteadyMotion`, `w_roots`, `design`,
+//! `sampled_prediction`, `feedback_nominal`, `copy_params`, `negated_real_roots`) is kept
+//! together in the second half of this file.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -19,9 +25,9 @@ use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions};
 use dpc::core::tracking::TrackingError;
 use dpc::core::TrackingDae;
 use dpc::nalgebra::DMatrix;
-use dpc_models::registry::{self, Tracked, VisitTracked};
 use serde::Serialize;
 
+use crate::registry::Entry;
 use crate::scenario::{scalar_reference, About, NominalMotion, Scenario};
 use crate::ScenarioError;
 
@@ -45,6 +51,20 @@ pub struct ModelInUse {
     pub controller_params: BTreeMap<String, f64>,
     /// Per output, the coefficients of `W_i(s)` in the controller, lowest power first.
     pub w_coefficients: BTreeMap<String, Vec<f64>>,
+    /// The controller's retry ladder after the scenario's defaults were filled in.
+    pub retry: RetryInUse,
+}
+
+/// The retry ladder of a run: `delta * growth^k` clamped to `max_delta`, at most `retries`
+/// times per sample.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RetryInUse {
+    /// Factor by which `delta` grows at each retry.
+    pub growth: f64,
+    /// The largest `delta` tried.
+    pub max_delta: f64,
+    /// The most retries per sample.
+    pub retries: usize,
 }
 
 /// What the linear analysis of the controller's model said.
@@ -96,48 +116,13 @@ pub struct RunResult {
     pub wall_time: f64,
 }
 
-/// Run `scenario`.
-///
-/// # Errors
-/// [`ScenarioError`] for an unknown model, a scenario that does not fit the model, or a
-/// controller that cannot be set up. A run that starts and then diverges is not an error: see
-/// [`ClosedLoop::divergence`].
-pub fn run(scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError> {
-    registry::visit(
-        &scenario.model,
-        Runner {
-            scenario,
-            label: label.to_string(),
-        },
-    )?
-}
-
 struct Runner<'a> {
     scenario: &'a Scenario,
-    label: String,
-}
-
-/// `x0(t) = state + t * rate`, `u0 = input`.
-struct SteadyMotion {
-    state: Vec<f64>,
-    rate: Vec<f64>,
-    input: Vec<f64>,
-}
-
-impl Nominal for SteadyMotion {
-    fn state(&self, t: f64, x0: &mut [f64]) {
-        for ((x, s), r) in x0.iter_mut().zip(&self.state).zip(&self.rate) {
-            *x = s + t * r;
-        }
-    }
-    fn input(&self, _t: f64, u0: &mut [f64]) {
-        u0.copy_from_slice(&self.input);
-    }
 }
 
 /// The scenario's reference: the model's own or one assembled from terms.
 enum ScenarioReference {
-    Model(Box<dyn Reference + Send + Sync>),
+    Model(Arc<dyn Reference + Send + Sync>),
     Terms(Components),
 }
 
@@ -206,7 +191,7 @@ impl Runner<'_> {
 
     fn reference(
         &self,
-        own: Option<Box<dyn Reference + Send + Sync>>,
+        own: Option<Arc<dyn Reference + Send + Sync>>,
         outputs: &model::Names,
     ) -> Result<ScenarioReference, ScenarioError> {
         let Some(terms) = &self.scenario.reference else {
@@ -228,8 +213,7 @@ impl Runner<'_> {
             })?;
             components.push(scalar_reference(t));
         }
-        let c = Components::new(outputs.len(), components)
-            .map_err(|e| ScenarioError::Setup(e.to_string()))?;
+        let c = Components::new(outputs.len(), components).map_err(ScenarioError::Reference)?;
         Ok(ScenarioReference::Terms(c))
     }
 
@@ -268,6 +252,240 @@ impl Runner<'_> {
         Ok(())
     }
 
+    /// The retry ladder: the scenario's values, `max_delta` defaulting to `h` and the number
+    /// of retries to the number that reaches `max_delta`.
+    fn retry(&self) -> Result<RetryInUse, ScenarioError> {
+        let s = self.scenario;
+        let ladder = &s.controller.retry;
+        let max_delta = ladder.max_delta.unwrap_or(s.h);
+        let options = DpcOptions {
+            delta: s.delta,
+            retry_growth: ladder.growth,
+            max_delta,
+            ..DpcOptions::default()
+        };
+        let retries = match ladder.retries {
+            Some(n) => n,
+            None => options.retries_to_reach_max_delta().ok_or_else(|| {
+                self.invalid(format!(
+                    "`controller.retry`: no ladder from delta = {} with growth {} reaches max_delta = {max_delta}",
+                    s.delta, ladder.growth
+                ))
+            })?,
+        };
+        Ok(RetryInUse {
+            growth: ladder.growth,
+            max_delta,
+            retries,
+        })
+    }
+
+    /// Per state, the scenario's bound `divergence.state.NAME` (unlisted states: none).
+    fn state_bounds(&self, states: &model::Names) -> Result<Vec<Option<f64>>, ScenarioError> {
+        let given = &self.scenario.divergence.state;
+        for name in given.keys() {
+            if states.position(name).is_none() {
+                return Err(self.invalid(format!(
+                    "`divergence.state.{name}`: model `{}` has no state `{name}`; its states are {}",
+                    self.scenario.model,
+                    states.join(", ")
+                )));
+            }
+        }
+        Ok(states.iter().map(|name| given.get(name).copied()).collect())
+    }
+
+    /// Per output, the scenario's bound `divergence.output.NAME`, else
+    /// `divergence.tracking_error`.
+    fn tracking_bounds(&self, outputs: &model::Names) -> Result<Vec<Option<f64>>, ScenarioError> {
+        let d = &self.scenario.divergence;
+        for name in d.output.keys() {
+            self.output_index("divergence.output", name, outputs)?;
+        }
+        Ok(outputs
+            .iter()
+            .map(|name| Some(d.output.get(name).copied().unwrap_or(d.tracking_error)))
+            .collect())
+    }
+}
+
+/// Every parameter of a model by name.
+fn named_params<P: DaeModel>(model: &P, params: &P::Params) -> BTreeMap<String, f64> {
+    model
+        .structure()
+        .params
+        .iter()
+        .enumerate()
+        .filter_map(|(i, name)| Some((name.to_string(), P::parameter(params, i)?)))
+        .collect()
+}
+
+/// Run `scenario` on `entry`, a model of plant type `P` with tracking DAE `T` and linear
+/// solver `L` (monomorphised per model: no dynamic dispatch in the loop).
+///
+/// # Errors
+/// [`ScenarioError`] for a scenario that does not fit the model or a controller that cannot
+/// be set up. A run that starts and then diverges is not an error: see
+/// [`ClosedLoop::divergence`].
+pub fn run<P, T, L>(
+    entry: &Entry<P, T, L>,
+    scenario: &Scenario,
+    label: &str,
+) -> Result<RunResult, ScenarioError>
+where
+    P: DaeModel + Clone + Send + Sync + 'static,
+    T: TrackingDae<Plant = P> + Clone + Send + Sync + 'static,
+    L: LinearSolver + Send + 'static,
+{
+    let runner = Runner { scenario };
+    let model = entry;
+    let s = runner.scenario;
+    let structure = model.plant.structure();
+    let outputs = &structure.outputs;
+    runner.check_length("x0", &s.x0, &structure.states)?;
+    // The registry's values are the starting point (a model may be registered with
+    // non-default parameters); the scenario changes them by name.
+    let plant_params = runner.params(
+        &model.plant,
+        "plant.params",
+        model.plant.params().clone(),
+        &s.plant.params,
+    )?;
+    let controller_params = runner.params(
+        &model.tracking,
+        "controller.params",
+        model.tracking.params().clone(),
+        &s.controller.params,
+    )?;
+    let plant = P::from_params(plant_params);
+    let mut tracking = T::from_params(controller_params);
+    for i in 0..outputs.len() {
+        tracking
+            .set_w_coefficients(i, model.tracking.w_coefficients(i))
+            .map_err(ScenarioError::RegisteredW)?;
+    }
+    runner.set_w(&mut tracking, outputs)?;
+    let in_use = ModelInUse {
+        plant_params: named_params(&plant, plant.params()),
+        controller_params: named_params(&tracking, tracking.params()),
+        w_coefficients: outputs
+            .iter()
+            .enumerate()
+            .map(|(i, name)| (name.to_string(), tracking.w_coefficients(i).to_vec()))
+            .collect(),
+        retry: runner.retry()?,
+    };
+    let reference = Arc::new(runner.reference(model.reference.clone(), outputs)?);
+
+    let mut design_report = None;
+    let mut k_n = None;
+    if let Some(design) = &s.design {
+        // The controller's model: the plant type with the controller's parameters, and
+        // the W in use.
+        let controller_model = P::from_params(copy_params(
+            &tracking,
+            tracking.params(),
+            &model.plant,
+            model.plant.params().clone(),
+        ));
+        let w = runner.w_roots(&tracking, outputs)?;
+        let (report, k) = runner.design(&controller_model, &design.nominal, w)?;
+        design_report = Some(report);
+        k_n = k;
+    }
+    let mut dpc = Dpc::new(
+        tracking,
+        reference.clone(),
+        (model.solver)(),
+        DpcOptions {
+            delta: s.delta,
+            nu: s.nu,
+            extraction: s.extraction,
+            max_retries: in_use.retry.retries,
+            retry_growth: in_use.retry.growth,
+            max_delta: in_use.retry.max_delta,
+            ..DpcOptions::default()
+        },
+    )
+    .map_err(ScenarioError::Controller)?;
+    if s.prefeedback {
+        let design = s.design.as_ref().ok_or_else(|| {
+            runner.invalid("`prefeedback = true` needs a `[design]` table".into())
+        })?;
+        let k_n = k_n.ok_or(ScenarioError::NoFeedbackGain)?;
+        let nominal = &design.nominal;
+        let motion = SteadyMotion {
+            state: nominal.state.clone(),
+            rate: nominal
+                .rate
+                .clone()
+                .unwrap_or_else(|| vec![0.0; structure.n_states()]),
+            input: nominal
+                .input
+                .clone()
+                .unwrap_or_else(|| vec![0.0; structure.n_inputs()]),
+        };
+        dpc = dpc
+            .with_prefeedback(Prefeedback {
+                k_n,
+                nominal: runner.feedback_nominal(&model.plant, motion, reference)?,
+            })
+            .map_err(ScenarioError::Prefeedback)?;
+    }
+    let options = ClosedLoopOptions {
+        h: s.h,
+        t_end: s.t_end,
+        rtol: s.plant.rtol,
+        atol: s.plant.atol,
+        hold: s.hold,
+        state_bounds: runner.state_bounds(&structure.states)?,
+        tracking_bounds: runner.tracking_bounds(outputs)?,
+        max_consecutive_failures: s.plant.max_consecutive_failures,
+    };
+    let start = Instant::now();
+    let closed_loop =
+        simulate(&plant, &mut dpc, &s.x0, &options).map_err(ScenarioError::Simulation)?;
+    let wall_time = start.elapsed().as_secs_f64();
+
+    Ok(RunResult {
+        label: label.to_string(),
+        scenario: s.clone(),
+        names: Names {
+            states: structure.states.to_vec(),
+            inputs: structure.inputs.to_vec(),
+            outputs: structure.outputs.to_vec(),
+        },
+        model: in_use,
+        design: design_report,
+        closed_loop,
+        wall_time,
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// The design of the preliminary feedback: linearise the controller's model about the
+// scenario's steady motion, analyse, build K_n and its nominal.
+// ---------------------------------------------------------------------------------------
+
+/// `x0(t) = state + t * rate`, `u0 = input`.
+struct SteadyMotion {
+    state: Vec<f64>,
+    rate: Vec<f64>,
+    input: Vec<f64>,
+}
+
+impl Nominal for SteadyMotion {
+    fn state(&self, t: f64, x0: &mut [f64]) {
+        for ((x, s), r) in x0.iter_mut().zip(&self.state).zip(&self.rate) {
+            *x = s + t * r;
+        }
+    }
+    fn input(&self, _t: f64, u0: &mut [f64]) {
+        u0.copy_from_slice(&self.input);
+    }
+}
+
+impl Runner<'_> {
     /// The per-output roots of the `W` in use, for the analysis: the scenario's where given,
     /// else those of the controller's coefficients.
     fn w_roots<T: TrackingDae>(
@@ -470,136 +688,6 @@ impl Runner<'_> {
     }
 }
 
-impl VisitTracked for Runner<'_> {
-    type Output = Result<RunResult, ScenarioError>;
-
-    fn visit<P, T, L>(self, model: Tracked<P, T, L>) -> Self::Output
-    where
-        P: DaeModel + Clone + Send + Sync + 'static,
-        T: TrackingDae<Plant = P> + Clone + Send + Sync + 'static,
-        L: LinearSolver + Send + 'static,
-    {
-        let s = self.scenario;
-        let structure = model.plant.structure();
-        let outputs = &structure.outputs;
-        self.check_length("x0", &s.x0, &structure.states)?;
-        // The registry's values are the starting point (a model may be registered with
-        // non-default parameters); the scenario changes them by name.
-        let plant_params = self.params(
-            &model.plant,
-            "plant.params",
-            model.plant.params().clone(),
-            &s.plant.params,
-        )?;
-        let controller_params = self.params(
-            &model.tracking,
-            "controller.params",
-            model.tracking.params().clone(),
-            &s.controller.params,
-        )?;
-        let plant = P::from_params(plant_params);
-        let mut tracking = T::from_params(controller_params);
-        for i in 0..outputs.len() {
-            tracking
-                .set_w_coefficients(i, model.tracking.w_coefficients(i))
-                .map_err(|e| ScenarioError::Setup(format!("the registered model's W: {e}")))?;
-        }
-        self.set_w(&mut tracking, outputs)?;
-        let in_use = ModelInUse {
-            plant_params: named_params(&plant, plant.params()),
-            controller_params: named_params(&tracking, tracking.params()),
-            w_coefficients: outputs
-                .iter()
-                .enumerate()
-                .map(|(i, name)| (name.to_string(), tracking.w_coefficients(i).to_vec()))
-                .collect(),
-        };
-        let reference = Arc::new(self.reference(model.reference, outputs)?);
-
-        let mut design_report = None;
-        let mut k_n = None;
-        if let Some(design) = &s.design {
-            // The controller's model: the plant type with the controller's parameters, and
-            // the W in use.
-            let controller_model = P::from_params(copy_params(
-                &tracking,
-                tracking.params(),
-                &model.plant,
-                model.plant.params().clone(),
-            ));
-            let w = self.w_roots(&tracking, outputs)?;
-            let (report, k) = self.design(&controller_model, &design.nominal, w)?;
-            design_report = Some(report);
-            k_n = k;
-        }
-        let mut dpc = Dpc::new(
-            tracking,
-            reference.clone(),
-            model.solver,
-            DpcOptions {
-                delta: s.delta,
-                nu: s.nu,
-                extraction: s.extraction,
-                ..DpcOptions::default()
-            },
-        )
-        .map_err(|e| ScenarioError::Setup(format!("controller: {e}")))?;
-        if s.prefeedback {
-            let design = s.design.as_ref().ok_or_else(|| {
-                self.invalid("`prefeedback = true` needs a `[design]` table".into())
-            })?;
-            let k_n = k_n.ok_or_else(|| {
-                ScenarioError::Setup("the linear analysis built no K_n".to_string())
-            })?;
-            let nominal = &design.nominal;
-            let motion = SteadyMotion {
-                state: nominal.state.clone(),
-                rate: nominal
-                    .rate
-                    .clone()
-                    .unwrap_or_else(|| vec![0.0; structure.n_states()]),
-                input: nominal
-                    .input
-                    .clone()
-                    .unwrap_or_else(|| vec![0.0; structure.n_inputs()]),
-            };
-            dpc = dpc
-                .with_prefeedback(Prefeedback {
-                    k_n,
-                    nominal: self.feedback_nominal(&model.plant, motion, reference)?,
-                })
-                .map_err(|e| ScenarioError::Setup(format!("preliminary feedback: {e}")))?;
-        }
-        let options = ClosedLoopOptions {
-            h: s.h,
-            t_end: s.t_end,
-            rtol: s.plant.rtol,
-            atol: s.plant.atol,
-            hold: s.hold,
-            state_bound: s.plant.state_bound,
-            max_consecutive_failures: s.plant.max_consecutive_failures,
-        };
-        let start = Instant::now();
-        let closed_loop = simulate(&plant, &mut dpc, &s.x0, &options)
-            .map_err(|e| ScenarioError::Setup(format!("simulation: {e}")))?;
-        let wall_time = start.elapsed().as_secs_f64();
-
-        Ok(RunResult {
-            label: self.label,
-            scenario: s.clone(),
-            names: Names {
-                states: structure.states.to_vec(),
-                inputs: structure.inputs.to_vec(),
-                outputs: structure.outputs.to_vec(),
-            },
-            model: in_use,
-            design: design_report,
-            closed_loop,
-            wall_time,
-        })
-    }
-}
-
 /// `into` with every parameter of `from` copied by name. A tracking DAE shares its plant's
 /// parameter type, but generic code cannot name that equality, so values go by name.
 fn copy_params<A: DaeModel, B: DaeModel>(
@@ -615,17 +703,6 @@ fn copy_params<A: DaeModel, B: DaeModel>(
         }
     }
     into
-}
-
-/// Every parameter of a model by name.
-fn named_params<P: DaeModel>(model: &P, params: &P::Params) -> BTreeMap<String, f64> {
-    model
-        .structure()
-        .params
-        .iter()
-        .enumerate()
-        .filter_map(|(i, name)| Some((name.to_string(), P::parameter(params, i)?)))
-        .collect()
 }
 
 /// The `a_k` of a monic `prod (s + a_k)` given lowest power first, if all roots are real.

@@ -20,13 +20,24 @@
 //! nominal = { state = [1.5707963267948966, 0.0, 0.0, 0.0, -6.0], rate = [0.0, -6.0, 0.0, 0.0, 0.0], input = [0.0, 0.0] }
 //! about = "reference"             # or "nominal" (default): where x - x0(t) is taken
 //! reference_state = { theta = "theta", psi = "psi", dtheta = "theta'", dpsi = "psi'" }
+//!
+//! [divergence]                    # when the run counts as diverged
+//! tracking_error = 1e3            # bound on |y_i - ref_i| for every output (default 1e3)
+//! output = { theta = 0.5 }        # per-output bounds replacing it
+//! state = { dphi = 100.0 }        # per-state |x_i| bounds; other states: only NaN/Inf
+//!
+//! [controller.retry]              # the retry ladder delta * growth^k, clamped to max_delta
+//! growth = 4.0                    # default 4
+//! max_delta = 0.05                # default: h
+//! retries = 5                     # default: as many as reach max_delta
 //! ```
 //!
 //! Every key is documented on [`Scenario`]; unknown keys are errors. The reference defaults to
 //! the model's own `references` section; a `[reference]` table replaces it with a sum of
 //! terms per output. `[plant]` sets the simulated plant's tolerances and parameters (a plant
 //! that differs from the controller's model, for mismatch studies), `[controller]` the
-//! controller model's parameters.
+//! controller model's parameters and its retry ladder, `[divergence]` the bounds that stop a
+//! run.
 //!
 //! [`Overrides`] change any key from the command line (`--set h=0.1`,
 //! `--set plant.params.m=1.2`): the same mechanism runs sweeps and the comparison runs that
@@ -88,9 +99,12 @@ pub struct Scenario {
     /// The simulated plant.
     #[serde(default)]
     pub plant: PlantOptions,
-    /// The controller's model.
+    /// The controller's model and its retry ladder.
     #[serde(default)]
     pub controller: ControllerOptions,
+    /// When the run counts as diverged: bounds on the tracking errors and on chosen states.
+    #[serde(default)]
+    pub divergence: DivergenceOptions,
     /// Override sets (`"key=value"`, several separated by `;`) for comparison runs drawn
     /// beside the main run in the plots, e.g. `["prefeedback=false"]`.
     #[serde(default)]
@@ -239,9 +253,6 @@ pub struct PlantOptions {
     /// Absolute tolerance of the integration between samples.
     #[serde(default = "default_atol")]
     pub atol: f64,
-    /// The run counts as diverged when some `|x_i|` exceeds this bound.
-    #[serde(default = "default_state_bound")]
-    pub state_bound: f64,
     /// The run counts as diverged after this many consecutive failed controller updates.
     #[serde(default = "default_failures")]
     pub max_consecutive_failures: usize,
@@ -257,9 +268,6 @@ fn default_rtol() -> f64 {
 fn default_atol() -> f64 {
     1e-10
 }
-fn default_state_bound() -> f64 {
-    1e3
-}
 fn default_failures() -> usize {
     3
 }
@@ -269,14 +277,13 @@ impl Default for PlantOptions {
         Self {
             rtol: default_rtol(),
             atol: default_atol(),
-            state_bound: default_state_bound(),
             max_consecutive_failures: default_failures(),
             params: BTreeMap::new(),
         }
     }
 }
 
-/// The controller's model.
+/// The controller's model and its retry ladder.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ControllerOptions {
@@ -284,6 +291,75 @@ pub struct ControllerOptions {
     /// differ from the model's, by name.
     #[serde(default)]
     pub params: BTreeMap<String, f64>,
+    /// What the controller does when the first implicit-Euler step from the measured state
+    /// has no solution at `delta`.
+    #[serde(default)]
+    pub retry: RetryLadder,
+}
+
+/// The retry ladder `delta * growth^k`, clamped to `max_delta`: a large inconsistency of the
+/// measured state can leave the first inner step without a solution below some `delta`
+/// (about 0.03 for the wheel with `theta(0) = pi/2 + 0.3`), which only a larger step reaches.
+/// Every retry is reported in `controller_events`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RetryLadder {
+    /// Factor by which `delta` grows at each retry (default 4, must exceed 1).
+    #[serde(default = "default_growth")]
+    pub growth: f64,
+    /// The largest `delta` tried; absent: the sampling period `h`.
+    #[serde(default)]
+    pub max_delta: Option<f64>,
+    /// The most retries per sample; absent: as many as the ladder needs to reach
+    /// `max_delta`.
+    #[serde(default)]
+    pub retries: Option<usize>,
+}
+
+fn default_growth() -> f64 {
+    4.0
+}
+
+impl Default for RetryLadder {
+    fn default() -> Self {
+        Self {
+            growth: default_growth(),
+            max_delta: None,
+            retries: None,
+        }
+    }
+}
+
+/// When a run counts as diverged (besides a non-finite state, repeated controller failures
+/// and a failing plant integration, which always stop it).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DivergenceOptions {
+    /// The bound on `|y_i - xi_i|` for every output not listed in `output` (default `1e3`;
+    /// `inf` disables the check).
+    #[serde(default = "default_tracking_error")]
+    pub tracking_error: f64,
+    /// Per output name, its own bound on the tracking error.
+    #[serde(default)]
+    pub output: BTreeMap<String, f64>,
+    /// Per state name, a bound on `|x_i|`; states not listed are only checked for NaN and
+    /// infinity (a heading angle that grows without limit while the loop tracks is fine).
+    #[serde(default)]
+    pub state: BTreeMap<String, f64>,
+}
+
+fn default_tracking_error() -> f64 {
+    1e3
+}
+
+impl Default for DivergenceOptions {
+    fn default() -> Self {
+        Self {
+            tracking_error: default_tracking_error(),
+            output: BTreeMap::new(),
+            state: BTreeMap::new(),
+        }
+    }
 }
 
 /// `key=value` assignments to apply to a scenario before it is read: the key is a dotted path
@@ -408,12 +484,44 @@ impl Scenario {
                 Err(format!("`{name}` must be a positive number, found {v}"))
             }
         };
+        // A bound may be infinite (no check), never NaN or non-positive.
+        let bound = |name: &str, v: f64| {
+            if v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!(
+                    "`{name}` must be a positive number (or inf), found {v}"
+                ))
+            }
+        };
         positive("h", self.h)?;
         positive("t_end", self.t_end)?;
         positive("delta", self.delta)?;
         positive("plant.rtol", self.plant.rtol)?;
         positive("plant.atol", self.plant.atol)?;
-        positive("plant.state_bound", self.plant.state_bound)?;
+        bound("divergence.tracking_error", self.divergence.tracking_error)?;
+        for (name, value) in &self.divergence.output {
+            bound(&format!("divergence.output.{name}"), *value)?;
+        }
+        for (name, value) in &self.divergence.state {
+            bound(&format!("divergence.state.{name}"), *value)?;
+        }
+        let retry = &self.controller.retry;
+        if !(retry.growth.is_finite() && retry.growth > 1.0) {
+            return Err(format!(
+                "`controller.retry.growth` must be a number above 1, found {}",
+                retry.growth
+            ));
+        }
+        if let Some(max_delta) = retry.max_delta {
+            positive("controller.retry.max_delta", max_delta)?;
+            if max_delta < self.delta {
+                return Err(format!(
+                    "`controller.retry.max_delta` ({max_delta}) must be at least `delta` ({})",
+                    self.delta
+                ));
+            }
+        }
         if self.delta >= self.h {
             return Err(format!(
                 "`delta` ({}) must be smaller than the sampling period `h` ({})",

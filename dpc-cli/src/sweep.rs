@@ -8,8 +8,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::plot::{sweep_figure, SweepSeries};
+use crate::registry::Registry;
 use crate::report::{write_run, Summary};
-use crate::run::run;
 use crate::scenario::{parse_value, split_assignment, value_text, Overrides, Scenario};
 use crate::ScenarioError;
 
@@ -103,6 +103,7 @@ pub struct SweepRow {
 /// # Errors
 /// [`ScenarioError`] when the scenario file is malformed or outputs cannot be written.
 pub fn sweep(
+    registry: &Registry,
     path: &Path,
     axes: &[Axis],
     out: &Path,
@@ -129,7 +130,7 @@ pub fn sweep(
         .map(|overrides| {
             let label = overrides.label();
             let outcome = Scenario::load(path, &overrides)
-                .and_then(|s| run(&s, &label))
+                .and_then(|s| registry.run(&s, &label))
                 .and_then(|r| write_run(&runs_dir.join(dir_name(&label)), &r))
                 .map_err(|e| e.to_string());
             bar.inc(1);

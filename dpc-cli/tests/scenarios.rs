@@ -239,6 +239,36 @@ fn bad_scenarios_give_one_error_line() {
             ],
             "has no output `phi`",
         ),
+        (
+            "bound-state.toml",
+            wheel.clone(),
+            vec!["--set", "divergence.state.spin=1.0"],
+            "`divergence.state.spin`: model `wheel` has no state `spin`",
+        ),
+        (
+            "bound-output.toml",
+            wheel.clone(),
+            vec!["--set", "divergence.output.phi=1.0"],
+            "`divergence.output.phi`: model `wheel` has no output `phi`",
+        ),
+        (
+            "bound-value.toml",
+            wheel.clone(),
+            vec!["--set", "divergence.tracking_error=0"],
+            "`divergence.tracking_error` must be a positive number",
+        ),
+        (
+            "growth.toml",
+            wheel.clone(),
+            vec!["--set", "controller.retry.growth=1.0"],
+            "`controller.retry.growth` must be a number above 1",
+        ),
+        (
+            "max-delta.toml",
+            wheel.clone(),
+            vec!["--set", "controller.retry.max_delta=1e-4"],
+            "`controller.retry.max_delta` (0.0001) must be at least `delta` (0.001)",
+        ),
     ];
     for (name, text, extra, expected) in cases {
         let path = dir.join(name);
@@ -269,4 +299,150 @@ fn bad_scenarios_give_one_error_line() {
         "{err}"
     );
     assert_eq!(err.lines().count(), 1, "{err}");
+}
+
+#[test]
+fn a_long_wheel_run_that_tracks_is_not_a_divergence() {
+    // psi = -6t - ... passes -1000 near t = 148; only the tracking errors and the rates decide.
+    for name in ["wheel", "wheel-hold-correction"] {
+        let out = out_dir(&format!("long-{name}"));
+        let file = scenarios().join(format!("{name}.toml"));
+        let o = simulate(&file, &out, &["t_end=400", "compare=[]"]);
+        let s = summary(&out);
+        assert_eq!(
+            s["diverged"],
+            false,
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+        assert_eq!(s["samples"], 8001, "{name}");
+        assert_eq!(s["t_final"].as_f64().unwrap(), 400.0, "{name}");
+        assert!(
+            s["max_abs_error"]["psi"].as_f64().unwrap() < 1e-2,
+            "{name}: {s}"
+        );
+    }
+}
+
+#[test]
+fn tracking_error_and_state_bounds_stop_a_run_with_a_typed_cause() {
+    let file = scenarios().join("wheel.toml");
+    // A state bound that psi (about -6t - 0.22 t^2 early on) crosses just before t = 1.
+    let out = out_dir("state-bound");
+    simulate(
+        &file,
+        &out,
+        &["t_end=2", "compare=[]", "divergence.state.psi=6.0"],
+    );
+    let s = summary(&out);
+    assert_eq!(s["diverged"], true);
+    let t = s["t_diverged"].as_f64().unwrap();
+    assert!((t - 1.0).abs() < 0.06, "{t}");
+    let cause = s["divergence_cause"].as_str().unwrap();
+    assert!(cause.starts_with("state psi = -6.2"), "{cause}");
+    assert!(cause.ends_with("left the domain |psi| <= 6"), "{cause}");
+
+    // Without the preliminary feedback the wheel leaves the path: a tracking bound of 0.1 rad
+    // on theta catches it where the old state bound waited for psi.
+    let out = out_dir("tracking-bound");
+    simulate(
+        &file,
+        &out,
+        &[
+            "t_end=20",
+            "compare=[]",
+            "prefeedback=false",
+            "divergence.output.theta=0.1",
+        ],
+    );
+    let s = summary(&out);
+    assert_eq!(s["diverged"], true);
+    let cause = s["divergence_cause"].as_str().unwrap();
+    assert!(cause.starts_with("tracking error of theta = "), "{cause}");
+    assert!(
+        cause.ends_with("exceeds the bound |theta - ref| <= 0.1"),
+        "{cause}"
+    );
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let last = csv.lines().last().unwrap();
+    let err_theta: f64 = last.split(',').nth(10).unwrap().parse().unwrap();
+    assert!(err_theta.abs() > 0.1, "{last}");
+}
+
+#[test]
+fn the_default_retry_ladder_solves_a_large_initial_inconsistency() {
+    // theta(0) = pi/2 + 0.3: the first implicit-Euler step has no solution below delta ~ 0.03.
+    // From delta = 1e-4 the default ladder (growth 4 up to max_delta = h = 0.05) ends at 0.05.
+    let file = scenarios().join("wheel.toml");
+    for delta in ["1e-3", "1e-4"] {
+        let out = out_dir(&format!("retry-{delta}"));
+        let delta_set = format!("delta={delta}");
+        simulate(
+            &file,
+            &out,
+            &[
+                "t_end=1",
+                "compare=[]",
+                "x0=[1.8707963267948966, 0.0, 0.0, 0.0, -6.0]",
+                &delta_set,
+            ],
+        );
+        let s = summary(&out);
+        assert_eq!(s["diverged"], false, "{delta}: {s}");
+        assert_eq!(s["failed_samples"], 0, "{delta}: {s}");
+        let first = &s["controller_events"][0];
+        assert_eq!(first["event"], "retried", "{delta}: {first}");
+        assert_eq!(first["t"], 0.0);
+        let reached = first["delta"].as_f64().unwrap();
+        assert!(reached >= 0.03, "{delta}: {first}");
+        // Every retry is counted: the total is the sum over the reported events.
+        let total: u64 = s["controller_events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["retries"].as_u64().unwrap())
+            .sum();
+        assert_eq!(s["retries"].as_u64().unwrap(), total);
+        assert_eq!(s["in_use"]["retry"]["max_delta"], 0.05);
+    }
+
+    // The old fixed ladder (four retries by 4 from 1e-4 ends at 0.0256) does not get there:
+    // the controller fails and the failure is reported.
+    let out = out_dir("retry-short");
+    simulate(
+        &file,
+        &out,
+        &[
+            "t_end=1",
+            "compare=[]",
+            "x0=[1.8707963267948966, 0.0, 0.0, 0.0, -6.0]",
+            "delta=1e-4",
+            "controller.retry.retries=4",
+        ],
+    );
+    let s = summary(&out);
+    assert_eq!(s["controller_events"][0]["event"], "failed", "{s}");
+    let message = s["controller_events"][0]["message"].as_str().unwrap();
+    assert!(message.contains("after 4 retries"), "{message}");
+}
+
+#[test]
+fn dpc_model_prints_the_listing_and_relative_degrees() {
+    let o = dpc(&["model", "flexible-joint"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("model FlexibleJoint"), "{text}");
+    assert!(text.contains("tracking FlexibleJointTracking"), "{text}");
+    assert!(
+        text.contains("output q_link: relative degree 4, deg W = 2"),
+        "{text}"
+    );
+    assert!(text.contains("nu = 2"), "{text}");
+    let o = dpc(&["model", "bicycle"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("unknown model `bicycle`"),
+        "{}",
+        stderr(&o)
+    );
 }

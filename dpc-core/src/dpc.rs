@@ -14,7 +14,9 @@
 //! Round-off grows like `eps * delta^-nu`, so `delta` must not be chosen too small; every
 //! update reports the scaled residual it reached. A large inconsistency can leave the first
 //! nonlinear implicit-Euler step without a real solution: Newton then fails on the residual
-//! test, and the sample is retried with a larger `delta`. Every retry is reported.
+//! test, and the sample is retried with a larger `delta` (the ladder `delta * growth^k`
+//! clamped to [`DpcOptions::max_delta`], at most [`DpcOptions::max_retries`] times). Every
+//! retry is reported.
 //!
 //! Newton stops on a test of the residual, scaled by `delta` on the dynamic rows (those that
 //! contain `X'`, whose residual is an `O(1/delta)` multiple of the others), not on the update
@@ -61,6 +63,9 @@ pub struct DpcOptions {
     pub max_retries: usize,
     /// Factor by which `delta` grows at each retry.
     pub retry_growth: f64,
+    /// The largest `delta` a retry tries: the ladder is `delta * retry_growth^k` clamped to
+    /// this value, and it ends after the retry that reached it (or after `max_retries`).
+    pub max_delta: f64,
 }
 
 impl Default for DpcOptions {
@@ -73,7 +78,30 @@ impl Default for DpcOptions {
             max_newton_iterations: 20,
             max_retries: 4,
             retry_growth: 4.0,
+            max_delta: f64::INFINITY,
         }
+    }
+}
+
+impl DpcOptions {
+    /// The number of retries after which the ladder `delta * retry_growth^k`, clamped to
+    /// `max_delta`, has reached `max_delta`; `None` when `max_delta` is infinite or the
+    /// options are out of range (no finite ladder reaches it).
+    pub fn retries_to_reach_max_delta(&self) -> Option<usize> {
+        let valid = self.delta.is_finite()
+            && self.delta > 0.0
+            && self.retry_growth.is_finite()
+            && self.retry_growth > 1.0
+            && self.max_delta.is_finite();
+        if !valid {
+            return None;
+        }
+        let (mut delta, mut retries) = (self.delta, 0);
+        while delta < self.max_delta {
+            delta *= self.retry_growth;
+            retries += 1;
+        }
+        Some(retries)
     }
 }
 
@@ -206,7 +234,8 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// A controller; all work buffers are allocated here.
     ///
     /// # Errors
-    /// [`DpcError::InvalidOption`] for a non-positive `delta`, tolerance or growth;
+    /// [`DpcError::InvalidOption`] for a non-positive `delta`, tolerance or growth, or a
+    /// `max_delta` below `delta`;
     /// [`DpcError::UnknownNu`] when `nu` is neither given nor defined by the model;
     /// [`DpcError::Dimension`] when the solver or the reference do not fit the model.
     pub fn new(model: T, reference: R, solver: L, opts: DpcOptions) -> Result<Self, DpcError> {
@@ -223,6 +252,12 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             return Err(DpcError::InvalidOption(format!(
                 "retry_growth = {} (must exceed 1)",
                 opts.retry_growth
+            )));
+        }
+        if opts.max_delta.is_nan() || opts.max_delta < opts.delta {
+            return Err(DpcError::InvalidOption(format!(
+                "max_delta = {} (must be at least delta = {})",
+                opts.max_delta, opts.delta
             )));
         }
         if opts.max_newton_iterations == 0 {
@@ -475,7 +510,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                     report.newton_iterations += iterations;
                     // A failed attempt's iterates are no warm start for a larger delta.
                     self.have_warm = false;
-                    if attempt == self.opts.max_retries {
+                    if attempt == self.opts.max_retries || delta >= self.opts.max_delta {
                         return Err(DpcError::NoSolution {
                             t,
                             step,
@@ -484,7 +519,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                             residual,
                         });
                     }
-                    delta *= self.opts.retry_growth;
+                    delta = (delta * self.opts.retry_growth).min(self.opts.max_delta);
                 }
             }
         }
@@ -596,6 +631,24 @@ pub fn roundoff_level(delta: f64, nu: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_retry_ladder_counts_the_retries_to_its_largest_delta() {
+        let ladder = |delta: f64, max_delta: f64| DpcOptions {
+            delta,
+            max_delta,
+            ..DpcOptions::default()
+        };
+        // 1e-4 -> 4e-4, 1.6e-3, 6.4e-3, 2.56e-2, then 0.05 (clamped): five retries.
+        assert_eq!(ladder(1e-4, 0.05).retries_to_reach_max_delta(), Some(5));
+        // 1e-3 -> 4e-3, 1.6e-2, then 0.05 (clamped).
+        assert_eq!(ladder(1e-3, 0.05).retries_to_reach_max_delta(), Some(3));
+        assert_eq!(ladder(0.05, 0.05).retries_to_reach_max_delta(), Some(0));
+        assert_eq!(
+            ladder(1e-3, f64::INFINITY).retries_to_reach_max_delta(),
+            None
+        );
+    }
 
     #[test]
     fn roundoff_grows_like_delta_to_the_minus_nu() {

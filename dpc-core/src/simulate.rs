@@ -7,9 +7,12 @@
 //! Two hold variants: hold the whole input `u`, or, with a preliminary feedback, apply
 //! `u = u0 + K_n (x - x0) + v` continuously and hold only `v`.
 //!
-//! The loop reports divergence (a state leaving the given domain, a non-finite state, a
-//! controller failing on consecutive samples, the plant integrator failing) with its time and
-//! cause, and stops there, instead of panicking or producing NaN.
+//! The loop reports divergence with its time and a typed [`DivergenceCause`] (a tracking
+//! error beyond its bound, a bounded state leaving its domain, a non-finite state, a
+//! controller failing on consecutive samples, the plant integrator failing), and stops there,
+//! instead of panicking or producing NaN. Divergence is judged on what the run is for, the
+//! tracking error `y - xi` per output, and on the states the user bounds: a state that grows
+//! without limit while the loop tracks (a heading angle) is not a divergence.
 
 use std::cell::RefCell;
 
@@ -50,8 +53,14 @@ pub struct ClosedLoopOptions {
     pub atol: f64,
     /// What is held between samples.
     pub hold: Hold,
-    /// The run counts as diverged when some `|x_i|` exceeds this bound.
-    pub state_bound: f64,
+    /// Per state, in the model's order, the bound `|x_i| <= b_i` beyond which the run counts
+    /// as diverged; `None` (or a state beyond the vector's end) is not bounded. Every state
+    /// is checked for NaN and infinity whatever its bound.
+    pub state_bounds: Vec<Option<f64>>,
+    /// Per output, in the model's order, the bound `|y_i - xi_i| <= e_i` on the tracking error
+    /// beyond which the run counts as diverged; `None` (or an output beyond the vector's end)
+    /// is not checked.
+    pub tracking_bounds: Vec<Option<f64>>,
     /// The run counts as diverged after this many consecutive samples on which the controller
     /// failed (the previous control is held meanwhile).
     pub max_consecutive_failures: usize,
@@ -65,7 +74,8 @@ impl Default for ClosedLoopOptions {
             rtol: 1e-8,
             atol: 1e-10,
             hold: Hold::Input,
-            state_bound: 1e3,
+            state_bounds: Vec::new(),
+            tracking_bounds: Vec::new(),
             max_consecutive_failures: 3,
         }
     }
@@ -78,6 +88,26 @@ pub enum SimulateError {
     /// An option is out of range.
     #[error("invalid simulation option: {0}")]
     InvalidOption(String),
+    /// A state or tracking-error bound is NaN or not positive.
+    #[error("the bound on {quantity} `{name}` is {value}; it must be positive")]
+    InvalidBound {
+        /// `"state"` or `"tracking error"`.
+        quantity: &'static str,
+        /// The state's or output's name.
+        name: String,
+        /// The bound given.
+        value: f64,
+    },
+    /// More bounds than the model has states or outputs.
+    #[error("{found} {quantity} bounds given, but the plant has {expected}")]
+    TooManyBounds {
+        /// `"state"` or `"tracking error"`.
+        quantity: &'static str,
+        /// The number of states or outputs.
+        expected: usize,
+        /// The number of bounds.
+        found: usize,
+    },
     /// The initial state has the wrong length or is not finite.
     #[error("initial state: {0}")]
     InitialState(String),
@@ -101,8 +131,63 @@ pub enum SimulateError {
 pub struct Divergence {
     /// Time at which it was detected.
     pub t: f64,
-    /// What happened.
-    pub cause: String,
+    /// What happened (serialised as its message).
+    pub cause: DivergenceCause,
+}
+
+/// What made a run stop: the structured cause, rendered as text only by its `Display` (which
+/// is also its serialised form).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DivergenceCause {
+    /// A bounded state left its domain.
+    #[error("state {state} = {value} left the domain |{state}| <= {bound}")]
+    StateBound {
+        /// The state's name.
+        state: String,
+        /// Its value.
+        value: f64,
+        /// The bound.
+        bound: f64,
+    },
+    /// A state became NaN or infinite.
+    #[error("state {state} is {value}")]
+    NonFiniteState {
+        /// The state's name.
+        state: String,
+        /// Its value.
+        value: f64,
+    },
+    /// The tracking error of an output exceeded its bound (or is NaN).
+    #[error("tracking error of {output} = {error} exceeds the bound |{output} - ref| <= {bound}")]
+    TrackingError {
+        /// The output's name.
+        output: String,
+        /// The error `y - xi`.
+        error: f64,
+        /// The bound.
+        bound: f64,
+    },
+    /// The controller failed on more consecutive samples than allowed, or with an error that
+    /// a retry at the next sample cannot cure.
+    #[error("controller failed: {0}")]
+    Controller(DpcError),
+    /// The plant could not be integrated over a sampling interval.
+    #[error("plant integration failed: {0}")]
+    Plant(BdfError),
+}
+
+impl serde::Serialize for DivergenceCause {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+/// An error serialised as its message.
+fn serialize_display<E: std::fmt::Display, S: serde::Serializer>(
+    error: &E,
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    serializer.collect_str(error)
 }
 
 /// One sample of a run.
@@ -139,8 +224,9 @@ pub enum ControllerEvent {
     Failed {
         /// Sample time.
         t: f64,
-        /// The controller's error.
-        message: String,
+        /// The controller's error (serialised as `message`, its text).
+        #[serde(rename = "message", serialize_with = "serialize_display")]
+        error: DpcError,
     },
 }
 
@@ -348,12 +434,12 @@ where
             opts.h, opts.t_end
         )));
     }
-    if opts.state_bound.is_nan() || opts.state_bound <= 0.0 {
-        return Err(SimulateError::InvalidOption(format!(
-            "state_bound = {}",
-            opts.state_bound
-        )));
-    }
+    check_bounds("state", &opts.state_bounds, &plant.structure().states)?;
+    check_bounds(
+        "tracking error",
+        &opts.tracking_bounds,
+        &plant.structure().outputs,
+    )?;
     if x0.len() != nx || x0.iter().any(|v| !v.is_finite()) {
         return Err(SimulateError::InitialState(format!(
             "expected {nx} finite values, got {x0:?}"
@@ -406,19 +492,8 @@ where
     for k in 0..=steps {
         let t = k as f64 * opts.h;
         let x = &y[..nx];
-        if let Some((i, v)) = x
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !v.is_finite() || v.abs() > opts.state_bound)
-        {
-            result.divergence = Some(Divergence {
-                t,
-                cause: format!(
-                    "state {} = {v} left the domain |x| <= {}",
-                    plant.structure().states.get(i).unwrap_or("?"),
-                    opts.state_bound
-                ),
-            });
+        if let Some(cause) = state_divergence(plant, x, &opts.state_bounds) {
+            result.divergence = Some(Divergence { t, cause });
             break;
         }
         match dpc.control(t, x, &mut control) {
@@ -436,17 +511,17 @@ where
                 }
             }
             Err(err) => {
+                consecutive_failures += 1;
+                let fatal = consecutive_failures > opts.max_consecutive_failures
+                    || !matches!(err, DpcError::NoSolution { .. } | DpcError::Singular { .. });
                 result.events.push(ControllerEvent::Failed {
                     t,
-                    message: err.to_string(),
+                    error: err.clone(),
                 });
-                consecutive_failures += 1;
-                if consecutive_failures > opts.max_consecutive_failures
-                    || !matches!(err, DpcError::NoSolution { .. } | DpcError::Singular { .. })
-                {
+                if fatal {
                     result.divergence = Some(Divergence {
                         t,
-                        cause: format!("controller failed: {err}"),
+                        cause: DivergenceCause::Controller(err),
                     });
                     break;
                 }
@@ -473,6 +548,14 @@ where
                 .map(|(a, b)| if ref_ok { a - b } else { f64::NAN })
                 .collect(),
         });
+        if let Some(cause) = result
+            .samples
+            .last()
+            .and_then(|s| tracking_divergence(plant, &s.error, &opts.tracking_bounds))
+        {
+            result.divergence = Some(Divergence { t, cause });
+            break;
+        }
         if k == steps {
             break;
         }
@@ -485,12 +568,98 @@ where
         {
             result.divergence = Some(Divergence {
                 t,
-                cause: format!("plant integration failed: {err}"),
+                cause: DivergenceCause::Plant(err),
             });
             break;
         }
     }
     Ok(result)
+}
+
+/// Bounds must be positive (infinity: unbounded) and no more than there are names.
+fn check_bounds(
+    quantity: &'static str,
+    bounds: &[Option<f64>],
+    names: &crate::model::Names,
+) -> Result<(), SimulateError> {
+    if bounds.len() > names.len() {
+        return Err(SimulateError::TooManyBounds {
+            quantity,
+            expected: names.len(),
+            found: bounds.len(),
+        });
+    }
+    for (i, bound) in bounds.iter().enumerate() {
+        if let Some(value) = *bound {
+            if value.is_nan() || value <= 0.0 {
+                return Err(SimulateError::InvalidBound {
+                    quantity,
+                    name: names.get(i).unwrap_or_default().to_string(),
+                    value,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The first non-finite state, else the first bounded state beyond its bound.
+fn state_divergence<P: DaeModel>(
+    plant: &P,
+    x: &[f64],
+    bounds: &[Option<f64>],
+) -> Option<DivergenceCause> {
+    let name = |i: usize| {
+        plant
+            .structure()
+            .states
+            .get(i)
+            .unwrap_or_default()
+            .to_string()
+    };
+    if let Some((i, &value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Some(DivergenceCause::NonFiniteState {
+            state: name(i),
+            value,
+        });
+    }
+    x.iter()
+        .zip(bounds)
+        .enumerate()
+        .find_map(|(i, (&value, bound))| match *bound {
+            Some(bound) if value.abs() > bound => Some(DivergenceCause::StateBound {
+                state: name(i),
+                value,
+                bound,
+            }),
+            _ => None,
+        })
+}
+
+/// The first output whose tracking error is beyond its bound or NaN.
+fn tracking_divergence<P: DaeModel>(
+    plant: &P,
+    error: &[f64],
+    bounds: &[Option<f64>],
+) -> Option<DivergenceCause> {
+    error
+        .iter()
+        .zip(bounds)
+        .enumerate()
+        .find_map(|(i, (&e, bound))| match *bound {
+            // A NaN error fails the test too.
+            Some(bound) if e.is_nan() || e.abs() > bound => Some(DivergenceCause::TrackingError {
+                output: plant
+                    .structure()
+                    .outputs
+                    .get(i)
+                    .unwrap_or_default()
+                    .to_string(),
+                error: e,
+                bound,
+            }),
+            _ => None,
+        })
 }
 
 fn record_reference<T: TrackingDae, R: Reference, L: LinearSolver>(

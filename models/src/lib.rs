@@ -10,14 +10,13 @@
 //! [`wheel_design`] holds the paper's nominal motion, linear analysis and preliminary feedback
 //! for the wheel.
 //!
-//! [`registry`] finds the tracked models by name for programs that pick a plant at run time.
+//! The `dpc` command line finds them by name through the registry in `dpc-cli`'s binary.
 //!
 //! The source files are also read by the snapshot tests of `dpc-codegen`, which store the
 //! code the macro generates for each of them.
 
 mod flexible_joint;
 mod pendulum;
-pub mod registry;
 mod wheel;
 pub mod wheel_design;
 

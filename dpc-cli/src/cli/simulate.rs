@@ -3,13 +3,15 @@
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
+use crate::plot::closed_loop_figure;
+use crate::registry::Registry;
+use crate::report::{write_run, Summary};
+use crate::run::RunResult;
+use crate::scenario::{Overrides, Scenario};
+use crate::sweep::{self, Axis};
+use crate::ScenarioError;
 use clap::Args;
 use dpc::core::linear::sampled::CriticalPeriod;
-use dpc_cli::plot::closed_loop_figure;
-use dpc_cli::report::{write_run, Summary};
-use dpc_cli::run::{run, RunResult};
-use dpc_cli::scenario::{Overrides, Scenario};
-use dpc_cli::sweep::{self, Axis};
 
 /// Arguments of `dpc simulate`.
 #[derive(Args)]
@@ -59,19 +61,18 @@ fn describe(summary: &Summary) -> String {
 }
 
 /// Run `dpc simulate`.
-pub fn simulate(args: &SimulateArgs) -> Result<(), String> {
-    let overrides =
-        Overrides::parse(args.set.iter().map(String::as_str)).map_err(|e| e.to_string())?;
-    let scenario = Scenario::load(&args.scenario, &overrides).map_err(|e| e.to_string())?;
-    let comparisons = scenario.comparisons().map_err(|e| e.to_string())?;
+pub fn simulate(registry: &Registry, args: &SimulateArgs) -> Result<(), ScenarioError> {
+    let overrides = Overrides::parse(args.set.iter().map(String::as_str))?;
+    let scenario = Scenario::load(&args.scenario, &overrides)?;
+    let comparisons = scenario.comparisons()?;
     let mut runs: Vec<RunResult> = Vec::new();
     let main_label = if overrides.0.is_empty() {
         "scenario".to_string()
     } else {
         overrides.label()
     };
-    runs.push(run(&scenario, &main_label).map_err(|e| e.to_string())?);
-    let summary = write_run(&args.out, &runs[0]).map_err(|e| e.to_string())?;
+    runs.push(registry.run(&scenario, &main_label)?);
+    let summary = write_run(&args.out, &runs[0])?;
     if let Some(d) = &summary.linear_design {
         println!(
             "linear analysis of the controller's model: DPC alone predicted {}; eig(Abar_4) = [{}]",
@@ -112,16 +113,15 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), String> {
     for extra in comparisons {
         let mut all = overrides.clone();
         all.0.extend(extra.0.iter().cloned());
-        let s = Scenario::load(&args.scenario, &all).map_err(|e| e.to_string())?;
-        let r = run(&s, &extra.label()).map_err(|e| e.to_string())?;
+        let s = Scenario::load(&args.scenario, &all)?;
+        let r = registry.run(&s, &extra.label())?;
         let dir = args.out.join("compare").join(extra.label());
-        let summary = write_run(&dir, &r).map_err(|e| e.to_string())?;
+        let summary = write_run(&dir, &r)?;
         println!("{}", describe(&summary));
         runs.push(r);
     }
     let refs: Vec<&RunResult> = runs.iter().collect();
-    let [svg, png] =
-        closed_loop_figure(&args.out.join("closed-loop"), &refs).map_err(|e| e.to_string())?;
+    let [svg, png] = closed_loop_figure(&args.out.join("closed-loop"), &refs)?;
     println!(
         "wrote {}, {}, {} and {}",
         args.out.join("summary.json").display(),
@@ -133,20 +133,19 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), String> {
 }
 
 /// Run `dpc sweep`.
-pub fn sweep(args: &SweepArgs) -> Result<(), String> {
+pub fn sweep(registry: &Registry, args: &SweepArgs) -> Result<(), ScenarioError> {
     let axes = args
         .set
         .iter()
         .map(|s| Axis::parse(s))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| e.to_string())?;
+        .collect::<Result<Vec<_>, _>>()?;
     let rows = sweep::sweep(
+        registry,
         &args.scenario,
         &axes,
         &args.out,
         std::io::stderr().is_terminal(),
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     for row in &rows {
         match &row.outcome {
             Ok(s) => println!("{}", describe(s)),

@@ -1,0 +1,102 @@
+//! The `dpc` command line for a [`Registry`] of models: [`main`] parses the arguments,
+//! dispatches to a subcommand (each in its own module with its own argument struct) and turns
+//! an error into one stderr line and exit status 1.
+
+mod analyze;
+mod simulate;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use thiserror::Error;
+
+use crate::registry::Registry;
+use crate::ScenarioError;
+
+/// Descriptor Predictive Control toolkit.
+#[derive(Parser)]
+#[command(name = "dpc", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Linear DPC analysis (paper, Section 3) of a square system given in a TOML file.
+    Analyze(analyze::AnalyzeArgs),
+    /// Run a closed-loop scenario: summary.json, trajectory.csv and plots in --out.
+    Simulate(simulate::SimulateArgs),
+    /// Run every combination of --set values of a scenario in parallel.
+    Sweep(simulate::SweepArgs),
+    /// List the models scenarios can name.
+    Models,
+    /// Print a model's listing, dimensions, relative degrees and W.
+    Model {
+        /// The model's name (see `dpc models`).
+        name: String,
+    },
+}
+
+/// Why a subcommand failed; printed as one line `error: ...`.
+#[derive(Debug, Error)]
+pub enum CliError {
+    /// A scenario, its model or its outputs.
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    /// `dpc analyze`: the system file is unreadable, malformed or has no analysis.
+    #[error("{0}")]
+    Analyze(String),
+}
+
+/// Run the `dpc` command line on the models of `registry`, with the process's arguments;
+/// `--help` and malformed arguments are handled by clap (which exits itself).
+pub fn main(registry: Registry) -> ExitCode {
+    run(&registry, Cli::parse())
+}
+
+/// Run the command line on `args` (the first is the program's name), as [`main`] does;
+/// for tests and for programs that build their own argument list.
+pub fn main_with_args<I, A>(registry: &Registry, args: I) -> ExitCode
+where
+    I: IntoIterator<Item = A>,
+    A: Into<std::ffi::OsString> + Clone,
+{
+    match Cli::try_parse_from(args) {
+        Ok(cli) => run(registry, cli),
+        Err(e) => {
+            // clap prints help and version to stdout with success, errors to stderr.
+            let _ = e.print();
+            if e.use_stderr() {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+    }
+}
+
+fn run(registry: &Registry, cli: Cli) -> ExitCode {
+    let result = match cli.command {
+        Command::Analyze(args) => analyze::run(&args).map_err(CliError::Analyze),
+        Command::Simulate(args) => simulate::simulate(registry, &args).map_err(CliError::from),
+        Command::Sweep(args) => simulate::sweep(registry, &args).map_err(CliError::from),
+        Command::Models => {
+            for m in registry.models() {
+                println!("{:<16} {}", m.name(), m.summary());
+            }
+            Ok(())
+        }
+        Command::Model { name } => registry
+            .get(&name)
+            .map(|m| print!("{}", m.describe()))
+            .map_err(|e| CliError::Scenario(e.into())),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("error: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}
