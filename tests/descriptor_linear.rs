@@ -8,7 +8,12 @@
 //! verdict and (mapped to the plant's coordinates) the same `K_n`. An index-1 plant and an ODE
 //! must give systems similar to [`linearize`]'s. Error cases: an inconsistent point, a singular
 //! pencil, an index above 3, an input whose derivatives drive the plant.
+//!
+//! Consistent initial values: states given off the manifold are projected onto the rod
+//! constraint and its hidden velocity constraint, and the derivatives and multiplier match those
+//! of the minimal-coordinate model at the same physical state.
 
+use dpc::core::consistent::{consistent_state, ConsistentError, ConsistentOptions};
 use dpc::core::linear::descriptor::{
     linearize_descriptor, DescriptorError, DescriptorOptions, ManifoldRealisation,
 };
@@ -653,4 +658,200 @@ fn singular_pencil_index_above_three_and_improper_input_are_typed_errors() {
             found: 5
         }
     ));
+}
+
+dpc::model! {
+    /// A point held on a circle of imaginary radius: the constraint cannot be met.
+    pub Unreachable {
+        states { x, y, vx, vy }
+        algebraic { lam }
+        equations {
+            der(x) = vx;
+            der(y) = vy;
+            der(vx) == -2.0 * lam * x;
+            der(vy) == -2.0 * lam * y;
+            0.0 == x.powi(2) + y.powi(2) + 1.0;
+        }
+        outputs { y }
+    }
+}
+
+/// Minimal-coordinate accelerations `(s'', phi'')` of the cart pendulum.
+fn cart_pendulum_accelerations(phi: f64, vs: f64, om: f64, f: f64) -> (f64, f64) {
+    let p = CartPendulumCartesianParams::default();
+    let mm = DMatrix::from_row_slice(2, 2, &[p.mc + p.m, p.m * p.l * phi.cos(), phi.cos(), p.l]);
+    let rhs = DMatrix::from_row_slice(
+        2,
+        1,
+        &[
+            f - p.b * vs + p.m * p.l * phi.sin() * om * om,
+            -p.g * phi.sin(),
+        ],
+    );
+    let acc = mm.lu().solve(&rhs).unwrap();
+    (acc[0], acc[1])
+}
+
+#[test]
+fn cart_pendulum_consistent_state_from_given_positions() {
+    let p = CartPendulumCartesianParams::default();
+    let given = [0.1, 0.5, -0.6, 0.2, 1.0, 0.3];
+    let f = 0.7;
+    let cs = consistent_state(
+        &CartPendulumCartesian::default(),
+        0.0,
+        &given,
+        &[f],
+        &ConsistentOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(cs.position_constraints, vec![6]);
+    assert!(cs.velocity_constraints.is_empty());
+    let [s, xb, yb, vs, vx, vy] = [0, 1, 2, 3, 4, 5].map(|i| cs.x[i]);
+    let (dx, dy) = (xb - s, yb);
+    assert!((dx * dx + dy * dy - p.l * p.l).abs() < 1e-12, "rod");
+    assert!(
+        ((vx - vs) * dx + vy * dy).abs() < 1e-12,
+        "hidden velocity constraint"
+    );
+    // Moved: the given distance was 0.72, not 0.8.
+    assert!(cs.max_move > 0.01 && cs.max_move < 0.2, "{:?}", cs.moved);
+    let moved: Vec<f64> = cs.x.iter().zip(&given).map(|(a, b)| a - b).collect();
+    assert_eq!(moved, cs.moved);
+    // The velocity correction is minimum-norm: along G^T = (-(xb - s), xb - s, yb).
+    let dv = [cs.moved[3], cs.moved[4], cs.moved[5]];
+    let gt = [-dx, dx, dy];
+    let along = (dv[0] * gt[0] + dv[1] * gt[1] + dv[2] * gt[2]) / (dx * dx * 2.0 + dy * dy);
+    for k in 0..3 {
+        assert!(
+            (dv[k] - along * gt[k]).abs() < 1e-12,
+            "{dv:?} not along {gt:?}"
+        );
+    }
+    assert!(
+        along.abs() > 1e-3,
+        "the given velocities were not consistent"
+    );
+    // The minimal model at the same physical state.
+    let phi = dx.atan2(-dy);
+    let om = ((vx - vs) * phi.cos() + vy * phi.sin()) / p.l;
+    let (sdd, phidd) = cart_pendulum_accelerations(phi, vs, om, f);
+    let xbdd = sdd + p.l * (phi.cos() * phidd - phi.sin() * om * om);
+    let ybdd = p.l * (phi.sin() * phidd + phi.cos() * om * om);
+    let lambda = -(p.m * ybdd + p.m * p.g) / yb;
+    let expected = [vs, vx, vy, sdd, xbdd, ybdd];
+    for (k, (a, b)) in cs.xdot.iter().zip(expected).enumerate() {
+        assert!(
+            (a - b).abs() < 1e-9 * (1.0 + b.abs()),
+            "x'[{k}] = {a} vs {b}"
+        );
+    }
+    assert!(
+        (cs.z[0] - lambda).abs() < 1e-9 * (1.0 + lambda.abs()),
+        "{} vs {lambda}",
+        cs.z[0]
+    );
+    assert!(cs.residual < 1e-12, "{}", cs.residual);
+    // The rod is quadratic: the curvature difference is exact up to rounding.
+    assert!(cs.curvature_error < 1e-8, "{}", cs.curvature_error);
+    // A consistent state is left where it is.
+    let again = consistent_state(
+        &CartPendulumCartesian::default(),
+        0.0,
+        &cs.x,
+        &[f],
+        &ConsistentOptions::default(),
+    )
+    .unwrap();
+    assert!(again.max_move < 1e-12, "{:?}", again.moved);
+}
+
+#[test]
+fn slider_crank_consistent_state_matches_minimal_model() {
+    let p = SliderCrankDescriptorParams::default();
+    let (th, om, tau) = (0.8, 2.5, 0.4);
+    // Given: the crank angle and rate right, the slider off the rod's reach and at rest.
+    let given = [th, 1.4, om, 0.0];
+    let cs = consistent_state(
+        &SliderCrankDescriptor::default(),
+        0.0,
+        &given,
+        &[tau],
+        &ConsistentOptions::default(),
+    )
+    .unwrap();
+    let [th1, xs, om1, vs] = [0, 1, 2, 3].map(|i| cs.x[i]);
+    let g = (xs - p.r * th1.cos()).powi(2) + (p.r * th1.sin()).powi(2) - p.l * p.l;
+    assert!(g.abs() < 1e-12, "rod: {g}");
+    // Minimum-norm projection moves the crank too; compare at the projected (th1, om1).
+    let q = (p.l * p.l - (p.r * th1.sin()).powi(2)).sqrt();
+    assert!((xs - (p.r * th1.cos() + q)).abs() < 1e-12);
+    let x1 = -p.r * th1.sin() - p.r * p.r * th1.sin() * th1.cos() / q;
+    assert!((vs - x1 * om1).abs() < 1e-12, "hidden velocity constraint");
+    // Crank acceleration from the minimal model's residual at the projected state.
+    let min = SliderCrankMinimal::default();
+    let mut r0 = [0.0; 2];
+    let mut r1 = [0.0; 2];
+    use dpc::core::DaeModel;
+    min.residual(0.0, &[th1, om1], &[om1, 0.0], &[], &[tau], &mut r0);
+    min.residual(0.0, &[th1, om1], &[om1, 1.0], &[], &[tau], &mut r1);
+    let thdd = -r0[1] / (r1[1] - r0[1]);
+    assert!(
+        (cs.xdot[2] - thdd).abs() < 1e-7 * (1.0 + thdd.abs()),
+        "{} vs {thdd}",
+        cs.xdot[2]
+    );
+    let lambda = (tau - p.bt * om1 - p.j * thdd) / (p.r * xs * th1.sin());
+    assert!(
+        (cs.z[0] - lambda).abs() < 1e-7 * (1.0 + lambda.abs()),
+        "{} vs {lambda}",
+        cs.z[0]
+    );
+    assert!(
+        cs.curvature_error > 0.0 && cs.curvature_error < 1e-6,
+        "{}",
+        cs.curvature_error
+    );
+}
+
+#[test]
+fn unreachable_constraint_is_a_typed_error() {
+    let err = consistent_state(
+        &Unreachable::default(),
+        0.0,
+        &[0.3, 0.2, 0.0, 0.0],
+        &[],
+        &ConsistentOptions::default(),
+    )
+    .unwrap_err();
+    match &err {
+        ConsistentError::CannotMeet {
+            stage, equation, ..
+        } => {
+            assert_eq!(*stage, "positions");
+            assert!(equation.starts_with("equation 4"), "{equation}");
+        }
+        other => panic!("expected CannotMeet, got {other:?}"),
+    }
+    let err = consistent_state(
+        &CartPendulumCartesian::default(),
+        0.0,
+        &[0.0; 5],
+        &[0.0],
+        &ConsistentOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(err, ConsistentError::Dimension { what: "x", .. }));
+    let err = consistent_state(
+        &Prescribed::default(),
+        0.0,
+        &[0.0; 2],
+        &[0.0],
+        &ConsistentOptions::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(err, ConsistentError::Unsupported { .. }),
+        "{err:?}"
+    );
 }

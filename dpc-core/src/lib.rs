@@ -6,6 +6,7 @@
 //! * [`model`]: the trait that `dpc::model!` implements for every declared plant
 //!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`, and its
 //!   [`Structure`]: names, dimensions, sparsity);
+//! * [`consistent`]: consistent initial values of index-2/3 plants from given states;
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
 //! * [`dpc`]: one sampled update of the Descriptor Predictive Controller;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
@@ -20,6 +21,7 @@
 //! * [`simulate`]: the sampled closed loop, with the plant integrated accurately between samples.
 
 pub mod bdf;
+pub mod consistent;
 pub mod dae;
 pub mod dpc;
 pub mod linalg;
