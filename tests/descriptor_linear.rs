@@ -855,3 +855,39 @@ fn unreachable_constraint_is_a_typed_error() {
         "{err:?}"
     );
 }
+
+#[test]
+fn cart_pendulum_badly_scaled_matches_minimal_coordinates() {
+    use dpc::core::DaeModel;
+    // A heavy cart, a light bob on a long rod, in units that spread the Jacobian entries over
+    // several orders of magnitude: the rank decisions must still find index 3 and 4 states.
+    for (mc, m, l) in [(1000.0, 0.01, 20.0), (0.05, 40.0, 0.02)] {
+        let g = 9.81;
+        let b = 0.3;
+        let cart =
+            CartPendulumCartesian::from_params(CartPendulumCartesianParams { mc, m, l, g, b });
+        let minimal =
+            CartPendulumMinimal::from_params(CartPendulumMinimalParams { mc, m, l, g, b });
+        let lambda = m * g / l;
+        let (_, real) = linearize_descriptor(
+            &cart,
+            descriptor_point(&[0.0, 0.0, -l, 0.0, 0.0, 0.0], &[0.0; 6], &[lambda], &[0.0]),
+            &DescriptorOptions::default(),
+        )
+        .unwrap();
+        let min = linearize(
+            &minimal,
+            descriptor_point(&[0.0; 4], &[0.0; 4], &[], &[0.0]),
+        )
+        .unwrap();
+        let what = format!("mc = {mc}, m = {m}, l = {l}");
+        assert_eq!((real.index, real.dof), (3, 4), "{what}");
+        assert_same_spectrum(
+            &what,
+            &eigenvalues(&real.system.a).unwrap(),
+            &eigenvalues(&min.a).unwrap(),
+            1e-8,
+        );
+        assert_same_transfer(&what, &real.system, &min);
+    }
+}

@@ -13,18 +13,23 @@
 //! from the generated Jacobians (no finite differences). Its realisation on the constraint
 //! manifold is computed with orthogonal decompositions only:
 //!
+//! 0. balancing: `D_r (sE - A) D_c` with diagonal power-of-two scalings that equilibrate the
+//!    rows and columns of `|E| + |A|`, so that rank decisions are not relative to the largest of
+//!    coefficients that span orders of magnitude; the bases below are mapped back by `D_c`;
 //! 1. the Weierstrass split of the regular pencil `sE - A` by the Wong sequences
 //!    ([`super::pencil::split`]; Berger, Ilchmann & Trenn, "The quasi-Kronecker form for matrix
-//!    pencils", SIAM J. Matrix Anal. Appl. 33, 2012): orthonormal bases `V` of the finite and
-//!    `W` of the infinite deflating subspace, each step an SVD with a rank decision relative to
-//!    `||E||` or `||A||`; the number of steps of the infinite sequence is the index `nu`
-//!    (the nilpotency index of `N`), and a pencil whose two limits do not span `R^n` is singular.
+//!    pencils", SIAM J. Matrix Anal. Appl. 33, 2012): orthonormal bases (of the balanced
+//!    pencil) `V` of the finite and `W` of the infinite deflating subspace, each step an SVD
+//!    with a rank decision relative to `||E||` or `||A||`; the number of steps of the infinite
+//!    sequence is the index `nu` (the nilpotency index of `N`), and a pencil whose two limits do
+//!    not span `R^n` is singular.
 //!    This is the deflation of the pencil onto its finite part that Varga's descriptor-system
 //!    algorithms perform by orthogonal staircase reductions (A. Varga, *Solving Fault Diagnosis
 //!    Problems*, Springer 2017, Section 10.1; Kunkel & Mehrmann, *Differential-Algebraic
 //!    Equations*, EMS 2006, Sections 2.1 and 3.1 for the regular-pencil theory).
-//! 2. With `M = [E V, A W]^-1` (never formed: systems with `[E V, A W]` are solved), the
-//!    slow part `zeta' = A_1 zeta + B_1 u` and the fast part `N eta' = eta + B_2 u`, where
+//! 2. With `M = [E V, A W]^-1` (applied by solving with `[E V, A W]`, an LU with full
+//!    pivoting whose condition number is reported), the slow part `zeta' = A_1 zeta + B_1 u`
+//!    and the fast part `N eta' = eta + B_2 u`, where
 //!    `[B_1; B_2] = M B` and `w = V zeta + W eta`. The fast part is `eta = -B_2 u` exactly when
 //!    `N B_2 = 0`; otherwise the plant responds to derivatives of `u` (an improper transfer
 //!    function, e.g. a position prescribed by the input) and no `LinearSystem` describes it.
@@ -414,6 +419,35 @@ pub fn linearize_descriptor<M: DaeModel>(
 /// Realise `E w' = A w + B u, y = C w + D u` on its constraint manifold (see the module
 /// documentation for the algorithm). `state_name(i)` names state `i` in errors.
 ///
+/// ```
+/// use dpc_core::linear::descriptor::{realise, DescriptorOptions, DescriptorSystem};
+/// use dpc_core::linear::eigenvalues;
+/// use nalgebra::DMatrix;
+/// // A unit mass on a line x = 0 held by the multiplier lambda, with a horizontal force u and
+/// // a spring k = 4: w = (x, y, vx, vy, lambda); x' = vx, y' = vy, vx' = -4 x + u,
+/// // vy' = lambda, 0 = y (index 3). On the manifold: x'' = -4 x + u.
+/// let mut e = DMatrix::zeros(5, 5);
+/// let mut a = DMatrix::zeros(5, 5);
+/// for i in 0..4 {
+///     e[(i, i)] = 1.0;
+/// }
+/// a[(0, 2)] = 1.0;
+/// a[(1, 3)] = 1.0;
+/// a[(2, 0)] = -4.0;
+/// a[(3, 4)] = 1.0;
+/// a[(4, 1)] = 1.0;
+/// let mut b = DMatrix::zeros(5, 1);
+/// b[(2, 0)] = 1.0;
+/// let mut c = DMatrix::zeros(1, 5);
+/// c[(0, 0)] = 1.0;
+/// let sys = DescriptorSystem { e, a, b, c, d: DMatrix::zeros(1, 1), n_states: 4 };
+/// let real = realise(&sys, &DescriptorOptions::default(), |i| format!("w{i}")).unwrap();
+/// assert_eq!((real.index, real.dof), (3, 2));
+/// assert_eq!(real.constrained_states, vec![1, 3]); // y and vy
+/// let ev = eigenvalues(&real.system.a).unwrap();
+/// assert!(ev.iter().all(|z| z.re.abs() < 1e-12 && (z.im.abs() - 2.0).abs() < 1e-12));
+/// ```
+///
 /// # Errors
 /// [`DescriptorError::Dimension`] when the matrices do not fit together,
 /// [`DescriptorError::SingularPencil`], [`DescriptorError::IndexTooHigh`],
@@ -452,9 +486,16 @@ pub fn realise(
         });
     }
 
-    let scale_e = subspace::norm2(&sys.e);
-    let scale_a = subspace::norm2(&sys.a);
-    let sp = match pencil::split(&sys.e, &sys.a, opts.tol_factor, scale_e, scale_a) {
+    // Rank decisions are made on the balanced pencil D_r (sE - A) D_c: entries of a plant
+    // span orders of magnitude (masses, stiffnesses, lengths), and a decision relative to
+    // the largest one would drop the smallest physical coefficients.
+    let (dr, dc) = balance(&sys.e, &sys.a);
+    let es = DMatrix::from_fn(n, n, |i, j| dr[i] * sys.e[(i, j)] * dc[j]);
+    let as_ = DMatrix::from_fn(n, n, |i, j| dr[i] * sys.a[(i, j)] * dc[j]);
+    let bs = DMatrix::from_fn(n, m, |i, j| dr[i] * sys.b[(i, j)]);
+    let scale_e = subspace::norm2(&es);
+    let scale_a = subspace::norm2(&as_);
+    let sp = match pencil::split(&es, &as_, opts.tol_factor, scale_e, scale_a) {
         Ok(sp) => sp,
         Err(LinearError::SingularPencil {
             finite_dim,
@@ -485,11 +526,12 @@ pub fn realise(
         n,
         tol_factor: opts.tol_factor,
     };
-    let v = sp.q.columns(0, nf).into_owned();
-    let w = sp.q.columns(nf, ni).into_owned();
+    // Bases of the deflating subspaces in the unscaled unknowns w = D_c w_s.
+    let v = DMatrix::from_fn(n, nf, |i, j| dc[i] * sp.q[(i, j)]);
+    let w = DMatrix::from_fn(n, ni, |i, j| dc[i] * sp.q[(i, nf + j)]);
 
     // [B_1; B_2] = M B, by solving with M^-1 = [E V, A W].
-    let mb = subspace::solve(&sp.m_inv, &sys.b).ok_or_else(singular)?;
+    let mb = subspace::solve(&sp.m_inv, &bs).ok_or_else(singular)?;
     let b1 = mb.rows(0, nf).into_owned();
     let b2 = mb.rows(nf, ni).into_owned();
     let nb2 = &sp.n_mat * &b2;
@@ -588,6 +630,35 @@ pub fn realise(
         infinite_chain: sp.infinite_chain,
         diagnostics,
     })
+}
+
+/// Row and column scalings by powers of two (exact in floating point) that bring the largest
+/// entry of every row and column of `|E| + |A|` near 1: a few sweeps of alternating row and
+/// column equilibration (as in the balancing that precedes descriptor-system reductions,
+/// Varga 2017, Section 10.1.1; Ward, "Balancing the generalized eigenvalue problem", 1981).
+fn balance(e: &DMatrix<f64>, a: &DMatrix<f64>) -> (Vec<f64>, Vec<f64>) {
+    let (r, c) = e.shape();
+    let g = DMatrix::from_fn(r, c, |i, j| e[(i, j)].abs() + a[(i, j)].abs());
+    let mut dr = vec![1.0; r];
+    let mut dc = vec![1.0; c];
+    let pow2 = |v: f64| -> f64 {
+        if v > 0.0 && v.is_finite() {
+            2f64.powi(-(v.log2().round() as i32))
+        } else {
+            1.0
+        }
+    };
+    for _ in 0..4 {
+        for (i, d) in dr.iter_mut().enumerate() {
+            let mx = (0..c).map(|j| g[(i, j)] * dc[j]).fold(0.0, f64::max);
+            *d = pow2(mx);
+        }
+        for (j, d) in dc.iter_mut().enumerate() {
+            let mx = (0..r).map(|i| g[(i, j)] * dr[i]).fold(0.0, f64::max);
+            *d = pow2(mx);
+        }
+    }
+    (dr, dc)
 }
 
 #[cfg(test)]
