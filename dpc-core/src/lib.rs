@@ -6,6 +6,7 @@
 //! * [`model`]: the trait that `dpc::model!` implements for every declared plant
 //!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`, and its
 //!   [`Structure`]: names, dimensions, sparsity);
+//! * [`consistent`]: consistent initial values of index-2/3 plants from given states;
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
 //! * [`design`]: the design chain of a preliminary feedback (trim, linearise, analyse, `K_n`)
 //!   and the check of the relative degrees at the nominal;
@@ -23,6 +24,7 @@
 //! * [`simulate`]: the sampled closed loop, with the plant integrated accurately between samples.
 
 pub mod bdf;
+pub mod consistent;
 pub mod dae;
 pub mod design;
 pub mod dpc;

@@ -27,7 +27,7 @@ pub enum LinearizeError {
     },
     /// `[dF/dx' dF/dz]` is singular at the point: the model is not an ODE or index-1 DAE
     /// there, so no state-space linearisation `x' = A x + B u` exists.
-    #[error("[dF/dx' dF/dz] is singular at the point (rank {rank} of {n}, tolerance {tolerance:e}): the plant is not of index 1 there")]
+    #[error("[dF/dx' dF/dz] is singular at the point (rank {rank} of {n}, tolerance {tolerance:e}): the plant is not of index 1 there; a constrained plant of index 2 or 3 is linearised by `linear::descriptor::linearize_descriptor`")]
     Singular {
         /// Numerical rank found.
         rank: usize,

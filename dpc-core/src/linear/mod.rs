@@ -12,7 +12,9 @@
 //! * [`place`]: multi-input pole placement (Luenberger controller form);
 //! * [`transfer`]: `H(s)`, `R_xi(s)`, the check of Theorem 3.3;
 //! * [`sampled`]: the limit law held by a zero-order hold: stability against the period `h`;
-//! * [`analysis`]: the report and the whole pipeline.
+//! * [`analysis`]: the report and the whole pipeline;
+//! * [`descriptor`]: linearised descriptor plants (index up to 3) realised on their constraint
+//!   manifold, the input of [`analyze`] for constrained plants.
 //!
 //! ```
 //! use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem};
@@ -35,6 +37,7 @@
 
 pub mod analysis;
 pub mod compress;
+pub mod descriptor;
 mod error;
 pub mod pencil;
 pub mod place;

@@ -1,0 +1,533 @@
+//! Consistent initial values of constrained (index-2 and index-3) plants from user-given
+//! states: projection onto the constraint manifold and its hidden velocity constraint, then
+//! the derivatives and the multipliers.
+//!
+//! The plant's equations are classified from its structural patterns:
+//! * *kinematic rows*: exactly one `x'` entry and no algebraic unknown, `c x'_j = f_j(t, x, u)`
+//!   as written by `der(q) = v` (the state `x_j` has the velocity `phi_j(x) = x'_j - F_i / c`);
+//! * *constraint rows*: no `x'` and no algebraic unknown, `g(x) = 0`. A constraint all of whose
+//!   states have kinematic rows is of *position* type (index 3 with its multipliers): it has
+//!   the hidden velocity constraint `g_x(x) phi(x) = 0`. Otherwise it is of *velocity* type
+//!   (index 2), with no further hidden constraint on `x`.
+//!
+//! The algorithm (the projection steps of Brenan, Campbell & Petzold, *Numerical Solution of
+//! Initial-Value Problems in DAEs*, SIAM 1996, Section 5.3, and of the consistent
+//! initialisation of mechanical systems in Hairer & Wanner, *Solving ODEs II*, Section VII.1):
+//! 1. *positions*: Gauss-Newton on `g(x) = 0` from the given `x`, each correction the
+//!    minimum-norm solution of `G dx = -g` by a QR factorisation of `G^T` (so only the states
+//!    the constraints involve move, and as little as possible);
+//! 2. *velocities*: with the states of the position constraints frozen, Gauss-Newton on
+//!    `g_x(x) phi(x) = 0` over the other states, again minimum-norm (for `q' = v` this is the
+//!    orthogonal projection of the given velocities onto `G v = 0`); the Jacobian is exact
+//!    because `g_x` depends only on frozen states;
+//! 3. *derivatives and multipliers*: at the fixed `x`, Gauss-Newton (column-pivoted QR,
+//!    least squares) for `(x', z)` on `F = 0` stacked with the acceleration-level constraints
+//!    `G phi_x x' + kappa = 0` of position constraints and `G x' = 0` of velocity
+//!    constraints. The curvature `kappa = (d/ds) g_x(x + s p) p` at `s = 0`, `p = phi(x)`, is the
+//!    one second derivative the generated code does not provide; it is a central difference of
+//!    the *analytic* Jacobian along `p` (exact for quadratic constraints such as rods of fixed
+//!    length), and its error is estimated from the same difference at twice the step and
+//!    reported. It is zero, with no difference taken, at rest.
+//!
+//! The constraints must not depend explicitly on time or on the input (the model provides no
+//! `dF/dt`, and a constraint driven by the input is a prescribed motion): such a plant is
+//! refused with [`ConsistentError::Unsupported`].
+
+use nalgebra::{DMatrix, DVector};
+use thiserror::Error;
+
+use crate::model::DaeModel;
+
+/// Options of [`consistent_state`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConsistentOptions {
+    /// A constraint is met when `|g_i| <= tol * (1 + s_i)`, `s_i` the size of its terms
+    /// (`sum_j |dg_i/dx_j| |x_j|`). Default `1e-12`.
+    pub tol: f64,
+    /// Gauss-Newton iterations per stage. Default 50.
+    pub max_iterations: usize,
+}
+
+impl Default for ConsistentOptions {
+    fn default() -> Self {
+        Self {
+            tol: 1e-12,
+            max_iterations: 50,
+        }
+    }
+}
+
+/// Why no consistent state was found.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ConsistentError {
+    /// A vector has the wrong length.
+    #[error("{what} has length {found}, expected {expected}")]
+    Dimension {
+        /// Which vector.
+        what: &'static str,
+        /// Required length.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// The model produced a non-finite value.
+    #[error("non-finite {what} during the consistent initialisation")]
+    NonFinite {
+        /// Residual or Jacobian.
+        what: &'static str,
+    },
+    /// The constraints cannot be met from the given state (contradictory, or out of reach).
+    #[error("the constraints cannot be met ({stage}): {equation} keeps the residual {residual:e} (tolerance {tolerance:e}) after {iterations} Gauss-Newton steps")]
+    CannotMeet {
+        /// Positions, velocities, or derivatives and multipliers.
+        stage: &'static str,
+        /// The equation with the largest residual, as the model names it.
+        equation: String,
+        /// Its residual.
+        residual: f64,
+        /// The tolerance.
+        tolerance: f64,
+        /// Steps taken.
+        iterations: usize,
+    },
+    /// The derivatives and multipliers are not determined at the projected state (dependent
+    /// constraints, or a constraint that does not involve the multiplier's direction).
+    #[error("the derivatives and multipliers are not determined: rank {rank} of {unknowns} (tolerance {tolerance:e})")]
+    Undetermined {
+        /// Numerical rank of the stacked Jacobian.
+        rank: usize,
+        /// Number of unknowns `n_x + n_z`.
+        unknowns: usize,
+        /// Rank tolerance.
+        tolerance: f64,
+    },
+    /// The plant's structure is outside what this projection handles.
+    #[error("{equation}: {reason}")]
+    Unsupported {
+        /// The equation, as the model names it.
+        equation: String,
+        /// Why.
+        reason: &'static str,
+    },
+}
+
+/// A consistent state and how it was reached.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConsistentState {
+    /// The states, on the constraint manifold and its hidden velocity constraint.
+    pub x: Vec<f64>,
+    /// Their derivatives.
+    pub xdot: Vec<f64>,
+    /// The algebraic unknowns (multipliers).
+    pub z: Vec<f64>,
+    /// `x - x_given`, per state.
+    pub moved: Vec<f64>,
+    /// `max_i |moved_i|`.
+    pub max_move: f64,
+    /// The constraint rows of position type (index 3).
+    pub position_constraints: Vec<usize>,
+    /// The constraint rows of velocity type (index 2).
+    pub velocity_constraints: Vec<usize>,
+    /// Gauss-Newton steps of the three stages.
+    pub iterations: [usize; 3],
+    /// Estimated absolute error of the curvature term `kappa` (largest entry), zero at rest.
+    pub curvature_error: f64,
+    /// Largest residual of `F` at the result, relative to the size of its terms.
+    pub residual: f64,
+}
+
+struct Jac {
+    r: Vec<f64>,
+    f_xdot: DMatrix<f64>,
+    f_x: DMatrix<f64>,
+    f_z: DMatrix<f64>,
+    f_u: DMatrix<f64>,
+}
+
+fn evaluate<M: DaeModel>(
+    model: &M,
+    t: f64,
+    x: &[f64],
+    xdot: &[f64],
+    z: &[f64],
+    u: &[f64],
+) -> Result<Jac, ConsistentError> {
+    let s = model.structure();
+    let (ne, nx, nz, nu) = (s.n_equations(), s.n_states(), s.n_algebraic(), s.n_inputs());
+    let mut j = Jac {
+        r: vec![0.0; ne],
+        f_xdot: DMatrix::zeros(ne, nx),
+        f_x: DMatrix::zeros(ne, nx),
+        f_z: DMatrix::zeros(ne, nz),
+        f_u: DMatrix::zeros(ne, nu),
+    };
+    model.evaluate(
+        t,
+        x,
+        xdot,
+        z,
+        u,
+        &mut j.r,
+        &mut j.f_xdot,
+        &mut j.f_x,
+        &mut j.f_z,
+        &mut j.f_u,
+    );
+    if j.r.iter().any(|v| !v.is_finite()) {
+        return Err(ConsistentError::NonFinite { what: "residual" });
+    }
+    for (what, m) in [("dF/dx'", &j.f_xdot), ("dF/dx", &j.f_x), ("dF/dz", &j.f_z)] {
+        if m.iter().any(|v| !v.is_finite()) {
+            return Err(ConsistentError::NonFinite { what });
+        }
+    }
+    Ok(j)
+}
+
+/// Minimum-norm solution of the underdetermined `g dx = rhs` (`g` with full row rank) by a
+/// QR factorisation of `g^T`; `None` when `g` is rank deficient.
+fn min_norm(g: &DMatrix<f64>, rhs: &DVector<f64>) -> Option<DVector<f64>> {
+    if g.nrows() == 0 {
+        return Some(DVector::zeros(g.ncols()));
+    }
+    if g.nrows() > g.ncols() {
+        return None;
+    }
+    let qr = g.transpose().qr();
+    let r = qr.r();
+    let rmax = r.diagonal().amax();
+    let tol = 100.0 * (g.ncols() as f64) * f64::EPSILON * rmax;
+    if rmax == 0.0 || r.diagonal().iter().any(|d| d.abs() <= tol) {
+        return None;
+    }
+    let y = r.tr_solve_upper_triangular(rhs)?;
+    Some(qr.q() * y)
+}
+
+/// The consistent state nearest (in the sense of minimum-norm Gauss-Newton corrections) to
+/// `x_given`, with its derivatives and multipliers, at time `t` and input `u`. See the module
+/// documentation for the algorithm.
+///
+/// # Errors
+/// [`ConsistentError`]: wrong lengths, non-finite values, constraints that cannot be met,
+/// undetermined multipliers, or an unsupported structure.
+pub fn consistent_state<M: DaeModel>(
+    model: &M,
+    t: f64,
+    x_given: &[f64],
+    u: &[f64],
+    opts: &ConsistentOptions,
+) -> Result<ConsistentState, ConsistentError> {
+    let s = model.structure();
+    let (ne, nx, nz, nu) = (s.n_equations(), s.n_states(), s.n_algebraic(), s.n_inputs());
+    for (what, v, n) in [("x", x_given, nx), ("u", u, nu)] {
+        if v.len() != n {
+            return Err(ConsistentError::Dimension {
+                what,
+                expected: n,
+                found: v.len(),
+            });
+        }
+    }
+    // Structural classification.
+    let row_cols = |p: &[(usize, usize)], i: usize| -> Vec<usize> {
+        p.iter().filter(|(r, _)| *r == i).map(|(_, c)| *c).collect()
+    };
+    let mut kinematic: Vec<Option<usize>> = vec![None; nx]; // state -> row
+    let mut constraints = Vec::new();
+    for i in 0..ne {
+        let xd = row_cols(&s.pattern_f_xdot, i);
+        let zc = row_cols(&s.pattern_f_z, i);
+        if zc.is_empty() && xd.len() == 1 && kinematic[xd[0]].is_none() {
+            kinematic[xd[0]] = Some(i);
+        }
+        if xd.is_empty() && zc.is_empty() {
+            if !row_cols(&s.pattern_f_u, i).is_empty() {
+                return Err(ConsistentError::Unsupported {
+                    equation: s.equation_name(i),
+                    reason: "a constraint that depends on the input prescribes a motion; consistent values depend on the input's derivatives",
+                });
+            }
+            constraints.push(i);
+        }
+    }
+    let states_of = |i: usize| row_cols(&s.pattern_f_x, i);
+    let (position, velocity): (Vec<usize>, Vec<usize>) = constraints
+        .iter()
+        .partition(|&&i| states_of(i).iter().all(|&j| kinematic[j].is_some()));
+    let mut pos_states: Vec<usize> = position.iter().flat_map(|&i| states_of(i)).collect();
+    pos_states.sort_unstable();
+    pos_states.dedup();
+
+    let mut x = x_given.to_vec();
+    let mut xdot = vec![0.0; nx];
+    let mut z = vec![0.0; nz];
+    let mut iterations = [0usize; 3];
+
+    // Relative residual of rows `rows` of `j` at `x`.
+    let rel = |j: &Jac, rows: &[usize], x: &[f64]| -> (f64, usize) {
+        let mut worst = (0.0, rows.first().copied().unwrap_or(0));
+        for &i in rows {
+            let scale: f64 = (0..nx).map(|k| j.f_x[(i, k)].abs() * x[k].abs()).sum();
+            let v = j.r[i].abs() / (1.0 + scale);
+            if v > worst.0 || v.is_nan() {
+                worst = (v, i);
+            }
+        }
+        worst
+    };
+    let cannot =
+        |stage: &'static str, j: &Jac, i: usize, iters: usize| ConsistentError::CannotMeet {
+            stage,
+            equation: s.equation_name(i),
+            residual: j.r[i],
+            tolerance: opts.tol,
+            iterations: iters,
+        };
+
+    // 1. Positions: g(x) = 0 over all states, minimum norm.
+    let all_states: Vec<usize> = (0..nx).collect();
+    let mut it = 0;
+    loop {
+        let j = evaluate(model, t, &x, &xdot, &z, u)?;
+        let (worst, wi) = rel(&j, &constraints, &x);
+        if worst <= opts.tol {
+            break;
+        }
+        if it == opts.max_iterations {
+            return Err(cannot("positions", &j, wi, it));
+        }
+        let g = DMatrix::from_fn(constraints.len(), nx, |a, k| j.f_x[(constraints[a], k)]);
+        let rhs = DVector::from_fn(constraints.len(), |a, _| -j.r[constraints[a]]);
+        let dx = min_norm(&g, &rhs).ok_or_else(|| cannot("positions", &j, wi, it))?;
+        for k in &all_states {
+            x[*k] += dx[*k];
+        }
+        it += 1;
+    }
+    iterations[0] = it;
+
+    // Velocities phi_j(x) of the kinematic states, and their Jacobian rows.
+    let velocities = |j: &Jac, xdot: &[f64]| -> (DVector<f64>, DMatrix<f64>) {
+        let mut p = DVector::zeros(nx);
+        let mut p_x = DMatrix::zeros(nx, nx);
+        for (k, row) in kinematic.iter().enumerate() {
+            if let Some(i) = *row {
+                let c = j.f_xdot[(i, k)];
+                p[k] = xdot[k] - j.r[i] / c;
+                for l in 0..nx {
+                    p_x[(k, l)] = -j.f_x[(i, l)] / c;
+                }
+            }
+        }
+        (p, p_x)
+    };
+    let j = evaluate(model, t, &x, &xdot, &z, u)?;
+    for (k, row) in kinematic.iter().enumerate() {
+        if let Some(i) = *row {
+            if j.f_xdot[(i, k)] == 0.0 {
+                return Err(ConsistentError::Unsupported {
+                    equation: s.equation_name(i),
+                    reason: "the derivative's coefficient vanishes at the given state",
+                });
+            }
+        }
+    }
+
+    // 2. Velocities: g_x(x) phi(x) = 0 over the states the position constraints do not involve.
+    let free: Vec<usize> = (0..nx).filter(|k| !pos_states.contains(k)).collect();
+    let mut it = 0;
+    loop {
+        let j = evaluate(model, t, &x, &xdot, &z, u)?;
+        let (p, p_x) = velocities(&j, &xdot);
+        let g = DMatrix::from_fn(position.len(), nx, |a, k| j.f_x[(position[a], k)]);
+        let h = &g * &p;
+        let mut worst = (0.0, 0usize);
+        for (a, &i) in position.iter().enumerate() {
+            let scale: f64 = (0..nx).map(|k| (g[(a, k)] * p[k]).abs()).sum();
+            let v = h[a].abs() / (1.0 + scale);
+            if v > worst.0 || v.is_nan() {
+                worst = (v, i);
+            }
+        }
+        if worst.0 <= opts.tol {
+            break;
+        }
+        let fail = |it| ConsistentError::CannotMeet {
+            stage: "velocities",
+            equation: format!("the derivative of {}", s.equation_name(worst.1)),
+            residual: worst.0,
+            tolerance: opts.tol,
+            iterations: it,
+        };
+        if it == opts.max_iterations {
+            return Err(fail(it));
+        }
+        let jac_full = &g * &p_x;
+        let jac = DMatrix::from_fn(position.len(), free.len(), |a, b| jac_full[(a, free[b])]);
+        let d = min_norm(&jac, &(-h)).ok_or_else(|| fail(it))?;
+        for (b, &k) in free.iter().enumerate() {
+            x[k] += d[b];
+        }
+        it += 1;
+    }
+    iterations[1] = it;
+
+    // 3. Derivatives and multipliers at fixed x.
+    let n = nx + nz;
+    let (kappa, curvature_error) = {
+        let j = evaluate(model, t, &x, &xdot, &z, u)?;
+        let (p, _) = velocities(&j, &xdot);
+        curvature(model, t, &x, &xdot, &z, u, &position, &p)?
+    };
+    let mut it = 0;
+    loop {
+        let j = evaluate(model, t, &x, &xdot, &z, u)?;
+        let (_, p_x) = velocities(&j, &xdot);
+        let rows = ne + position.len() + velocity.len();
+        let mut jac = DMatrix::zeros(rows, n);
+        let mut res = DVector::zeros(rows);
+        jac.view_mut((0, 0), (ne, nx)).copy_from(&j.f_xdot);
+        jac.view_mut((0, nx), (ne, nz)).copy_from(&j.f_z);
+        for i in 0..ne {
+            res[i] = j.r[i];
+        }
+        for (a, &i) in position.iter().enumerate() {
+            let g = j.f_x.row(i);
+            let row = g * &p_x;
+            let xd = DVector::from_column_slice(&xdot);
+            jac.view_mut((ne + a, 0), (1, nx)).copy_from(&row);
+            res[ne + a] = (row * xd)[0] + kappa[a];
+        }
+        for (b, &i) in velocity.iter().enumerate() {
+            let g = j.f_x.row(i);
+            let xd = DVector::from_column_slice(&xdot);
+            jac.view_mut((ne + position.len() + b, 0), (1, nx))
+                .copy_from(&g);
+            res[ne + position.len() + b] = (g * xd)[0];
+        }
+        let all: Vec<usize> = (0..ne).collect();
+        let (worst, wi) = {
+            let (w, i) = rel(&j, &all, &x);
+            let w = (ne..rows).fold(w, |m, r| {
+                let scale = 1.0 + jac.row(r).iter().map(|v| v.abs()).sum::<f64>();
+                m.max(res[r].abs() / scale)
+            });
+            (w, i)
+        };
+        if worst <= opts.tol && it > 0 {
+            break;
+        }
+        if it == opts.max_iterations {
+            return Err(cannot("derivatives and multipliers", &j, wi, it));
+        }
+        let qr = jac.clone().col_piv_qr();
+        let rd = qr.r().diagonal();
+        let tol = 100.0 * (rows as f64) * f64::EPSILON * rd.amax();
+        let rank = rd.iter().filter(|v| v.abs() > tol).count();
+        if rank < n {
+            return Err(ConsistentError::Undetermined {
+                rank,
+                unknowns: n,
+                tolerance: tol,
+            });
+        }
+        // Least squares through the (consistent, overdetermined) stacked system:
+        // R P^T d = (Q^T r)[..n].
+        let qtr = qr.q().transpose() * (-&res);
+        let r = qr.r();
+        let rn = r.view((0, 0), (n, n)).into_owned();
+        let mut y = rn
+            .solve_upper_triangular(&qtr.rows(0, n).into_owned())
+            .ok_or(ConsistentError::Undetermined {
+                rank,
+                unknowns: n,
+                tolerance: tol,
+            })?;
+        qr.p().inv_permute_rows(&mut y);
+        for k in 0..nx {
+            xdot[k] += y[k];
+        }
+        for k in 0..nz {
+            z[k] += y[nx + k];
+        }
+        it += 1;
+    }
+    iterations[2] = it;
+
+    let j = evaluate(model, t, &x, &xdot, &z, u)?;
+    let residual = (0..ne)
+        .map(|i| {
+            let scale: f64 = (0..nx)
+                .map(|k| j.f_x[(i, k)].abs() * x[k].abs() + j.f_xdot[(i, k)].abs() * xdot[k].abs())
+                .sum::<f64>()
+                + (0..nz)
+                    .map(|k| j.f_z[(i, k)].abs() * z[k].abs())
+                    .sum::<f64>();
+            j.r[i].abs() / (1.0 + scale)
+        })
+        .fold(0.0, f64::max);
+    let moved: Vec<f64> = x.iter().zip(x_given).map(|(a, b)| a - b).collect();
+    let max_move = moved.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    Ok(ConsistentState {
+        x,
+        xdot,
+        z,
+        moved,
+        max_move,
+        position_constraints: position,
+        velocity_constraints: velocity,
+        iterations,
+        curvature_error,
+        residual,
+    })
+}
+
+/// `kappa_a = d/ds [g_x(x + s p) p]_a` at `s = 0` for the position constraints, by a central
+/// difference of the analytic Jacobian, and the Richardson estimate of its error from the
+/// difference at twice the step.
+#[allow(clippy::too_many_arguments)]
+fn curvature<M: DaeModel>(
+    model: &M,
+    t: f64,
+    x: &[f64],
+    xdot: &[f64],
+    z: &[f64],
+    u: &[f64],
+    rows: &[usize],
+    p: &DVector<f64>,
+) -> Result<(Vec<f64>, f64), ConsistentError> {
+    let pn = p.amax();
+    if rows.is_empty() || pn == 0.0 {
+        return Ok((vec![0.0; rows.len()], 0.0));
+    }
+    let xn = x.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    let h = f64::EPSILON.cbrt() * xn / pn;
+    let diff = |h: f64| -> Result<Vec<f64>, ConsistentError> {
+        let shift = |sign: f64| -> Vec<f64> {
+            x.iter()
+                .zip(p.iter())
+                .map(|(a, b)| a + sign * h * b)
+                .collect()
+        };
+        let jp = evaluate(model, t, &shift(1.0), xdot, z, u)?;
+        let jm = evaluate(model, t, &shift(-1.0), xdot, z, u)?;
+        Ok(rows
+            .iter()
+            .map(|&i| {
+                let gp = jp.f_x.row(i) * p;
+                let gm = jm.f_x.row(i) * p;
+                (gp[0] - gm[0]) / (2.0 * h)
+            })
+            .collect())
+    };
+    let k1 = diff(h)?;
+    let k2 = diff(2.0 * h)?;
+    let err = k1
+        .iter()
+        .zip(&k2)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs() / 3.0));
+    // Richardson extrapolation removes the O(h^2) term.
+    let k: Vec<f64> = k1.iter().zip(&k2).map(|(a, b)| a + (a - b) / 3.0).collect();
+    Ok((k, err))
+}
