@@ -18,6 +18,7 @@ pub mod emit;
 pub mod hirschorn;
 pub mod ir;
 pub mod lower;
+pub mod names;
 pub mod parse;
 pub mod symbolic;
 pub mod text;

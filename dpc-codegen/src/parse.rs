@@ -16,6 +16,7 @@
 //! ```
 
 use proc_macro2::Span;
+use syn::ext::IdentExt;
 use syn::parse::{Parse, ParseStream};
 use syn::punctuated::Punctuated;
 use syn::{braced, bracketed, Attribute, Expr, Ident, Token, Visibility};
@@ -152,11 +153,8 @@ impl Parse for ModelDef {
     fn parse(input: ParseStream) -> syn::Result<Self> {
         let attrs = input.call(Attribute::parse_outer)?;
         let vis: Visibility = input.parse()?;
-        let name: Ident = input.parse().map_err(|e| {
-            syn::Error::new(
-                e.span(),
-                "expected the model's name, e.g. `pub Wheel { ... }`",
-            )
+        let name: Ident = user_ident(input, "a model").map_err(|e| {
+            keyword_or(e, "expected the model's name, e.g. `pub Wheel { ... }`")
         })?;
         let body;
         let brace = braced!(body in input);
@@ -183,7 +181,7 @@ impl Parse for Item {
     fn parse(input: ParseStream) -> syn::Result<Self> {
         if input.peek(Token![let]) {
             let let_token: Token![let] = input.parse()?;
-            let name: Ident = input.parse()?;
+            let name: Ident = user_ident(input, "a `let` intermediate")?;
             input.parse::<Token![=]>()?;
             let expr: Expr = input.parse()?;
             input.parse::<Token![;]>().map_err(|e| {
@@ -215,7 +213,12 @@ impl Parse for Item {
             "states" | "algebraic" | "inputs" => {
                 let content;
                 body_span = braced!(content in input).span.join();
-                let names = comma_list(&content, parse_name)?;
+                let what = match kw.as_str() {
+                    "states" => "a state",
+                    "algebraic" => "an algebraic unknown",
+                    _ => "an input",
+                };
+                let names = comma_list(&content, |c| parse_name(c, what))?;
                 match kw.as_str() {
                     "states" => SectionBody::States(names),
                     "algebraic" => SectionBody::Algebraic(names),
@@ -255,9 +258,9 @@ impl Parse for Item {
                 })?)
             }
             "tracking" => {
-                let type_name: Ident = input.parse().map_err(|e| {
-                    syn::Error::new(
-                        e.span(),
+                let type_name: Ident = user_ident(input, "a tracking type").map_err(|e| {
+                    keyword_or(
+                        e,
                         "expected the name of the generated tracking type, e.g. `tracking WheelTracking { theta: [5.0] }`",
                     )
                 })?;
@@ -310,16 +313,40 @@ fn comma_list<T>(
     Ok(out)
 }
 
-fn parse_name(input: ParseStream) -> syn::Result<NameDef> {
+/// Marker in the message of a keyword error, so callers keep it instead of a generic one.
+const KEYWORD_MARK: &str = "is a Rust keyword";
+
+/// An identifier that names `what`; a keyword gets an error saying so on its token.
+fn user_ident(input: ParseStream, what: &str) -> syn::Result<Ident> {
+    if input.peek(Ident::peek_any) && !input.peek(Ident) {
+        let kw = input.call(Ident::parse_any)?;
+        let msg = crate::names::refusal(&kw.to_string(), what).unwrap_or_else(|| {
+            format!("`{kw}` {KEYWORD_MARK} and cannot name {what}; choose another name")
+        });
+        return Err(syn::Error::new(kw.span(), msg));
+    }
+    input.parse()
+}
+
+/// `e` if it is a keyword error from [`user_ident`], else an error with `message` at its span.
+fn keyword_or(e: syn::Error, message: &str) -> syn::Error {
+    if e.to_string().contains(KEYWORD_MARK) {
+        e
+    } else {
+        syn::Error::new(e.span(), message)
+    }
+}
+
+fn parse_name(input: ParseStream, what: &str) -> syn::Result<NameDef> {
     Ok(NameDef {
         attrs: input.call(Attribute::parse_outer)?,
-        name: input.parse()?,
+        name: user_ident(input, what)?,
     })
 }
 
 fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
     let attrs = input.call(Attribute::parse_outer)?;
-    let name: Ident = input.parse()?;
+    let name: Ident = user_ident(input, "a parameter")?;
     input.parse::<Token![=]>().map_err(|e| {
         syn::Error::new(
             e.span(),
@@ -335,7 +362,7 @@ fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
 
 fn parse_output(input: ParseStream) -> syn::Result<OutputDef> {
     let attrs = input.call(Attribute::parse_outer)?;
-    let name: Ident = input.parse()?;
+    let name: Ident = user_ident(input, "an output")?;
     let expr = if input.peek(Token![=]) {
         input.parse::<Token![=]>()?;
         Some(input.parse()?)
