@@ -6,7 +6,6 @@ use dpc::core::dpc::{Dpc, DpcError, DpcOptions, Extraction};
 use dpc::core::linalg::NalgebraLu;
 use dpc::core::linear::{analyze, AnalysisOptions, LinearSystem};
 use dpc::core::reference::{Components, Constant, Sinusoid};
-use dpc::core::TrackingDae;
 use dpc::nalgebra::{DMatrix, DVector};
 use dpc_models::WheelLinearTracking;
 
@@ -133,7 +132,7 @@ fn reference_feedforward_matches_r_xi() {
         err < 1e-3 * (1.0 + expected.norm()),
         "u = {u:?}, R_xi xi = {expected}"
     );
-    assert_eq!(WheelLinearTracking::W_COEFFICIENTS.len(), 2);
+    assert_eq!(WheelLinearTracking::N_OUTPUTS, 2);
 }
 
 #[test]

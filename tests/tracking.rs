@@ -21,8 +21,9 @@ fn blocks<M: DaeModel + Default>(
     z: &[f64],
 ) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
     let m = M::default();
-    let ne = M::N_EQUATIONS;
-    let (nx, nz, nu) = (M::N_STATES, M::N_ALGEBRAIC, M::N_INPUTS);
+    let st = m.structure();
+    let ne = st.n_equations();
+    let (nx, nz, nu) = (st.n_states(), st.n_algebraic(), st.n_inputs());
     let mut r = vec![0.0; ne];
     let (mut fxd, mut fx, mut fz, mut fu) = (
         DMatrix::zeros(ne, nx),
@@ -55,8 +56,8 @@ fn linear_example_constraint_rows_are_the_papers_yhat() {
     assert_eq!(fz[(2, 0)], -1.0);
     assert_eq!(fz[(4, 1)], -1.0);
     assert_eq!(
-        WheelLinearTracking::W_COEFFICIENTS,
-        &[&[5.0, 1.0][..], &[5.0, 1.0][..]]
+        default_w(&WheelLinearTracking::default()),
+        [vec![5.0, 1.0], vec![5.0, 1.0]]
     );
 }
 
@@ -194,8 +195,8 @@ fn two_steps_on_the_flexible_joint_match_finite_differences() {
         );
     }
     assert_eq!(
-        FlexibleJointTracking::W_COEFFICIENTS,
-        &[&[6.0, 5.0, 1.0][..]]
+        default_w(&FlexibleJointTracking::default()),
+        [vec![6.0, 5.0, 1.0]]
     );
 }
 
@@ -204,24 +205,37 @@ fn relative_degrees_are_reported() {
     // Paper, Section 4: H(s) = diag(5/(s^3 + 8.46 s), 1/s^2).
     assert_eq!(Wheel::RELATIVE_DEGREES, &[Some(3), Some(2)]);
     assert_eq!(WheelLinear::RELATIVE_DEGREES, &[Some(3), Some(2)]);
-    assert_eq!(WheelTracking::RELATIVE_DEGREES, &[Some(3), Some(2)]);
+    assert_eq!(
+        WheelTracking::default().relative_degrees(),
+        &[Some(3), Some(2)]
+    );
     assert_eq!(FlexibleJoint::RELATIVE_DEGREES, &[Some(4)]);
     // A position constraint makes the pendulum structurally higher-index.
     assert_eq!(Pendulum::RELATIVE_DEGREES, &[None]);
     // After one step on each wheel output the largest relative degree left is 2 (the
     // nilpotency index of N in the paper's example), after two steps on the arm also 2.
-    assert_eq!(WheelTracking::remaining_relative_degree(), Some(2));
-    assert_eq!(FlexibleJointTracking::remaining_relative_degree(), Some(2));
+    assert_eq!(
+        WheelTracking::default().remaining_relative_degree(),
+        Some(2)
+    );
+    assert_eq!(
+        FlexibleJointTracking::default().remaining_relative_degree(),
+        Some(2)
+    );
 }
 
 #[test]
 fn tracking_dae_layout() {
     assert_eq!(WheelTracking::N_STATES, 5);
     assert_eq!(WheelTracking::N_ALGEBRAIC, 2);
-    assert_eq!(WheelTracking::ALGEBRAIC_NAMES, &["u1", "u2"]);
-    assert_eq!(WheelTracking::INPUT_NAMES, &["w_theta", "w_psi"]);
+    let tracking = WheelTracking::default();
+    let structure = tracking.structure();
+    assert_eq!(structure.algebraic, ["u1", "u2"]);
+    assert_eq!(structure.inputs, ["w_theta", "w_psi"]);
     assert_eq!(WheelTracking::N_EQUATIONS, 7);
-    assert_eq!(WheelTracking::EQUATIONS[5], "dtheta + 5 * theta == w_theta");
+    assert_eq!(structure.n_equations(), 7);
+    assert_eq!(&structure.equations[5], "dtheta + 5 * theta == w_theta");
+    assert_eq!(tracking.plant_inputs(), 2);
     assert!(WheelTracking::LISTING.contains("W(s) = s + 5"));
 }
 
@@ -329,13 +343,14 @@ fn everything<M: DaeModel>(
     u: &[f64],
     c: f64,
 ) -> Vec<DMatrix<f64>> {
-    let ne = M::N_EQUATIONS;
+    let st = m.structure();
+    let ne = st.n_equations();
     let mut r = vec![0.0; ne];
     let (mut fxd, mut fx, mut fz, mut fu) = (
-        DMatrix::zeros(ne, M::N_STATES),
-        DMatrix::zeros(ne, M::N_STATES),
-        DMatrix::zeros(ne, M::N_ALGEBRAIC),
-        DMatrix::zeros(ne, M::N_INPUTS),
+        DMatrix::zeros(ne, st.n_states()),
+        DMatrix::zeros(ne, st.n_states()),
+        DMatrix::zeros(ne, st.n_algebraic()),
+        DMatrix::zeros(ne, st.n_inputs()),
     );
     m.evaluate(
         t, x, xdot, z, u, &mut r, &mut fxd, &mut fx, &mut fz, &mut fu,
@@ -356,7 +371,8 @@ fn everything<M: DaeModel>(
 }
 
 fn assert_same_at_random_points<A: DaeModel, B: DaeModel>(a: &A, b: &B) {
-    assert_eq!(A::N_EQUATIONS, B::N_EQUATIONS);
+    let st = a.structure();
+    assert_eq!(st.n_equations(), b.structure().n_equations());
     let mut state = 0x9e37_79b9_7f4a_7c15_u64;
     for _ in 0..50 {
         let mut draw = |n: usize| {
@@ -365,8 +381,8 @@ fn assert_same_at_random_points<A: DaeModel, B: DaeModel>(a: &A, b: &B) {
                 .collect::<Vec<_>>()
         };
         let (t, c) = (draw(1)[0], 10.0 * draw(1)[0]);
-        let (x, xdot) = (draw(A::N_STATES), draw(A::N_STATES));
-        let (z, u) = (draw(A::N_ALGEBRAIC), draw(A::N_INPUTS));
+        let (x, xdot) = (draw(st.n_states()), draw(st.n_states()));
+        let (z, u) = (draw(st.n_algebraic()), draw(st.n_inputs()));
         let ea = everything(a, t, &x, &xdot, &z, &u, c);
         let eb = everything(b, t, &x, &xdot, &z, &u, c);
         for (k, (ma, mb)) in ea.iter().zip(&eb).enumerate() {
@@ -381,14 +397,18 @@ fn assert_same_at_random_points<A: DaeModel, B: DaeModel>(a: &A, b: &B) {
 
 #[test]
 fn w_roots_set_at_run_time_give_the_model_compiled_with_them() {
-    assert_eq!(CartATracking::W_COEFFICIENTS, &[&[5.0, 6.0, 1.0][..]]);
-    assert_eq!(CartBTracking::W_COEFFICIENTS, &[&[0.0, 3.0, 1.0][..]]);
+    assert_eq!(default_w(&CartATracking::default()), [vec![5.0, 6.0, 1.0]]);
+    assert_eq!(default_w(&CartBTracking::default()), [vec![0.0, 3.0, 1.0]]);
     // The entries the coefficients multiply are structural, whatever their defaults: the
     // root 0 of CartB does not drop the column of x from its constraint row.
-    assert_eq!(CartATracking::PATTERN_F_X, CartBTracking::PATTERN_F_X);
-    assert_eq!(CartATracking::PATTERN_F_XDOT, CartBTracking::PATTERN_F_XDOT);
-    assert_eq!(CartATracking::PATTERN_F_Z, CartBTracking::PATTERN_F_Z);
-    assert!(CartBTracking::PATTERN_F_X.contains(&(2, 0)));
+    let (sa, sb) = (
+        CartATracking::default().structure().clone(),
+        CartBTracking::default().structure().clone(),
+    );
+    assert_eq!(sa.pattern_f_x, sb.pattern_f_x);
+    assert_eq!(sa.pattern_f_xdot, sb.pattern_f_xdot);
+    assert_eq!(sa.pattern_f_z, sb.pattern_f_z);
+    assert!(sb.pattern_f_x.contains(&(2, 0)));
 
     let mut a = CartATracking::default();
     assert_eq!(a.w_coefficients(0), &[5.0, 6.0, 1.0]);
@@ -451,8 +471,8 @@ fn bad_w_gives_typed_errors_and_leaves_w_unchanged() {
     assert_eq!(
         e,
         TrackingError::WrongDegree {
-            model: "CartATracking",
-            output: "p",
+            model: "CartATracking".into(),
+            output: "p".into(),
             expected: 2,
             found: 1
         }
@@ -518,9 +538,10 @@ fn bad_w_gives_typed_errors_and_leaves_w_unchanged() {
 
 #[test]
 fn parameters_set_by_name_change_the_residual_as_the_parameter_would() {
-    assert_eq!(CartA::PARAM_NAMES, &["m", "k", "c"]);
+    let cart = CartA::default();
+    assert_eq!(cart.structure().params, ["m", "k", "c"]);
     let mut params = CartAParams::default();
-    set_parameter_by_name::<CartA>(&mut params, "k", 7.5).unwrap();
+    set_parameter_by_name(&cart, &mut params, "k", 7.5).unwrap();
     assert_eq!(
         params,
         CartAParams {
@@ -528,7 +549,7 @@ fn parameters_set_by_name_change_the_residual_as_the_parameter_would() {
             ..CartAParams::default()
         }
     );
-    assert_eq!(parameter_by_name::<CartA>(&params, "k"), Ok(7.5));
+    assert_eq!(parameter_by_name(&cart, &params, "k"), Ok(7.5));
     assert_eq!(CartA::parameter(&params, 0), Some(2.0));
     assert_eq!(CartA::parameter(&params, 3), None);
     assert!(!CartA::set_parameter(&mut params, 3, 1.0));
@@ -546,7 +567,7 @@ fn parameters_set_by_name_change_the_residual_as_the_parameter_would() {
 
     // The tracking DAE shares the parameters: the controller's model changes the same way.
     let mut cp = CartATracking::default().params;
-    set_parameter_by_name::<CartATracking>(&mut cp, "m", 3.0).unwrap();
+    set_parameter_by_name(&CartATracking::default(), &mut cp, "m", 3.0).unwrap();
     let controller = CartATracking::from_params(cp);
     let mut g = [0.0; 3];
     controller.residual(0.0, &x, &xdot, &u, &[0.0], &mut g);
@@ -558,12 +579,20 @@ fn parameters_set_by_name_change_the_residual_as_the_parameter_would() {
     .residual(0.0, &x, &xdot, &[], &u, &mut plant);
     assert_eq!(&g[..2], &plant);
 
-    let e = set_parameter_by_name::<CartA>(&mut params, "nope", 1.0).unwrap_err();
+    let e = set_parameter_by_name(&cart, &mut params, "nope", 1.0).unwrap_err();
     assert_eq!(
         e.to_string(),
         "model `CartA` has no parameter `nope`; its parameters are m, k, c"
     );
     assert_eq!(params.k, 7.5, "unchanged after an error");
-    let e = parameter_by_name::<Wheel>(&Wheel::default().params, "mass").unwrap_err();
+    let wheel = Wheel::default();
+    let e = parameter_by_name(&wheel, &wheel.params, "mass").unwrap_err();
     assert!(e.to_string().contains("m, r, i_r, i_n, g"), "{e}");
+}
+
+/// The compiled default `W_i` of every output of a tracking DAE.
+fn default_w<T: TrackingDae>(tracking: &T) -> Vec<Vec<f64>> {
+    (0..tracking.structure().n_outputs())
+        .map(|i| tracking.default_w_coefficients(i).to_vec())
+        .collect()
 }

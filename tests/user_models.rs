@@ -81,17 +81,24 @@ dpc::model! {
 fn declared_dimensions_names_and_kinds() {
     assert_eq!(Robertson::N_STATES, 2);
     assert_eq!(Robertson::N_ALGEBRAIC, 1);
+    let robertson = Robertson::default();
+    let kinds: Vec<UnknownKind> = (0..3)
+        .map(|i| robertson.structure().unknown_kind(i))
+        .collect();
     assert_eq!(
-        Robertson::UNKNOWN_KINDS,
-        &[
+        kinds,
+        [
             UnknownKind::Differential,
             UnknownKind::Differential,
             UnknownKind::Algebraic
         ]
     );
-    assert_eq!(Robertson::default().params.k2, 3e7);
-    assert_eq!(Cstr::INPUT_NAMES, &["t_cool"]);
-    assert_eq!(DoublePendulum::OUTPUT_NAMES, &["tip_x", "tip_y"]);
+    assert_eq!(robertson.params.k2, 3e7);
+    assert_eq!(Cstr::default().structure().inputs, ["t_cool"]);
+    assert_eq!(
+        DoublePendulum::default().structure().outputs,
+        ["tip_x", "tip_y"]
+    );
     assert_eq!(DoublePendulum::RELATIVE_DEGREES, &[Some(2), Some(2)]);
     assert_eq!(Cstr::RELATIVE_DEGREES, &[Some(1)]);
     // Robertson's residual at the consistent initial state.

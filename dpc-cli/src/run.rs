@@ -12,7 +12,7 @@ use dpc::core::linalg::LinearSolver;
 use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
 use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
 use dpc::core::linearize::{linearize, OperatingPoint};
-use dpc::core::model::{parameter_index, set_parameter_by_name, DaeModel};
+use dpc::core::model::{self, set_parameter_by_name, DaeModel};
 use dpc::core::reference::{Components, Reference, ReferenceError};
 use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions};
 use dpc::core::tracking::TrackingError;
@@ -169,7 +169,12 @@ impl Runner<'_> {
         }
     }
 
-    fn check_length(&self, what: &str, v: &[f64], names: &[&str]) -> Result<(), ScenarioError> {
+    fn check_length(
+        &self,
+        what: &str,
+        v: &[f64],
+        names: &model::Names,
+    ) -> Result<(), ScenarioError> {
         if v.len() == names.len() {
             Ok(())
         } else {
@@ -187,9 +192,9 @@ impl Runner<'_> {
         &self,
         what: &str,
         name: &str,
-        outputs: &[&str],
+        outputs: &model::Names,
     ) -> Result<usize, ScenarioError> {
-        outputs.iter().position(|o| *o == name).ok_or_else(|| {
+        outputs.position(name).ok_or_else(|| {
             self.invalid(format!(
                 "`{what}.{name}`: model `{}` has no output `{name}`; its outputs are {}",
                 self.scenario.model,
@@ -201,7 +206,7 @@ impl Runner<'_> {
     fn reference(
         &self,
         own: Option<Box<dyn Reference + Send + Sync>>,
-        outputs: &[&str],
+        outputs: &model::Names,
     ) -> Result<ScenarioReference, ScenarioError> {
         let Some(terms) = &self.scenario.reference else {
             return own.map(ScenarioReference::Model).ok_or_else(|| {
@@ -216,8 +221,8 @@ impl Runner<'_> {
             self.output_index("reference", name, outputs)?;
         }
         let mut components = Vec::with_capacity(outputs.len());
-        for name in outputs {
-            let t = terms.get(*name).ok_or_else(|| {
+        for name in outputs.iter() {
+            let t = terms.get(name).ok_or_else(|| {
                 self.invalid(format!("`[reference]` has no entry for output `{name}`"))
             })?;
             components.push(scalar_reference(t));
@@ -231,12 +236,13 @@ impl Runner<'_> {
     /// `controller.params`) set by name.
     fn params<P: DaeModel>(
         &self,
+        model: &P,
         what: &str,
         mut params: P::Params,
         values: &BTreeMap<String, f64>,
     ) -> Result<P::Params, ScenarioError> {
         for (name, value) in values {
-            set_parameter_by_name::<P>(&mut params, name, *value)
+            set_parameter_by_name(model, &mut params, name, *value)
                 .map_err(|e| self.invalid(format!("`{what}.{name}`: {e}")))?;
         }
         Ok(params)
@@ -246,7 +252,7 @@ impl Runner<'_> {
     fn set_w<T: TrackingDae>(
         &self,
         tracking: &mut T,
-        outputs: &[&str],
+        outputs: &model::Names,
     ) -> Result<(), ScenarioError> {
         for (name, roots) in &self.scenario.w {
             let i = self.output_index("w", name, outputs)?;
@@ -266,11 +272,11 @@ impl Runner<'_> {
     fn w_roots<T: TrackingDae>(
         &self,
         tracking: &T,
-        outputs: &[&str],
+        outputs: &model::Names,
     ) -> Result<Vec<Vec<f64>>, ScenarioError> {
         let mut roots = Vec::with_capacity(outputs.len());
         for (i, name) in outputs.iter().enumerate() {
-            match self.scenario.w.get(*name) {
+            match self.scenario.w.get(name) {
                 Some(r) => roots.push(r.clone()),
                 None => roots.push(
                     negated_real_roots(tracking.w_coefficients(i)).ok_or_else(|| {
@@ -290,16 +296,17 @@ impl Runner<'_> {
         nominal: &NominalMotion,
         w: Vec<Vec<f64>>,
     ) -> Result<(DesignReport, Option<DMatrix<f64>>), ScenarioError> {
-        let nx = P::N_STATES;
-        self.check_length("design.nominal.state", &nominal.state, P::STATE_NAMES)?;
+        let structure = model.structure();
+        let nx = structure.n_states();
+        self.check_length("design.nominal.state", &nominal.state, &structure.states)?;
         let rate = nominal.rate.clone().unwrap_or_else(|| vec![0.0; nx]);
-        self.check_length("design.nominal.rate", &rate, P::STATE_NAMES)?;
+        self.check_length("design.nominal.rate", &rate, &structure.states)?;
         let input = nominal
             .input
             .clone()
-            .unwrap_or_else(|| vec![0.0; P::N_INPUTS]);
-        self.check_length("design.nominal.input", &input, P::INPUT_NAMES)?;
-        if P::N_ALGEBRAIC > 0 {
+            .unwrap_or_else(|| vec![0.0; structure.n_inputs()]);
+        self.check_length("design.nominal.input", &input, &structure.inputs)?;
+        if structure.n_algebraic() > 0 {
             return Err(self.invalid(format!(
                 "a preliminary-feedback design for model `{}` needs its algebraic unknowns at the nominal point, which scenarios cannot give yet",
                 self.scenario.model
@@ -405,6 +412,7 @@ impl Runner<'_> {
     /// reference, that motion with the mapped states following the reference.
     fn feedback_nominal<P: DaeModel>(
         &self,
+        plant: &P,
         motion: SteadyMotion,
         reference: Arc<ScenarioReference>,
     ) -> Result<Box<dyn Nominal + Send + Sync>, ScenarioError> {
@@ -414,12 +422,13 @@ impl Runner<'_> {
         if design.about == About::Nominal {
             return Ok(Box::new(motion));
         }
-        let (states, outputs) = (P::STATE_NAMES, P::OUTPUT_NAMES);
+        let structure = plant.structure();
+        let (states, outputs) = (&structure.states, &structure.outputs);
         let map = match &design.reference_state {
             Some(entries) => entries
                 .iter()
                 .map(|(state, target)| {
-                    let state_index = states.iter().position(|s| s == state).ok_or_else(|| {
+                    let state_index = states.position(state).ok_or_else(|| {
                         self.invalid(format!(
                             "`design.reference_state.{state}`: model `{}` has no state `{state}`; its states are {}",
                             self.scenario.model,
@@ -440,7 +449,7 @@ impl Runner<'_> {
                 .iter()
                 .enumerate()
                 .filter_map(|(output, name)| {
-                    states.iter().position(|s| s == name).map(|state| ReferenceState {
+                    states.position(name).map(|state| ReferenceState {
                         state,
                         output,
                         order: 0,
@@ -454,7 +463,7 @@ impl Runner<'_> {
                 self.scenario.model
             )));
         }
-        let nominal = ReferenceNominal::new(motion, reference, P::N_STATES, map)
+        let nominal = ReferenceNominal::new(motion, reference, structure.n_states(), map)
             .map_err(|e| self.invalid(format!("`design.reference_state`: {e}")))?;
         Ok(Box::new(nominal))
     }
@@ -470,16 +479,19 @@ impl VisitTracked for Runner<'_> {
         L: LinearSolver + Send + 'static,
     {
         let s = self.scenario;
-        let outputs = P::OUTPUT_NAMES;
-        self.check_length("x0", &s.x0, P::STATE_NAMES)?;
+        let structure = model.plant.structure();
+        let outputs = &structure.outputs;
+        self.check_length("x0", &s.x0, &structure.states)?;
         // The registry's values are the starting point (a model may be registered with
         // non-default parameters); the scenario changes them by name.
-        let plant_params = self.params::<P>(
+        let plant_params = self.params(
+            &model.plant,
             "plant.params",
             model.plant.params().clone(),
             &s.plant.params,
         )?;
-        let controller_params = self.params::<T>(
+        let controller_params = self.params(
+            &model.tracking,
             "controller.params",
             model.tracking.params().clone(),
             &s.controller.params,
@@ -493,8 +505,8 @@ impl VisitTracked for Runner<'_> {
         }
         self.set_w(&mut tracking, outputs)?;
         let in_use = ModelInUse {
-            plant_params: named_params::<P>(plant.params()),
-            controller_params: named_params::<T>(tracking.params()),
+            plant_params: named_params(&plant, plant.params()),
+            controller_params: named_params(&tracking, tracking.params()),
             w_coefficients: outputs
                 .iter()
                 .enumerate()
@@ -508,8 +520,10 @@ impl VisitTracked for Runner<'_> {
         if let Some(design) = &s.design {
             // The controller's model: the plant type with the controller's parameters, and
             // the W in use.
-            let controller_model = P::from_params(copy_params::<T, P>(
+            let controller_model = P::from_params(copy_params(
+                &tracking,
                 tracking.params(),
+                &model.plant,
                 model.plant.params().clone(),
             ));
             let w = self.w_roots(&tracking, outputs)?;
@@ -542,16 +556,16 @@ impl VisitTracked for Runner<'_> {
                 rate: nominal
                     .rate
                     .clone()
-                    .unwrap_or_else(|| vec![0.0; P::N_STATES]),
+                    .unwrap_or_else(|| vec![0.0; structure.n_states()]),
                 input: nominal
                     .input
                     .clone()
-                    .unwrap_or_else(|| vec![0.0; P::N_INPUTS]),
+                    .unwrap_or_else(|| vec![0.0; structure.n_inputs()]),
             };
             dpc = dpc
                 .with_prefeedback(Prefeedback {
                     k_n,
-                    nominal: self.feedback_nominal::<P>(motion, reference)?,
+                    nominal: self.feedback_nominal(&model.plant, motion, reference)?,
                 })
                 .map_err(|e| ScenarioError::Setup(format!("preliminary feedback: {e}")))?;
         }
@@ -568,14 +582,14 @@ impl VisitTracked for Runner<'_> {
         let closed_loop = simulate(&plant, &mut dpc, &s.x0, &options)
             .map_err(|e| ScenarioError::Setup(format!("simulation: {e}")))?;
         let wall_time = start.elapsed().as_secs_f64();
-        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect();
+
         Ok(RunResult {
             label: self.label,
             scenario: s.clone(),
             names: Names {
-                states: names(P::STATE_NAMES),
-                inputs: names(P::INPUT_NAMES),
-                outputs: names(P::OUTPUT_NAMES),
+                states: structure.states.to_vec(),
+                inputs: structure.inputs.to_vec(),
+                outputs: structure.outputs.to_vec(),
             },
             model: in_use,
             design: design_report,
@@ -587,9 +601,15 @@ impl VisitTracked for Runner<'_> {
 
 /// `into` with every parameter of `from` copied by name. A tracking DAE shares its plant's
 /// parameter type, but generic code cannot name that equality, so values go by name.
-fn copy_params<A: DaeModel, B: DaeModel>(from: &A::Params, mut into: B::Params) -> B::Params {
-    for (i, name) in A::PARAM_NAMES.iter().enumerate() {
-        if let (Some(value), Some(j)) = (A::parameter(from, i), parameter_index::<B>(name)) {
+fn copy_params<A: DaeModel, B: DaeModel>(
+    a: &A,
+    from: &A::Params,
+    b: &B,
+    mut into: B::Params,
+) -> B::Params {
+    let target = b.structure();
+    for (i, name) in a.structure().params.iter().enumerate() {
+        if let (Some(value), Some(j)) = (A::parameter(from, i), target.parameter_index(name)) {
             B::set_parameter(&mut into, j, value);
         }
     }
@@ -597,8 +617,10 @@ fn copy_params<A: DaeModel, B: DaeModel>(from: &A::Params, mut into: B::Params) 
 }
 
 /// Every parameter of a model by name.
-fn named_params<P: DaeModel>(params: &P::Params) -> BTreeMap<String, f64> {
-    P::PARAM_NAMES
+fn named_params<P: DaeModel>(model: &P, params: &P::Params) -> BTreeMap<String, f64> {
+    model
+        .structure()
+        .params
         .iter()
         .enumerate()
         .filter_map(|(i, name)| Some((name.to_string(), P::parameter(params, i)?)))

@@ -372,6 +372,7 @@ fn emit_tracking(
         quote!(&[#(#c),*])
     });
     let degrees = option_list(relative_degrees);
+    let plant_nz = model.algebraic.len();
     // Output i owns w_coefficients[start..end]: its monic coefficients, lowest power first.
     let mut start = 0;
     let ranges: Vec<TokenStream> = rows
@@ -389,8 +390,21 @@ fn emit_tracking(
         #[allow(clippy::all, clippy::pedantic)]
         impl ::dpc::core::TrackingDae for #name {
             type Plant = #plant_name;
-            const W_COEFFICIENTS: &'static [&'static [f64]] = &[#(#coeffs),*];
-            const RELATIVE_DEGREES: &'static [::core::option::Option<usize>] = #degrees;
+            fn default_w_coefficients(&self, output: usize) -> &[f64] {
+                const W_COEFFICIENTS: &[&[f64]] = &[#(#coeffs),*];
+                match W_COEFFICIENTS.get(output) {
+                    ::core::option::Option::Some(c) => c,
+                    ::core::option::Option::None => &[],
+                }
+            }
+
+            fn relative_degrees(&self) -> &[::core::option::Option<usize>] {
+                #degrees
+            }
+
+            fn plant_algebraic(&self) -> usize {
+                #plant_nz
+            }
 
             fn w_coefficients(&self, output: usize) -> &[f64] {
                 let range = match output {
@@ -405,7 +419,7 @@ fn emit_tracking(
                 output: usize,
                 coefficients: &[f64],
             ) -> ::core::result::Result<(), ::dpc::core::tracking::TrackingError> {
-                ::dpc::core::tracking::check_w_coefficients::<Self>(output, coefficients)?;
+                ::dpc::core::tracking::check_w_coefficients(self, output, coefficients)?;
                 let range = match output {
                     #(#ranges)*
                     _ => 0..0,
@@ -702,9 +716,6 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
     let output_names = str_list(ty.outputs.iter().map(|o| o.0.clone()));
     let param_names = str_list(model.params.iter().map(|p| p.name.to_string()));
     let equations = str_list(ty.equation_texts.iter().cloned());
-    let kinds = (0..nx)
-        .map(|_| quote!(::dpc::core::model::UnknownKind::Differential))
-        .chain((0..nz).map(|_| quote!(::dpc::core::model::UnknownKind::Algebraic)));
     let (p_xdot, p_x, p_z, p_u, p_hx) = (
         f_xdot.pattern(),
         f_x.pattern(),
@@ -874,24 +885,23 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
         #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens, non_snake_case)]
         impl ::dpc::core::DaeModel for #name {
             type Params = #params_name;
-            const NAME: &'static str = #model_name;
-            const N_STATES: usize = #nx;
-            const N_ALGEBRAIC: usize = #nz;
-            const N_INPUTS: usize = #nu;
-            const N_OUTPUTS: usize = #ny;
-            const N_EQUATIONS: usize = #neq;
-            const STATE_NAMES: &'static [&'static str] = #state_names;
-            const ALGEBRAIC_NAMES: &'static [&'static str] = #alg_names;
-            const INPUT_NAMES: &'static [&'static str] = #input_names;
-            const OUTPUT_NAMES: &'static [&'static str] = #output_names;
-            const PARAM_NAMES: &'static [&'static str] = #param_names;
-            const UNKNOWN_KINDS: &'static [::dpc::core::model::UnknownKind] = &[#(#kinds),*];
-            const EQUATIONS: &'static [&'static str] = #equations;
-            const PATTERN_F_XDOT: ::dpc::core::model::Pattern = #p_xdot;
-            const PATTERN_F_X: ::dpc::core::model::Pattern = #p_x;
-            const PATTERN_F_Z: ::dpc::core::model::Pattern = #p_z;
-            const PATTERN_F_U: ::dpc::core::model::Pattern = #p_u;
-            const PATTERN_H_X: ::dpc::core::model::Pattern = #p_hx;
+            fn structure(&self) -> &::dpc::core::model::Structure {
+                static STRUCTURE: ::dpc::core::model::Structure = ::dpc::core::model::Structure {
+                    name: ::std::borrow::Cow::Borrowed(#model_name),
+                    states: ::dpc::core::model::Names::Static(#state_names),
+                    algebraic: ::dpc::core::model::Names::Static(#alg_names),
+                    inputs: ::dpc::core::model::Names::Static(#input_names),
+                    outputs: ::dpc::core::model::Names::Static(#output_names),
+                    params: ::dpc::core::model::Names::Static(#param_names),
+                    equations: ::dpc::core::model::Names::Static(#equations),
+                    pattern_f_xdot: ::std::borrow::Cow::Borrowed(#p_xdot),
+                    pattern_f_x: ::std::borrow::Cow::Borrowed(#p_x),
+                    pattern_f_z: ::std::borrow::Cow::Borrowed(#p_z),
+                    pattern_f_u: ::std::borrow::Cow::Borrowed(#p_u),
+                    pattern_h_x: ::std::borrow::Cow::Borrowed(#p_hx),
+                };
+                &STRUCTURE
+            }
 
             fn from_params(params: Self::Params) -> Self {
                 Self::new(params)
@@ -985,15 +995,14 @@ mod tests {
         prettyplease::unparse(&syn::parse2(out).expect("valid Rust"))
     }
 
-    /// The text of `const NAME: ... = VALUE;` in the impl block that follows `marker`.
-    fn constant_after<'a>(code: &'a str, marker: &str, name: &str) -> &'a str {
+    /// The text of the field `name: ...,` of the `Structure` in the impl block that follows
+    /// `marker`.
+    fn structure_field_after<'a>(code: &'a str, marker: &str, name: &str) -> &'a str {
         let from = code.find(marker).expect("marker present");
         let rest = &code[from..];
-        let start = rest
-            .find(&format!("const {name}:"))
-            .expect("constant present");
+        let start = rest.find(&format!("{name}:")).expect("field present");
         let rest = &rest[start..];
-        &rest[..rest.find(';').expect("constant ends")]
+        &rest[..rest.find("])").expect("field ends")]
     }
 
     const CART: &str = "
@@ -1031,15 +1040,15 @@ mod tests {
         assert_eq!(code.matches("w_coefficients: [f64;").count(), 1, "{code}");
         assert!(code.contains("0usize => 0usize..3usize"), "{code}");
         assert!(
-            code.contains("check_w_coefficients::<Self>(output, coefficients)?"),
+            code.contains("check_w_coefficients(self, output, coefficients)?"),
             "{code}"
         );
         // The entry of x in the constraint row (row 2) is structural although its default
         // coefficient is 0.
-        let pattern = constant_after(
+        let pattern = structure_field_after(
             &code,
             "impl ::dpc::core::DaeModel for CartTracking",
-            "PATTERN_F_X",
+            "pattern_f_x",
         );
         assert!(pattern.contains("(2usize, 0usize)"), "{pattern}");
         // The compiled value still shows in the listing and the equation text.

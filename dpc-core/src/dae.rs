@@ -1,8 +1,8 @@
 //! The implicit DAE interface consumed by the integrator.
 //!
 //! A system `F(t, y, y') = 0` with `n` unknowns and `n` equations, as in DASSL and IDA
-//! (Brenan, Campbell & Petzold 1989, ch. 5). Generated models reach it through
-//! [`crate::model::ModelDae`]; hand-written test problems implement it directly.
+//! (Brenan, Campbell & Petzold 1989, ch. 5). The closed loop wraps a generated model with
+//! its held inputs in one (`simulate`); hand-written test problems implement it directly.
 
 use crate::sink::MatrixSink;
 

@@ -163,7 +163,7 @@ enum Inner {
 }
 
 /// The DPC controller for a generated tracking DAE `T`, a reference `R` and a linear solver
-/// `L` of size `T::N_EQUATIONS`.
+/// `L` of the tracking DAE's size (its number of equations).
 pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     model: T,
     reference: R,
@@ -366,9 +366,11 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         }
         let nu = match opts.nu {
             Some(nu) => nu,
-            None => T::remaining_relative_degree().ok_or(DpcError::UnknownNu)?,
+            None => model
+                .remaining_relative_degree()
+                .ok_or(DpcError::UnknownNu)?,
         };
-        let n = T::N_EQUATIONS;
+        let n = model.structure().n_equations();
         if solver.dimension() != n {
             return Err(DpcError::Dimension {
                 what: "linear solver",
@@ -376,20 +378,26 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 found: solver.dimension(),
             });
         }
-        if reference.dimension() != T::N_OUTPUTS {
+        if reference.dimension() != model.structure().n_outputs() {
             return Err(DpcError::Dimension {
                 what: "reference",
-                expected: T::N_OUTPUTS,
+                expected: model.structure().n_outputs(),
                 found: reference.dimension(),
             });
         }
         let mut dynamic_row = vec![false; n];
-        for &(i, _) in T::PATTERN_F_XDOT {
+        for &(i, _) in model.structure().pattern_f_xdot.iter() {
             dynamic_row[i] = true;
         }
         let steps = nu + 2;
-        let order = T::reference_orders().max().unwrap_or(0);
-        let n_inputs = T::plant_inputs();
+        let order = model.reference_orders().max().unwrap_or(0);
+        let n_inputs = model.plant_inputs();
+        let structure = model.structure();
+        let (nx, nw, ny) = (
+            structure.n_states(),
+            structure.n_inputs(),
+            structure.n_outputs(),
+        );
         Ok(Self {
             model,
             reference,
@@ -399,13 +407,13 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             dynamic_row,
             warm: vec![vec![0.0; n]; steps],
             have_warm: false,
-            x_prev: vec![0.0; T::N_STATES],
+            x_prev: vec![0.0; nx],
             y: vec![0.0; n],
-            xdot: vec![0.0; T::N_STATES],
+            xdot: vec![0.0; nx],
             res: vec![0.0; n],
             res_scratch: vec![0.0; n],
-            w: vec![0.0; T::N_INPUTS],
-            scratch: vec![0.0; (order + 1) * T::N_OUTPUTS],
+            w: vec![0.0; nw],
+            scratch: vec![0.0; (order + 1) * ny],
             u_first: vec![0.0; n_inputs],
             u_second: vec![0.0; n_inputs],
             prefeedback: None,
@@ -426,7 +434,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// # Errors
     /// [`DpcError::Dimension`] when `K_n` is not `inputs x states`.
     pub fn with_prefeedback(mut self, law: Prefeedback) -> Result<Self, DpcError> {
-        let (m, n) = (self.u_first.len(), T::N_STATES);
+        let (m, n) = (self.u_first.len(), self.model.structure().n_states());
         if law.k_n.nrows() != m || law.k_n.ncols() != n {
             return Err(DpcError::Dimension {
                 what: "K_n (inputs x states), entries",
@@ -434,15 +442,15 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 found: law.k_n.len(),
             });
         }
-        let ne = T::N_EQUATIONS;
+        let ne = self.model.structure().n_equations();
         self.prefeedback = Some(PrefeedbackWork {
             law,
             x0: vec![0.0; n],
-            z_eval: vec![0.0; T::N_ALGEBRAIC],
+            z_eval: vec![0.0; self.model.structure().n_algebraic()],
             f_xdot: nalgebra::DMatrix::zeros(ne, n),
             f_x: nalgebra::DMatrix::zeros(ne, n),
-            f_z: nalgebra::DMatrix::zeros(ne, T::N_ALGEBRAIC),
-            f_w: nalgebra::DMatrix::zeros(ne, T::N_INPUTS),
+            f_z: nalgebra::DMatrix::zeros(ne, self.model.structure().n_algebraic()),
+            f_w: nalgebra::DMatrix::zeros(ne, self.model.structure().n_inputs()),
         });
         self.have_warm = false;
         Ok(self)
@@ -456,10 +464,10 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// With a preliminary feedback, the algebraic unknowns `[Z; u]` the plant sees for the
     /// current iterate `[X; Z; v]`.
     fn fill_plant_inputs(&mut self, t: f64) {
-        let nx = T::N_STATES;
+        let nx = self.model.structure().n_states();
         if let Some(pf) = self.prefeedback.as_mut() {
             let n_u = self.u_first.len();
-            let nz = T::N_ALGEBRAIC - n_u;
+            let nz = self.model.structure().n_algebraic() - n_u;
             let (xs, zs) = self.y.split_at(nx);
             pf.z_eval[..nz].copy_from_slice(&zs[..nz]);
             pf.law
@@ -468,7 +476,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     }
 
     fn evaluate_residual(&mut self, t: f64) {
-        let nx = T::N_STATES;
+        let nx = self.model.structure().n_states();
         self.fill_plant_inputs(t);
         let (xs, zs) = self.y.split_at(nx);
         let z_eval = match &self.prefeedback {
@@ -482,7 +490,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// The Newton matrix `dG/dY + c dG/dX'` for the unknowns `Y = [X; Z; U]`, or, under a
     /// preliminary feedback, `Y = [X; Z; v]` with `dG/dX` gaining `dG/du K_n`.
     fn evaluate_iteration_matrix(&mut self, t: f64, c: f64) {
-        let nx = T::N_STATES;
+        let nx = self.model.structure().n_states();
         let (xs, zs) = self.y.split_at(nx);
         let matrix = self.solver.matrix_mut();
         matrix.fill_zero();
@@ -507,8 +515,8 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             &mut pf.f_z,
             &mut pf.f_w,
         );
-        let ne = T::N_EQUATIONS;
-        let nz_all = T::N_ALGEBRAIC;
+        let ne = self.model.structure().n_equations();
+        let nz_all = self.model.structure().n_algebraic();
         let n_u = pf.law.k_n.nrows();
         let u_col = nz_all - n_u;
         for j in 0..nx {
@@ -564,10 +572,10 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// [`DpcError::NoSolution`] when every `delta` tried failed, and the errors of
     /// [`DpcError`] for singular matrices, a failing reference and wrong lengths.
     pub fn control(&mut self, t: f64, x: &[f64], u: &mut [f64]) -> Result<UpdateReport, DpcError> {
-        if x.len() != T::N_STATES {
+        if x.len() != self.model.structure().n_states() {
             return Err(DpcError::Dimension {
                 what: "measured state",
-                expected: T::N_STATES,
+                expected: self.model.structure().n_states(),
                 found: x.len(),
             });
         }
@@ -635,8 +643,8 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// Integrate the tracking DAE from `x` at `t` for `nu + 1` (or `nu + 2`) implicit-Euler
     /// steps of size `delta`, storing the controls of steps `nu + 1` and `nu + 2`.
     fn integrate(&mut self, t: f64, x: &[f64], delta: f64) -> Result<Inner, DpcError> {
-        let nx = T::N_STATES;
-        let n = T::N_EQUATIONS;
+        let nx = self.model.structure().n_states();
+        let n = self.model.structure().n_equations();
         let n_u = self.u_first.len();
         let steps = match self.opts.extraction {
             Extraction::FirstUsable => self.nu + 1,

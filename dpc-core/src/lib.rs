@@ -4,11 +4,12 @@
 //!
 //! * [`sink`]: where generated code writes Jacobian entries (dense nalgebra, faer, sparse);
 //! * [`model`]: the trait that `dpc::model!` implements for every declared plant
-//!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`), and the adapter
-//!   that turns a model with given inputs into an [`dae::ImplicitDae`];
+//!   (residual `F(t, x, x', z, u)`, its Jacobians, outputs `h(t, x)`, and its
+//!   [`Structure`]: names, dimensions, sparsity);
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
 //! * [`dpc`]: one sampled update of the Descriptor Predictive Controller;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
+//! * [`radau`]: the Radau IIA integrator (order 5) for DAEs of index up to 3 as declared;
 //! * [`linalg`]: the linear solvers behind the integrator's Newton iteration;
 //! * [`linear`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
 //!   verdict, preliminary feedback `K_n`);
@@ -26,13 +27,14 @@ pub mod linear;
 pub mod linearize;
 pub mod model;
 pub mod numeric;
+pub mod radau;
 pub mod reference;
 pub mod simulate;
 pub mod sink;
 pub mod tracking;
 
 pub use dae::ImplicitDae;
-pub use model::{DaeModel, ModelDae};
+pub use model::{DaeModel, Structure};
 pub use reference::Reference;
 pub use sink::MatrixSink;
 pub use tracking::TrackingDae;

@@ -69,12 +69,13 @@ pub fn linearize<M: DaeModel>(
     model: &M,
     point: OperatingPoint<'_>,
 ) -> Result<LinearSystem, LinearizeError> {
+    let structure = model.structure();
     let (nx, nz, nu, ny, ne) = (
-        M::N_STATES,
-        M::N_ALGEBRAIC,
-        M::N_INPUTS,
-        M::N_OUTPUTS,
-        M::N_EQUATIONS,
+        structure.n_states(),
+        structure.n_algebraic(),
+        structure.n_inputs(),
+        structure.n_outputs(),
+        structure.n_equations(),
     );
     for (what, v, n) in [
         ("x", point.x, nx),

@@ -5,8 +5,8 @@
 //! Generated code writes Jacobian blocks into [`MatrixSink`]s; all of its methods take
 //! slices so that the same routine serves fixed-size and dynamic storage.
 
-use crate::dae::ImplicitDae;
 use crate::sink::MatrixSink;
+use std::borrow::Cow;
 use thiserror::Error;
 
 /// Whether an unknown is differentiated (`der(x)` appears) or algebraic.
@@ -19,71 +19,213 @@ pub enum UnknownKind {
 }
 
 /// A structural sparsity pattern: the `(row, col)` positions that may be non-zero.
-pub type Pattern = &'static [(usize, usize)];
+pub type Pattern = Cow<'static, [(usize, usize)]>;
 
-/// A DAE plant compiled by `dpc::model!`.
-///
-/// Dimensions, names, equation text and sparsity are compile-time constants. All slice
-/// arguments must have the lengths given by the constants; generated code indexes them
-/// directly, so a wrong length is a programming error that panics, never a silent misuse.
-pub trait DaeModel {
-    /// The parameter struct, with `Default` built from the declared defaults.
-    type Params: Clone + Default + core::fmt::Debug;
+/// A list of names (of states, inputs, parameters, equations, ...): `'static` text for
+/// generated models, owned strings for models built at run time.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Names {
+    /// Names known at compile time.
+    Static(&'static [&'static str]),
+    /// Names built at run time.
+    Owned(Vec<String>),
+}
 
+impl Names {
+    /// Number of names.
+    pub fn len(&self) -> usize {
+        match self {
+            Names::Static(s) => s.len(),
+            Names::Owned(v) => v.len(),
+        }
+    }
+
+    /// Whether there are no names.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Name `i`, if there is one.
+    pub fn get(&self, i: usize) -> Option<&str> {
+        match self {
+            Names::Static(s) => s.get(i).copied(),
+            Names::Owned(v) => v.get(i).map(String::as_str),
+        }
+    }
+
+    /// The names in order.
+    pub fn iter(&self) -> impl Iterator<Item = &str> + '_ {
+        (0..self.len()).filter_map(move |i| self.get(i))
+    }
+
+    /// The position of `name`.
+    pub fn position(&self, name: &str) -> Option<usize> {
+        self.iter().position(|n| n == name)
+    }
+
+    /// The names joined by `separator`.
+    pub fn join(&self, separator: &str) -> String {
+        self.iter().collect::<Vec<_>>().join(separator)
+    }
+
+    /// The names as owned strings.
+    pub fn to_vec(&self) -> Vec<String> {
+        self.iter().map(str::to_string).collect()
+    }
+}
+
+impl core::ops::Index<usize> for Names {
+    type Output = str;
+
+    fn index(&self, i: usize) -> &str {
+        match self {
+            Names::Static(s) => s[i],
+            Names::Owned(v) => &v[i],
+        }
+    }
+}
+
+impl<S: AsRef<str>> PartialEq<[S]> for Names {
+    fn eq(&self, other: &[S]) -> bool {
+        self.len() == other.len() && self.iter().zip(other).all(|(a, b)| a == b.as_ref())
+    }
+}
+
+impl<S: AsRef<str>, const N: usize> PartialEq<[S; N]> for Names {
+    fn eq(&self, other: &[S; N]) -> bool {
+        *self == other[..]
+    }
+}
+
+/// Names, dimensions and structural sparsity of a model: everything about it that does not
+/// depend on the point of evaluation. Generated models return a `static` one; models read at
+/// run time build theirs when they are parsed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Structure {
     /// The model's name as declared.
-    const NAME: &'static str;
-    /// Number of states (differential unknowns) `x`.
-    const N_STATES: usize;
-    /// Number of algebraic unknowns `z`.
-    const N_ALGEBRAIC: usize;
-    /// Number of inputs `u`.
-    const N_INPUTS: usize;
-    /// Number of outputs `y`.
-    const N_OUTPUTS: usize;
-    /// Number of equations, `N_STATES + N_ALGEBRAIC`.
-    const N_EQUATIONS: usize;
-    /// Names of the states, in order.
-    const STATE_NAMES: &'static [&'static str];
-    /// Names of the algebraic unknowns, in order.
-    const ALGEBRAIC_NAMES: &'static [&'static str];
-    /// Names of the inputs, in order.
-    const INPUT_NAMES: &'static [&'static str];
-    /// Names of the outputs, in order.
-    const OUTPUT_NAMES: &'static [&'static str];
+    pub name: Cow<'static, str>,
+    /// Names of the states (differential unknowns) `x`, in order.
+    pub states: Names,
+    /// Names of the algebraic unknowns `z`, in order.
+    pub algebraic: Names,
+    /// Names of the inputs `u`, in order.
+    pub inputs: Names,
+    /// Names of the outputs `y`, in order.
+    pub outputs: Names,
     /// Names of the parameters, in order.
-    const PARAM_NAMES: &'static [&'static str];
-    /// Kind of each unknown of `[x; z]`: states are differential, the rest algebraic.
-    const UNKNOWN_KINDS: &'static [UnknownKind];
-    /// The equations as readable text, normalised to `lhs == rhs` form, one per residual row.
-    const EQUATIONS: &'static [&'static str];
-    /// Structural pattern of `dF/dx'` (`N_EQUATIONS x N_STATES`).
-    const PATTERN_F_XDOT: Pattern;
-    /// Structural pattern of `dF/dx` (`N_EQUATIONS x N_STATES`).
-    const PATTERN_F_X: Pattern;
-    /// Structural pattern of `dF/dz` (`N_EQUATIONS x N_ALGEBRAIC`).
-    const PATTERN_F_Z: Pattern;
-    /// Structural pattern of `dF/du` (`N_EQUATIONS x N_INPUTS`).
-    const PATTERN_F_U: Pattern;
-    /// Structural pattern of `dh/dx` (`N_OUTPUTS x N_STATES`).
-    const PATTERN_H_X: Pattern;
+    pub params: Names,
+    /// The equations as readable text, normalised to `lhs == rhs` form, one per residual row
+    /// (so there are `states + algebraic` of them).
+    pub equations: Names,
+    /// Structural pattern of `dF/dx'` (equations x states).
+    pub pattern_f_xdot: Pattern,
+    /// Structural pattern of `dF/dx` (equations x states).
+    pub pattern_f_x: Pattern,
+    /// Structural pattern of `dF/dz` (equations x algebraic unknowns).
+    pub pattern_f_z: Pattern,
+    /// Structural pattern of `dF/du` (equations x inputs).
+    pub pattern_f_u: Pattern,
+    /// Structural pattern of `dh/dx` (outputs x states).
+    pub pattern_h_x: Pattern,
+}
+
+impl Structure {
+    /// Number of states `x`.
+    pub fn n_states(&self) -> usize {
+        self.states.len()
+    }
+
+    /// Number of algebraic unknowns `z`.
+    pub fn n_algebraic(&self) -> usize {
+        self.algebraic.len()
+    }
+
+    /// Number of inputs `u`.
+    pub fn n_inputs(&self) -> usize {
+        self.inputs.len()
+    }
+
+    /// Number of outputs `y`.
+    pub fn n_outputs(&self) -> usize {
+        self.outputs.len()
+    }
+
+    /// Number of parameters.
+    pub fn n_params(&self) -> usize {
+        self.params.len()
+    }
+
+    /// Number of equations, `states + algebraic unknowns`.
+    pub fn n_equations(&self) -> usize {
+        self.n_states() + self.n_algebraic()
+    }
+
+    /// Kind of unknown `i` of `[x; z]`: states are differential, the rest algebraic.
+    pub fn unknown_kind(&self, i: usize) -> UnknownKind {
+        if i < self.n_states() {
+            UnknownKind::Differential
+        } else {
+            UnknownKind::Algebraic
+        }
+    }
+
+    /// Equation `i` for messages: `"equation i (text)"`.
+    pub fn equation_name(&self, i: usize) -> String {
+        match self.equations.get(i) {
+            Some(text) => format!("equation {i} ({text})"),
+            None => format!("equation {i}"),
+        }
+    }
+
+    /// Unknown `i` of `[x; z]` for messages: its declared name.
+    pub fn unknown_name(&self, i: usize) -> String {
+        let nx = self.n_states();
+        let name = if i < nx {
+            self.states.get(i)
+        } else {
+            self.algebraic.get(i - nx)
+        };
+        name.map_or_else(|| format!("y[{i}]"), str::to_string)
+    }
+
+    /// The index of parameter `name`.
+    pub fn parameter_index(&self, name: &str) -> Option<usize> {
+        self.params.position(name)
+    }
+}
+
+/// A DAE plant: compiled by `dpc::model!`, or read from a `.dpc` file at run time.
+///
+/// Names, dimensions and sparsity are in [`structure`](Self::structure). All slice
+/// arguments must have the lengths it gives; generated code indexes them directly, so a wrong
+/// length is a programming error that panics, never a silent misuse. Generated types also
+/// have inherent constants `N_STATES`, `N_ALGEBRAIC`, `N_INPUTS`, `N_OUTPUTS` and
+/// `N_EQUATIONS` for fixed-size storage.
+pub trait DaeModel {
+    /// The parameter values (generated models: a struct with `Default` built from the
+    /// declared defaults).
+    type Params: Clone + core::fmt::Debug;
+
+    /// Names, dimensions and structural patterns.
+    fn structure(&self) -> &Structure;
 
     /// The model with the given parameters.
     fn from_params(params: Self::Params) -> Self;
     /// The model's parameters.
     fn params(&self) -> &Self::Params;
 
-    /// The value of parameter `index` (into [`PARAM_NAMES`](Self::PARAM_NAMES)) in `params`,
-    /// or `None` when there is no such parameter.
+    /// The value of parameter `index` (into [`Structure::params`]) in `params`, or `None`
+    /// when there is no such parameter.
     fn parameter(params: &Self::Params, index: usize) -> Option<f64>;
 
-    /// Set parameter `index` (into [`PARAM_NAMES`](Self::PARAM_NAMES)) of `params` to
+    /// Set parameter `index` (into [`Structure::params`]) of `params` to
     /// `value`; `false` (and `params` unchanged) when there is no such parameter.
     ///
     /// Any value is stored as given: whether it makes sense for the model (a positive mass,
     /// say) is the caller's business. See [`set_parameter_by_name`] for lookup by name.
     fn set_parameter(params: &mut Self::Params, index: usize, value: f64) -> bool;
 
-    /// Residual `F(t, x, x', z, u)` into `out` (length `N_EQUATIONS`).
+    /// Residual `F(t, x, x', z, u)` into `out` (one entry per equation).
     fn residual(&self, t: f64, x: &[f64], xdot: &[f64], z: &[f64], u: &[f64], out: &mut [f64]);
 
     /// Residual and all four Jacobian blocks in one pass with shared subexpressions.
@@ -108,7 +250,7 @@ pub trait DaeModel {
         C: MatrixSink + ?Sized,
         D: MatrixSink + ?Sized;
 
-    /// The BDF iteration matrix `[dF/dx + c dF/dx' | dF/dz]` (`N_EQUATIONS` square) into a
+    /// The BDF iteration matrix `[dF/dx + c dF/dx' | dF/dz]` (square, one row per equation) into a
     /// zeroed sink.
     #[allow(clippy::too_many_arguments)]
     fn iteration_matrix<S: MatrixSink + ?Sized>(
@@ -122,7 +264,7 @@ pub trait DaeModel {
         out: &mut S,
     );
 
-    /// Outputs `y = h(t, x, z, u)` into `out` (length `N_OUTPUTS`).
+    /// Outputs `y = h(t, x, z, u)` into `out` (one entry per output).
     fn outputs(&self, t: f64, x: &[f64], z: &[f64], u: &[f64], out: &mut [f64]);
 
     /// Output Jacobians `dh/dx`, `dh/dz`, `dh/du` into zeroed sinks.
@@ -142,103 +284,19 @@ pub trait DaeModel {
         C: MatrixSink + ?Sized;
 }
 
-/// A model with its inputs given as a function of time, seen as an [`ImplicitDae`] in the
-/// unknowns `y = [x; z]`.
-///
-/// The input function is called with a buffer of length `N_INPUTS`. The adapter keeps a
-/// small scratch buffer for the inputs, allocated once at construction.
-pub struct ModelDae<M, U> {
-    model: M,
-    inputs: U,
-    scratch: core::cell::RefCell<Vec<f64>>,
-}
-
-impl<M: DaeModel, U: Fn(f64, &mut [f64])> ModelDae<M, U> {
-    /// Wrap `model`, with `inputs(t, u)` writing the inputs at time `t` into `u`.
-    pub fn new(model: M, inputs: U) -> Self {
-        Self {
-            model,
-            inputs,
-            scratch: core::cell::RefCell::new(vec![0.0; M::N_INPUTS]),
-        }
-    }
-
-    /// The wrapped model.
-    pub fn model(&self) -> &M {
-        &self.model
-    }
-
-    fn with_inputs<R>(&self, t: f64, f: impl FnOnce(&[f64]) -> R) -> R {
-        let mut u = self.scratch.borrow_mut();
-        (self.inputs)(t, &mut u);
-        f(&u)
-    }
-}
-
-impl<M: DaeModel, U: Fn(f64, &mut [f64])> ImplicitDae for ModelDae<M, U> {
-    fn dimension(&self) -> usize {
-        M::N_EQUATIONS
-    }
-
-    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-        let (x, z) = y.split_at(M::N_STATES);
-        let xdot = &yp[..M::N_STATES];
-        self.with_inputs(t, |u| self.model.residual(t, x, xdot, z, u, out));
-    }
-
-    fn iteration_matrix<S: MatrixSink + ?Sized>(
-        &self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        c: f64,
-        out: &mut S,
-    ) {
-        let (x, z) = y.split_at(M::N_STATES);
-        let xdot = &yp[..M::N_STATES];
-        self.with_inputs(t, |u| {
-            self.model.iteration_matrix(t, x, xdot, z, u, c, out);
-        });
-    }
-
-    fn is_differential(&self, i: usize) -> bool {
-        i < M::N_STATES
-    }
-
-    fn iteration_pattern(&self) -> Option<Vec<(usize, usize)>> {
-        let mut p: Vec<(usize, usize)> = M::PATTERN_F_X
-            .iter()
-            .chain(M::PATTERN_F_XDOT)
-            .copied()
-            .chain(M::PATTERN_F_Z.iter().map(|&(r, c)| (r, c + M::N_STATES)))
-            .collect();
-        p.sort_unstable();
-        p.dedup();
-        Some(p)
-    }
-
-    fn equation_name(&self, i: usize) -> String {
-        equation_name::<M>(i)
-    }
-
-    fn unknown_name(&self, i: usize) -> String {
-        unknown_name::<M>(i)
-    }
-}
-
 /// A parameter name that a model does not declare.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("model `{model}` has no parameter `{name}`; {}", known_parameters(.known))]
 pub struct UnknownParameter {
-    /// The model's name ([`DaeModel::NAME`]).
-    pub model: &'static str,
+    /// The model's name ([`Structure::name`]).
+    pub model: String,
     /// The name asked for.
     pub name: String,
-    /// The parameters the model declares ([`DaeModel::PARAM_NAMES`]).
-    pub known: &'static [&'static str],
+    /// The parameters the model declares ([`Structure::params`]).
+    pub known: Vec<String>,
 }
 
-fn known_parameters(known: &[&str]) -> String {
+fn known_parameters(known: &[String]) -> String {
     if known.is_empty() {
         "it declares no parameters".to_string()
     } else {
@@ -246,65 +304,49 @@ fn known_parameters(known: &[&str]) -> String {
     }
 }
 
-/// The index of parameter `name` of model `M` in [`DaeModel::PARAM_NAMES`].
-pub fn parameter_index<M: DaeModel>(name: &str) -> Option<usize> {
-    M::PARAM_NAMES.iter().position(|p| *p == name)
-}
-
-/// The value of parameter `name` of model `M` in `params`.
+/// The value of parameter `name` of `model`'s kind in `params` (which need not be the
+/// model's own parameters: a tracking DAE shares its plant's `Params`).
 ///
 /// # Errors
-/// [`UnknownParameter`] when `M` declares no parameter of that name.
-pub fn parameter_by_name<M: DaeModel>(
+/// [`UnknownParameter`] when the model declares no parameter of that name.
+pub fn parameter_by_name<M: DaeModel + ?Sized>(
+    model: &M,
     params: &M::Params,
     name: &str,
 ) -> Result<f64, UnknownParameter> {
-    parameter_index::<M>(name)
+    let structure = model.structure();
+    structure
+        .parameter_index(name)
         .and_then(|i| M::parameter(params, i))
-        .ok_or_else(|| unknown_parameter::<M>(name))
+        .ok_or_else(|| unknown_parameter(structure, name))
 }
 
-/// Set parameter `name` of model `M` in `params` to `value`, e.g. to simulate a plant whose
-/// mass differs from the controller's model. A tracking DAE shares its plant's `Params`, so
-/// the same call sets the controller's parameters.
+/// Set parameter `name` of `params` (parameters of `model`'s kind) to `value`, e.g. to
+/// simulate a plant whose mass differs from the controller's model. A tracking DAE shares its
+/// plant's `Params`, so the same call sets the controller's parameters.
 ///
 /// # Errors
-/// [`UnknownParameter`], naming the model and listing its parameters, when `M` declares no
-/// parameter of that name; `params` is then unchanged.
-pub fn set_parameter_by_name<M: DaeModel>(
+/// [`UnknownParameter`], naming the model and listing its parameters, when the model
+/// declares no parameter of that name; `params` is then unchanged.
+pub fn set_parameter_by_name<M: DaeModel + ?Sized>(
+    model: &M,
     params: &mut M::Params,
     name: &str,
     value: f64,
 ) -> Result<(), UnknownParameter> {
-    match parameter_index::<M>(name) {
+    let structure = model.structure();
+    match structure.parameter_index(name) {
         Some(i) if M::set_parameter(params, i, value) => Ok(()),
-        _ => Err(unknown_parameter::<M>(name)),
+        _ => Err(unknown_parameter(structure, name)),
     }
 }
 
-fn unknown_parameter<M: DaeModel>(name: &str) -> UnknownParameter {
+fn unknown_parameter(structure: &Structure, name: &str) -> UnknownParameter {
     UnknownParameter {
-        model: M::NAME,
+        model: structure.name.to_string(),
         name: name.to_string(),
-        known: M::PARAM_NAMES,
+        known: structure.params.to_vec(),
     }
-}
-
-/// Equation `i` of model `M` for messages: `"equation i (text)"`.
-pub fn equation_name<M: DaeModel>(i: usize) -> String {
-    match M::EQUATIONS.get(i) {
-        Some(text) => format!("equation {i} ({text})"),
-        None => format!("equation {i}"),
-    }
-}
-
-/// Unknown `i` of `[x; z]` of model `M` for messages: its declared name.
-pub fn unknown_name<M: DaeModel>(i: usize) -> String {
-    M::STATE_NAMES
-        .iter()
-        .chain(M::ALGEBRAIC_NAMES)
-        .nth(i)
-        .map_or_else(|| format!("y[{i}]"), |s| (*s).to_string())
 }
 
 /// Residual and Jacobian blocks of a model in fixed-size nalgebra types, as returned by the

@@ -216,18 +216,24 @@ struct HeldScratch {
 
 impl<'a, M: DaeModel> HeldPlant<'a, M> {
     fn new(model: M, held: &[f64], feedback: Option<&'a Prefeedback>) -> Self {
-        let ne = M::N_EQUATIONS;
+        let structure = model.structure();
+        let (ne, nx, nz, nu) = (
+            structure.n_equations(),
+            structure.n_states(),
+            structure.n_algebraic(),
+            structure.n_inputs(),
+        );
         Self {
             model,
             held: held.to_vec(),
             feedback,
             scratch: RefCell::new(HeldScratch {
-                u: vec![0.0; M::N_INPUTS],
-                x0: vec![0.0; M::N_STATES],
-                f_xdot: DMatrix::zeros(ne, M::N_STATES),
-                f_x: DMatrix::zeros(ne, M::N_STATES),
-                f_z: DMatrix::zeros(ne, M::N_ALGEBRAIC),
-                f_u: DMatrix::zeros(ne, M::N_INPUTS),
+                u: vec![0.0; nu],
+                x0: vec![0.0; nx],
+                f_xdot: DMatrix::zeros(ne, nx),
+                f_x: DMatrix::zeros(ne, nx),
+                f_z: DMatrix::zeros(ne, nz),
+                f_u: DMatrix::zeros(ne, nu),
                 res: vec![0.0; ne],
             }),
         }
@@ -243,14 +249,15 @@ impl<'a, M: DaeModel> HeldPlant<'a, M> {
 
 impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
     fn dimension(&self) -> usize {
-        M::N_EQUATIONS
+        self.model.structure().n_equations()
     }
 
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-        let (x, z) = y.split_at(M::N_STATES);
+        let (x, z) = y.split_at(self.model.structure().n_states());
         let s = &mut *self.scratch.borrow_mut();
         self.inputs(t, x, s);
-        self.model.residual(t, x, &yp[..M::N_STATES], z, &s.u, out);
+        self.model
+            .residual(t, x, &yp[..self.model.structure().n_states()], z, &s.u, out);
     }
 
     fn iteration_matrix<S: MatrixSink + ?Sized>(
@@ -261,7 +268,7 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
         c: f64,
         out: &mut S,
     ) {
-        let nx = M::N_STATES;
+        let nx = self.model.structure().n_states();
         let (x, z) = y.split_at(nx);
         let xdot = &yp[..nx];
         let s = &mut *self.scratch.borrow_mut();
@@ -288,31 +295,31 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
         // u depends on x through K_n: dF/dx gains dF/du K_n (summed in place: a Jacobian
         // evaluation inside the integrator allocates nothing).
         for j in 0..nx {
-            for i in 0..M::N_EQUATIONS {
+            for i in 0..self.model.structure().n_equations() {
                 let mut v = s.f_x[(i, j)] + c * s.f_xdot[(i, j)];
-                for k in 0..M::N_INPUTS {
+                for k in 0..self.model.structure().n_inputs() {
                     v += s.f_u[(i, k)] * pf.k_n[(k, j)];
                 }
                 out.set(i, j, v);
             }
         }
-        for j in 0..M::N_ALGEBRAIC {
-            for i in 0..M::N_EQUATIONS {
+        for j in 0..self.model.structure().n_algebraic() {
+            for i in 0..self.model.structure().n_equations() {
                 out.set(i, nx + j, s.f_z[(i, j)]);
             }
         }
     }
 
     fn is_differential(&self, i: usize) -> bool {
-        i < M::N_STATES
+        i < self.model.structure().n_states()
     }
 
     fn equation_name(&self, i: usize) -> String {
-        crate::model::equation_name::<M>(i)
+        self.model.structure().equation_name(i)
     }
 
     fn unknown_name(&self, i: usize) -> String {
-        crate::model::unknown_name::<M>(i)
+        self.model.structure().unknown_name(i)
     }
 }
 
@@ -334,7 +341,12 @@ where
     R: Reference,
     L: LinearSolver,
 {
-    let (nx, nz, nu, ny) = (P::N_STATES, P::N_ALGEBRAIC, P::N_INPUTS, P::N_OUTPUTS);
+    let (nx, nz, nu, ny) = (
+        plant.structure().n_states(),
+        plant.structure().n_algebraic(),
+        plant.structure().n_inputs(),
+        plant.structure().n_outputs(),
+    );
     if !(opts.h.is_finite() && opts.h > 0.0 && opts.t_end.is_finite() && opts.t_end > 0.0) {
         return Err(SimulateError::InvalidOption(format!(
             "h = {}, t_end = {}",
@@ -352,14 +364,14 @@ where
             "expected {nx} finite values, got {x0:?}"
         )));
     }
-    if T::N_STATES != nx {
+    if dpc.model().structure().n_states() != nx {
         return Err(SimulateError::Mismatch {
             what: "states",
             plant: nx,
-            controller: T::N_STATES,
+            controller: dpc.model().structure().n_states(),
         });
     }
-    let controller_inputs = T::plant_inputs();
+    let controller_inputs = dpc.model().plant_inputs();
     if controller_inputs != nu {
         return Err(SimulateError::Mismatch {
             what: "inputs",
@@ -367,11 +379,11 @@ where
             controller: controller_inputs,
         });
     }
-    if T::N_OUTPUTS != ny {
+    if dpc.model().structure().n_outputs() != ny {
         return Err(SimulateError::Mismatch {
             what: "outputs",
             plant: ny,
-            controller: T::N_OUTPUTS,
+            controller: dpc.model().structure().n_outputs(),
         });
     }
     if opts.hold == Hold::Correction && dpc.prefeedback().is_none() {
@@ -408,7 +420,7 @@ where
                 t,
                 cause: format!(
                     "state {} = {v} left the domain |x| <= {}",
-                    P::STATE_NAMES.get(i).copied().unwrap_or("?"),
+                    plant.structure().states.get(i).unwrap_or("?"),
                     opts.state_bound
                 ),
             });

@@ -21,7 +21,7 @@ pub enum TrackingError {
     #[error("tracking DAE `{model}` has {outputs} output(s); there is no output {output}")]
     UnknownOutput {
         /// The tracking DAE's name.
-        model: &'static str,
+        model: String,
         /// The index asked for.
         output: usize,
         /// Number of outputs.
@@ -33,9 +33,9 @@ pub enum TrackingError {
     )]
     WrongDegree {
         /// The tracking DAE's name.
-        model: &'static str,
+        model: String,
         /// The output's name.
-        output: &'static str,
+        output: String,
         /// The compiled degree.
         expected: usize,
         /// The number of roots given.
@@ -45,9 +45,9 @@ pub enum TrackingError {
     #[error("W for output `{output}` of `{model}`: entry {index} is {value}, not a finite number")]
     NonFinite {
         /// The tracking DAE's name.
-        model: &'static str,
+        model: String,
         /// The output's name.
-        output: &'static str,
+        output: String,
         /// Position of the entry in the slice given.
         index: usize,
         /// The value.
@@ -61,9 +61,9 @@ pub enum TrackingError {
     )]
     UnstableRoot {
         /// The tracking DAE's name.
-        model: &'static str,
+        model: String,
         /// The output's name.
-        output: &'static str,
+        output: String,
         /// The offending `a`.
         value: f64,
     },
@@ -74,9 +74,9 @@ pub enum TrackingError {
     )]
     WrongLength {
         /// The tracking DAE's name.
-        model: &'static str,
+        model: String,
         /// The output's name.
-        output: &'static str,
+        output: String,
         /// `deg W_i + 1`.
         expected: usize,
         /// The number given.
@@ -86,9 +86,9 @@ pub enum TrackingError {
     #[error("W for output `{output}` of `{model}` must be monic (leading coefficient 1), found {leading}")]
     NotMonic {
         /// The tracking DAE's name.
-        model: &'static str,
+        model: String,
         /// The output's name.
-        output: &'static str,
+        output: String,
         /// The leading coefficient given.
         leading: f64,
     },
@@ -99,9 +99,9 @@ pub enum TrackingError {
     )]
     Unstable {
         /// The tracking DAE's name.
-        model: &'static str,
+        model: String,
         /// The output's name.
-        output: &'static str,
+        output: String,
         /// The coefficients given.
         coefficients: Vec<f64>,
     },
@@ -113,18 +113,18 @@ pub trait TrackingDae: DaeModel {
     type Plant: DaeModel<Params = Self::Params>;
 
     /// Per output, the compiled default coefficients of `W_i(s)` from the model's `tracking`
-    /// section, lowest power first (monic: the last is 1). An output without a step has
-    /// `[1.0]`. Their lengths fix the degrees; the values in use are
-    /// [`w_coefficients`](Self::w_coefficients).
-    const W_COEFFICIENTS: &'static [&'static [f64]];
+    /// section, lowest power first (monic: the last is 1); empty when
+    /// `output >= n_outputs`. An output without a step has `[1.0]`. Their lengths fix the
+    /// degrees; the values in use are [`w_coefficients`](Self::w_coefficients).
+    fn default_w_coefficients(&self, output: usize) -> &[f64];
 
     /// Per output, the relative degree of the plant output: the number of total time
     /// derivatives after which an input appears, or `None` where it is not defined (an
     /// output the inputs never reach, or a structurally higher-index plant).
-    const RELATIVE_DEGREES: &'static [Option<usize>];
+    fn relative_degrees(&self) -> &[Option<usize>];
 
     /// The coefficients of `W_i(s)` in use, lowest power first, monic (the last is 1), of
-    /// length `deg W_i + 1`; empty when `output >= N_OUTPUTS`.
+    /// length `deg W_i + 1`; empty when `output >= n_outputs`.
     fn w_coefficients(&self, output: usize) -> &[f64];
 
     /// Replace the coefficients of `W_i(s)`, lowest power first. They must be finite, monic,
@@ -153,11 +153,11 @@ pub trait TrackingDae: DaeModel {
     /// [`TrackingError::NonFinite`] or [`TrackingError::UnstableRoot`]; the tracking DAE is
     /// then unchanged.
     fn set_w_roots(&mut self, output: usize, roots: &[f64]) -> Result<(), TrackingError> {
-        let name = output_name::<Self>(output)?;
-        let degree = Self::W_COEFFICIENTS[output].len() - 1;
+        let name = output_name(self, output)?;
+        let degree = self.default_w_coefficients(output).len() - 1;
         if roots.len() != degree {
             return Err(TrackingError::WrongDegree {
-                model: Self::NAME,
+                model: self.structure().name.to_string(),
                 output: name,
                 expected: degree,
                 found: roots.len(),
@@ -166,7 +166,7 @@ pub trait TrackingDae: DaeModel {
         for (index, &value) in roots.iter().enumerate() {
             if !value.is_finite() {
                 return Err(TrackingError::NonFinite {
-                    model: Self::NAME,
+                    model: self.structure().name.to_string(),
                     output: name,
                     index,
                     value,
@@ -174,7 +174,7 @@ pub trait TrackingDae: DaeModel {
             }
             if value < 0.0 {
                 return Err(TrackingError::UnstableRoot {
-                    model: Self::NAME,
+                    model: self.structure().name.to_string(),
                     output: name,
                     value,
                 });
@@ -184,31 +184,35 @@ pub trait TrackingDae: DaeModel {
     }
 
     /// Number of plant inputs: the trailing algebraic unknowns of the tracking DAE.
-    fn plant_inputs() -> usize {
-        Self::N_ALGEBRAIC - <Self::Plant as DaeModel>::N_ALGEBRAIC
+    fn plant_inputs(&self) -> usize {
+        self.structure().n_algebraic() - self.plant_algebraic()
     }
+
+    /// Number of the plant's algebraic unknowns: the leading algebraic unknowns of the
+    /// tracking DAE (the plant's inputs follow them).
+    fn plant_algebraic(&self) -> usize;
 
     /// Per output, how many derivatives of the reference `w_i` needs (`deg W_i`, fixed at
     /// compile time).
-    fn reference_orders() -> impl Iterator<Item = usize> {
-        Self::W_COEFFICIENTS.iter().map(|c| c.len() - 1)
+    fn reference_orders(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.structure().n_outputs()).map(|i| self.default_w_coefficients(i).len() - 1)
     }
 
     /// The largest relative degree left after the steps, `max_i (r_i - deg W_i)`: the
     /// nilpotency index `nu` of the linearised pencil, which decides how many implicit-Euler
     /// controls are unusable after a restart (paper, Section 3). `None` if some relative
     /// degree is undefined.
-    fn remaining_relative_degree() -> Option<usize> {
+    fn remaining_relative_degree(&self) -> Option<usize> {
         let mut nu = 0;
-        for (r, w) in Self::RELATIVE_DEGREES.iter().zip(Self::W_COEFFICIENTS) {
-            nu = nu.max(r.as_ref()?.saturating_sub(w.len() - 1));
+        for (r, w) in self.relative_degrees().iter().zip(self.reference_orders()) {
+            nu = nu.max(r.as_ref()?.saturating_sub(w));
         }
         Some(nu)
     }
 
     /// The tracking inputs `w_i = sum_k c_ik xi_i^(k)(t)` from a reference, with the
     /// coefficients `c_ik` in use ([`w_coefficients`](Self::w_coefficients)), using `scratch`
-    /// of length at least `(max_order + 1) * N_OUTPUTS` for the derivatives.
+    /// of length at least `(max_order + 1) * n_outputs` for the derivatives.
     fn tracking_inputs<R: Reference + ?Sized>(
         &self,
         reference: &R,
@@ -216,14 +220,14 @@ pub trait TrackingDae: DaeModel {
         scratch: &mut [f64],
         w: &mut [f64],
     ) -> Result<(), ReferenceError> {
-        let m = Self::N_OUTPUTS;
+        let m = self.structure().n_outputs();
         if reference.dimension() != m {
             return Err(ReferenceError::Dimension {
                 expected: m,
                 found: reference.dimension(),
             });
         }
-        let order = Self::reference_orders().max().unwrap_or(0);
+        let order = self.reference_orders().max().unwrap_or(0);
         if order > reference.max_order() {
             return Err(ReferenceError::OrderTooHigh {
                 name: "reference".into(),
@@ -252,13 +256,17 @@ pub trait TrackingDae: DaeModel {
     }
 }
 
-fn output_name<T: TrackingDae + ?Sized>(output: usize) -> Result<&'static str, TrackingError> {
-    match (T::OUTPUT_NAMES.get(output), T::W_COEFFICIENTS.get(output)) {
-        (Some(name), Some(_)) => Ok(name),
-        _ => Err(TrackingError::UnknownOutput {
-            model: T::NAME,
+fn output_name<T: TrackingDae + ?Sized>(
+    tracking: &T,
+    output: usize,
+) -> Result<String, TrackingError> {
+    let structure = tracking.structure();
+    match structure.outputs.get(output) {
+        Some(name) => Ok(name.to_string()),
+        None => Err(TrackingError::UnknownOutput {
+            model: structure.name.to_string(),
             output,
-            outputs: T::N_OUTPUTS,
+            outputs: structure.n_outputs(),
         }),
     }
 }
@@ -287,14 +295,16 @@ pub fn monic_from_negated_roots(roots: &[f64]) -> Vec<f64> {
 /// # Errors
 /// The [`TrackingError`] for the first check that fails.
 pub fn check_w_coefficients<T: TrackingDae + ?Sized>(
+    tracking: &T,
     output: usize,
     coefficients: &[f64],
 ) -> Result<(), TrackingError> {
-    let name = output_name::<T>(output)?;
-    let expected = T::W_COEFFICIENTS[output].len();
+    let name = output_name(tracking, output)?;
+    let model = tracking.structure().name.to_string();
+    let expected = tracking.default_w_coefficients(output).len();
     if coefficients.len() != expected {
         return Err(TrackingError::WrongLength {
-            model: T::NAME,
+            model,
             output: name,
             expected,
             found: coefficients.len(),
@@ -306,7 +316,7 @@ pub fn check_w_coefficients<T: TrackingDae + ?Sized>(
         .find(|(_, c)| !c.is_finite())
     {
         return Err(TrackingError::NonFinite {
-            model: T::NAME,
+            model,
             output: name,
             index,
             value,
@@ -315,7 +325,7 @@ pub fn check_w_coefficients<T: TrackingDae + ?Sized>(
     let leading = coefficients[expected - 1];
     if leading != 1.0 {
         return Err(TrackingError::NotMonic {
-            model: T::NAME,
+            model,
             output: name,
             leading,
         });
@@ -323,7 +333,7 @@ pub fn check_w_coefficients<T: TrackingDae + ?Sized>(
     let zeros = coefficients.iter().take_while(|c| **c == 0.0).count();
     if !is_hurwitz(&coefficients[zeros..]) {
         return Err(TrackingError::Unstable {
-            model: T::NAME,
+            model,
             output: name,
             coefficients: coefficients.to_vec(),
         });

@@ -13,13 +13,13 @@
 //! struct StateCount;
 //! impl VisitTracked for StateCount {
 //!     type Output = usize;
-//!     fn visit<P, T, L>(self, _model: Tracked<P, T, L>) -> usize
+//!     fn visit<P, T, L>(self, model: Tracked<P, T, L>) -> usize
 //!     where
 //!         P: DaeModel + Clone + Send + Sync + 'static,
 //!         T: dpc::core::TrackingDae<Plant = P> + Clone + Send + Sync + 'static,
 //!         L: dpc::core::linalg::LinearSolver + Send + 'static,
 //!     {
-//!         P::N_STATES
+//!         model.plant.structure().n_states()
 //!     }
 //! }
 //! assert_eq!(visit("wheel", StateCount).unwrap(), 5);
@@ -150,7 +150,7 @@ mod tests {
             L: LinearSolver + Send + 'static,
         {
             (
-                T::N_EQUATIONS,
+                model.tracking.structure().n_equations(),
                 model.solver.dimension(),
                 model.reference.is_some(),
             )

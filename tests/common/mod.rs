@@ -2,7 +2,7 @@
 
 #![allow(dead_code)]
 
-use dpc::core::model::DaeModel;
+use dpc::core::model::{DaeModel, Structure};
 use dpc::nalgebra::DMatrix;
 
 /// A point `(t, x, x', z, u)` of model `M`, stored flat in that order.
@@ -15,8 +15,8 @@ struct Point<'a> {
 }
 
 /// Start of each block (`x'`, `x`, `z`, `u`) in the flat vector, and its length.
-fn blocks<M: DaeModel>() -> [(usize, usize); 4] {
-    let (nx, nz, nu) = (M::N_STATES, M::N_ALGEBRAIC, M::N_INPUTS);
+fn blocks(s: &Structure) -> [(usize, usize); 4] {
+    let (nx, nz, nu) = (s.n_states(), s.n_algebraic(), s.n_inputs());
     [
         (1 + nx, nx),
         (1, nx),
@@ -25,8 +25,8 @@ fn blocks<M: DaeModel>() -> [(usize, usize); 4] {
     ]
 }
 
-fn point<M: DaeModel>(v: &[f64]) -> Point<'_> {
-    let [(xd, nx), (x, _), (z, nz), (u, nu)] = blocks::<M>();
+fn point<'a>(s: &Structure, v: &'a [f64]) -> Point<'a> {
+    let [(xd, nx), (x, _), (z, nz), (u, nu)] = blocks(s);
     Point {
         t: v[0],
         x: &v[x..x + nx],
@@ -36,26 +36,30 @@ fn point<M: DaeModel>(v: &[f64]) -> Point<'_> {
     }
 }
 
-pub fn dims<M: DaeModel>() -> usize {
-    1 + 2 * M::N_STATES + M::N_ALGEBRAIC + M::N_INPUTS
+pub fn dims<M: DaeModel + Default>() -> usize {
+    let model = M::default();
+    let s = model.structure();
+    1 + 2 * s.n_states() + s.n_algebraic() + s.n_inputs()
 }
 
 /// Central difference of the residual with respect to block `which` of the flat point.
 fn central_block<M: DaeModel>(model: &M, v: &[f64], which: usize) -> DMatrix<f64> {
-    let (start, n) = blocks::<M>()[which];
-    let mut jac = DMatrix::zeros(M::N_EQUATIONS, n);
-    let (mut plus, mut minus) = (vec![0.0; M::N_EQUATIONS], vec![0.0; M::N_EQUATIONS]);
+    let s = model.structure();
+    let ne = s.n_equations();
+    let (start, n) = blocks(s)[which];
+    let mut jac = DMatrix::zeros(ne, n);
+    let (mut plus, mut minus) = (vec![0.0; ne], vec![0.0; ne]);
     let mut w = v.to_vec();
     for j in 0..n {
         let h = 1e-5 * (1.0 + v[start + j].abs());
         w[start + j] = v[start + j] + h;
-        let p = point::<M>(&w);
+        let p = point(s, &w);
         model.residual(p.t, p.x, p.xdot, p.z, p.u, &mut plus);
         w[start + j] = v[start + j] - h;
-        let p = point::<M>(&w);
+        let p = point(s, &w);
         model.residual(p.t, p.x, p.xdot, p.z, p.u, &mut minus);
         w[start + j] = v[start + j];
-        for i in 0..M::N_EQUATIONS {
+        for i in 0..ne {
             jac[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
         }
     }
@@ -79,8 +83,9 @@ fn assert_close(name: &str, analytic: &DMatrix<f64>, fd: &DMatrix<f64>, row_scal
 
 pub fn check_model<M: DaeModel + Default>(v: &[f64]) {
     let model = M::default();
-    let p = point::<M>(v);
-    let (ne, nx, nz, nu) = (M::N_EQUATIONS, M::N_STATES, M::N_ALGEBRAIC, M::N_INPUTS);
+    let s = model.structure();
+    let p = point(s, v);
+    let (ne, nx, nz, nu) = (s.n_equations(), s.n_states(), s.n_algebraic(), s.n_inputs());
     let mut r = vec![0.0; ne];
     let mut f_xdot = DMatrix::zeros(ne, nx);
     let mut f_x = DMatrix::zeros(ne, nx);
@@ -122,10 +127,10 @@ pub fn check_model<M: DaeModel + Default>(v: &[f64]) {
 
     // Structural patterns cover every non-zero entry.
     let patterns = [
-        M::PATTERN_F_XDOT,
-        M::PATTERN_F_X,
-        M::PATTERN_F_Z,
-        M::PATTERN_F_U,
+        &s.pattern_f_xdot,
+        &s.pattern_f_x,
+        &s.pattern_f_z,
+        &s.pattern_f_u,
     ];
     for ((name, m), pat) in blocks.iter().zip(patterns) {
         for i in 0..m.nrows() {
@@ -150,7 +155,7 @@ pub fn check_model<M: DaeModel + Default>(v: &[f64]) {
     assert!((g - expected).amax() <= 1e-12 * (1.0 + f_x.amax() + f_xdot.amax()));
 
     // Output Jacobian against central differences in x.
-    let ny = M::N_OUTPUTS;
+    let ny = s.n_outputs();
     let mut h_x = DMatrix::zeros(ny, nx);
     let mut h_z = DMatrix::zeros(ny, nz);
     let mut h_u = DMatrix::zeros(ny, nu);

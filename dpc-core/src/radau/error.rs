@@ -1,0 +1,182 @@
+//! The Radau integrator's error type. No model- or user-caused condition panics.
+
+use core::fmt;
+
+/// An option outside its range: which one, its value and what it must satisfy.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InvalidOption {
+    /// Field or argument name as written in [`super::Options`] or the method signature.
+    pub name: &'static str,
+    /// The value given.
+    pub value: f64,
+    /// What the value must satisfy.
+    pub requirement: &'static str,
+}
+
+impl InvalidOption {
+    pub(crate) fn new(name: &'static str, value: f64, requirement: &'static str) -> Self {
+        Self {
+            name,
+            value,
+            requirement,
+        }
+    }
+}
+
+impl fmt::Display for InvalidOption {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} = {} must be {}",
+            self.name, self.value, self.requirement
+        )
+    }
+}
+
+/// Which of the two linear systems of the transformed stage equations failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StageSystem {
+    /// `(gamma/h) dF/dy' + dF/dy` (real eigenvalue of `A^{-1}`).
+    Real,
+    /// `((alpha - i beta)/h) dF/dy' + dF/dy` (complex pair of eigenvalues of `A^{-1}`).
+    Complex,
+}
+
+impl fmt::Display for StageSystem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Real => "real",
+            Self::Complex => "complex",
+        })
+    }
+}
+
+/// What made the last attempt of a step fail when the step size fell below its minimum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepFailure {
+    /// The local error estimate exceeded the tolerance.
+    ErrorTest,
+    /// The simplified Newton iteration diverged or converged too slowly.
+    Newton,
+}
+
+impl fmt::Display for StepFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::ErrorTest => "error test failed",
+            Self::Newton => "Newton iteration failed",
+        })
+    }
+}
+
+/// Everything that can stop the Radau integrator.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RadauError {
+    /// A tolerance is negative or non-finite, both tolerances of a component are zero, or an
+    /// error weight `1/(rtol |y_i| + atol_i)` is not positive and finite.
+    #[error("invalid tolerance {which} of component {component}: {value}")]
+    InvalidTolerance {
+        /// `"rtol"`, `"atol"`, `"rtol and atol"` or `"error weight"`.
+        which: &'static str,
+        /// Component index.
+        component: usize,
+        /// The offending value (`rtol |y_i| + atol_i` for an error weight).
+        value: f64,
+    },
+    /// A vector or solver has the wrong length.
+    #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
+    DimensionMismatch {
+        /// Which argument.
+        what: &'static str,
+        /// Length the DAE requires.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// An option or argument is out of range.
+    #[error("invalid option: {0}")]
+    InvalidOption(InvalidOption),
+    /// A time argument lies outside where it can be served: an output time behind the
+    /// integrator, an interpolation time outside the last step, a stop time not ahead.
+    #[error("time {t} is outside [{from}, {to}]")]
+    TimeOutOfRange {
+        /// The time asked for.
+        t: f64,
+        /// Start of the admissible interval.
+        from: f64,
+        /// End of the admissible interval (infinity when open).
+        to: f64,
+    },
+    /// A stage system is singular and reducing the step did not help.
+    #[error(
+        "singular {system} stage matrix at t = {t} (step {h}): unknown {}, equation {}",
+        unknown.as_deref().unwrap_or("(not identified)"),
+        equation.as_deref().unwrap_or("(no zero row)")
+    )]
+    SingularMatrix {
+        /// Start of the step.
+        t: f64,
+        /// Step size of the last attempt.
+        h: f64,
+        /// The system whose factorisation failed.
+        system: StageSystem,
+        /// Name of the unknown whose pivot vanished, when known.
+        unknown: Option<String>,
+        /// Name of an equation whose row is identically zero, when there is one.
+        equation: Option<String>,
+    },
+    /// The model's residual returned NaN or an infinity, and reducing the step did not help.
+    #[error("non-finite residual at t = {t} in {equation}")]
+    NonFiniteResidual {
+        /// Time of the evaluation.
+        t: f64,
+        /// Name of the first offending equation.
+        equation: String,
+    },
+    /// The model wrote an iteration-matrix entry outside the pattern it declared.
+    #[error("iteration matrix entry ({equation}, {unknown}) lies outside the declared pattern")]
+    OutsidePattern {
+        /// Name of the row's equation.
+        equation: String,
+        /// Name of the column's unknown.
+        unknown: String,
+    },
+    /// The step size fell below its minimum (`max(min_step, 4 eps |t|)`).
+    #[error("step size {h} too small at t = {t}: {cause}")]
+    StepTooSmall {
+        /// Start of the step.
+        t: f64,
+        /// The step size that was too small.
+        h: f64,
+        /// What failed in the last attempt.
+        cause: StepFailure,
+    },
+    /// More consecutive failures in one step than the options allow.
+    #[error("{failures} consecutive failures ({cause}) at t = {t}, last step {h}")]
+    RepeatedFailures {
+        /// Start of the step.
+        t: f64,
+        /// Step size of the last attempt.
+        h: f64,
+        /// Number of failed attempts.
+        failures: usize,
+        /// What failed.
+        cause: StepFailure,
+    },
+    /// More steps than [`super::Options::max_steps`] were needed to reach an output time.
+    #[error("too many steps ({max_steps}) before reaching t = {tout}; stopped at t = {t}")]
+    TooManySteps {
+        /// The step limit.
+        max_steps: usize,
+        /// The requested output time.
+        tout: f64,
+        /// Where the integrator stopped.
+        t: f64,
+    },
+}
+
+impl From<InvalidOption> for RadauError {
+    fn from(e: InvalidOption) -> Self {
+        Self::InvalidOption(e)
+    }
+}

@@ -1,0 +1,284 @@
+//! The two linear systems of the transformed stage equations and their factorisations.
+//!
+//! The simplified Newton matrix of the Radau IIA stage system for `F(t, y, y') = 0` is
+//! `I ⊗ J + (A^{-1}/h) ⊗ M` with `J = dF/dy` and `M = dF/dy'` frozen at the start of the step.
+//! With `A^{-1} = T Λ T^{-1}` (see [`super::tableau`]) it decouples into
+//!
+//! * the real `n x n` matrix `E_1 = J + (gamma/h) M`, factorised by the caller's
+//!   [`LinearSolver`] (fixed-size, dense or sparse), and
+//! * the complex `n x n` matrix `E_2 = J + ((alpha - i beta)/h) M`, factorised by a dense
+//!   complex partial-pivoting LU (faer) whose storage is allocated once.
+//!
+//! `J` and `M` are obtained from the model's single entry point `iteration_matrix(t, y, y', c)
+//! = J + c M` with `c = 0` and `c = 1` (`M = (J + M) - J`), and kept in dense storage so that a
+//! change of `h` only refactorises, without evaluating the Jacobian again (as RADAU5 does).
+//! The subtraction is exact where `J` has no entry; where both have one the error is a round-off
+//! of `|J_ij|`, the size of the round-off of the matrix entry `J_ij + c M_ij` itself.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::perm::PermRef;
+use faer::{c64, Mat, MatMut, Par};
+
+use super::error::StageSystem;
+use crate::linalg::{FactorError, LinearSolver};
+use crate::sink::MatrixSink;
+use crate::ImplicitDae;
+
+/// Dense complex LU with partial pivoting, workspace allocated at construction.
+pub(crate) struct ComplexLu {
+    matrix: Mat<c64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    mem: MemBuffer,
+    factored: bool,
+}
+
+impl ComplexLu {
+    pub fn new(n: usize) -> Self {
+        let par = Par::Seq;
+        let req = factor::lu_in_place_scratch::<usize, c64>(n, n, par, Default::default())
+            .or(solve::solve_in_place_scratch::<usize, c64>(n, 1, par));
+        Self {
+            matrix: Mat::zeros(n, n),
+            perm: vec![0; n],
+            perm_inv: vec![0; n],
+            mem: MemBuffer::new(req),
+            factored: false,
+        }
+    }
+
+    /// Factorise the matrix in place; the unfactorised matrix is not kept (the caller can
+    /// rebuild it from `J` and `M` to name a zero row).
+    fn factor(&mut self) -> Result<(), Option<usize>> {
+        let n = self.matrix.nrows();
+        factor::lu_in_place(
+            self.matrix.as_mut(),
+            &mut self.perm,
+            &mut self.perm_inv,
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+            Default::default(),
+        );
+        let m = &self.matrix;
+        if let Some(k) = (0..n).find(|&k| {
+            let d = m[(k, k)];
+            d == c64::new(0.0, 0.0) || !(d.re.is_finite() && d.im.is_finite())
+        }) {
+            self.factored = false;
+            return Err(Some(k));
+        }
+        self.factored = true;
+        Ok(())
+    }
+
+    fn solve_in_place(&mut self, b: &mut [c64]) {
+        if !self.factored {
+            return;
+        }
+        let n = b.len();
+        let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
+        let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
+        solve::solve_in_place(
+            self.matrix.as_ref(),
+            self.matrix.as_ref(),
+            perm,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+        );
+    }
+}
+
+/// Why the stage matrices could not be formed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum SetupFailure {
+    /// A singular system: which one, pivot column, zero row.
+    Singular(StageSystem, Option<usize>, Option<usize>),
+    /// An entry outside the declared pattern (row, column): not recoverable.
+    OutsidePattern(usize, usize),
+}
+
+/// `J`, `M` and the factorised stage matrices.
+pub(crate) struct StageMatrices<L: LinearSolver> {
+    ls: L,
+    jy: Mat<f64>,
+    jyp: Mat<f64>,
+    complex: ComplexLu,
+    /// A Jacobian has been evaluated (at some earlier step start, possibly stale).
+    pub have_jacobian: bool,
+    /// The Jacobian was evaluated at the start of the current step.
+    pub current: bool,
+    /// Both matrices are factorised for step [`h_factored`](Self::h_factored).
+    pub factored: bool,
+    /// The step size of the factorisations.
+    pub h_factored: f64,
+}
+
+impl<L: LinearSolver> StageMatrices<L> {
+    pub fn new(ls: L, n: usize) -> Self {
+        Self {
+            ls,
+            jy: Mat::zeros(n, n),
+            jyp: Mat::zeros(n, n),
+            complex: ComplexLu::new(n),
+            have_jacobian: false,
+            current: false,
+            factored: false,
+            h_factored: 0.0,
+        }
+    }
+
+    /// Evaluate `J = dF/dy` and `M = dF/dy'` at `(t, y, yp)`.
+    pub fn evaluate<D: ImplicitDae>(&mut self, dae: &D, t: f64, y: &[f64], yp: &[f64]) {
+        self.jy.fill_zero();
+        dae.iteration_matrix(t, y, yp, 0.0, &mut self.jy);
+        self.jyp.fill_zero();
+        dae.iteration_matrix(t, y, yp, 1.0, &mut self.jyp);
+        let n = self.jy.nrows();
+        for j in 0..n {
+            for i in 0..n {
+                self.jyp[(i, j)] -= self.jy[(i, j)];
+            }
+        }
+        self.have_jacobian = true;
+        self.current = true;
+        self.factored = false;
+    }
+
+    /// Form and factorise `E_1 = J + (gamma/h) M` and `E_2 = J + ((alpha - i beta)/h) M`.
+    pub fn factor(
+        &mut self,
+        h: f64,
+        gamma: f64,
+        alpha: f64,
+        beta: f64,
+    ) -> Result<(), SetupFailure> {
+        self.factored = false;
+        let n = self.jy.nrows();
+        let (cr, ca, cb) = (gamma / h, alpha / h, -beta / h);
+        let m = self.ls.matrix_mut();
+        m.fill_zero();
+        for j in 0..n {
+            for i in 0..n {
+                let (a, b) = (self.jy[(i, j)], self.jyp[(i, j)]);
+                if a != 0.0 || b != 0.0 {
+                    m.set(i, j, a + cr * b);
+                }
+            }
+        }
+        match self.ls.factor() {
+            Ok(()) => {}
+            Err(FactorError::Singular { column, row }) => {
+                return Err(SetupFailure::Singular(StageSystem::Real, column, row));
+            }
+            Err(FactorError::OutsidePattern { row, col }) => {
+                return Err(SetupFailure::OutsidePattern(row, col));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let (a, b) = (self.jy[(i, j)], self.jyp[(i, j)]);
+                self.complex.matrix[(i, j)] = c64::new(a + ca * b, cb * b);
+            }
+        }
+        if let Err(col) = self.complex.factor() {
+            let (jy, jyp) = (&self.jy, &self.jyp);
+            let row = crate::linalg::zero_row(n, |i, j| {
+                (jy[(i, j)] + ca * jyp[(i, j)]).abs() + (cb * jyp[(i, j)]).abs()
+            });
+            return Err(SetupFailure::Singular(StageSystem::Complex, col, row));
+        }
+        self.factored = true;
+        self.h_factored = h;
+        Ok(())
+    }
+
+    /// Solve `E_1 x = b` in place.
+    pub fn solve_real(&mut self, b: &mut [f64]) {
+        self.ls.solve_in_place(b);
+    }
+
+    /// Solve `E_2 x = b` in place.
+    pub fn solve_complex(&mut self, b: &mut [c64]) {
+        self.complex.solve_in_place(b);
+    }
+
+    /// `out = M v` with the stored `M = dF/dy'`.
+    #[cfg(test)]
+    pub fn apply_mass(&self, v: &[f64], out: &mut [f64]) {
+        let n = v.len();
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = (0..n).map(|j| self.jyp[(i, j)] * v[j]).sum();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::NalgebraLu;
+
+    /// `F = M y' - K y` with a singular `M`, so `dF/dy' = M`, `dF/dy = -K`.
+    struct Linear;
+    const M: [[f64; 3]; 3] = [[1.0, 2.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]];
+    const K: [[f64; 3]; 3] = [[-1.0, 0.5, 0.0], [0.2, -3.0, 1.0], [1.0, 0.0, -1.0]];
+    impl ImplicitDae for Linear {
+        fn dimension(&self) -> usize {
+            3
+        }
+        fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            for i in 0..3 {
+                out[i] = (0..3).map(|j| M[i][j] * yp[j] - K[i][j] * y[j]).sum();
+            }
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            _: f64,
+            _: &[f64],
+            _: &[f64],
+            c: f64,
+            m: &mut S,
+        ) {
+            for i in 0..3 {
+                for j in 0..3 {
+                    m.add(i, j, c * M[i][j] - K[i][j]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn both_systems_solve_what_they_should() {
+        let mut sm = StageMatrices::new(NalgebraLu::<3>::new(), 3);
+        sm.evaluate(&Linear, 0.0, &[0.0; 3], &[0.0; 3]);
+        let mut mv = [0.0; 3];
+        sm.apply_mass(&[1.0, 1.0, 1.0], &mut mv);
+        assert_eq!(mv, [3.0, 1.0, 0.0]);
+        let (h, g, a, b) = (0.1, 3.6, 2.7, 3.05);
+        sm.factor(h, g, a, b).unwrap();
+        // Real: (g/h M - K) x = r.
+        let x = [0.3, -1.0, 2.0];
+        let mut r = [0.0; 3];
+        for i in 0..3 {
+            r[i] = (0..3).map(|j| (g / h * M[i][j] - K[i][j]) * x[j]).sum();
+        }
+        sm.solve_real(&mut r);
+        for i in 0..3 {
+            assert!((r[i] - x[i]).abs() < 1e-13, "{r:?}");
+        }
+        // Complex: ((a - ib)/h M - K) z = r.
+        let z = [c64::new(1.0, 2.0), c64::new(-0.5, 0.0), c64::new(0.0, 3.0)];
+        let lam = c64::new(a, -b) / h;
+        let mut rc = [c64::new(0.0, 0.0); 3];
+        for i in 0..3 {
+            rc[i] = (0..3)
+                .map(|j| (lam * M[i][j] - K[i][j]) * z[j])
+                .fold(c64::new(0.0, 0.0), |s, v| s + v);
+        }
+        sm.solve_complex(&mut rc);
+        for i in 0..3 {
+            assert!((rc[i] - z[i]).norm() < 1e-13, "{rc:?}");
+        }
+    }
+}

@@ -1,0 +1,799 @@
+//! Radau IIA integration (three stages, order 5, variable step) of implicit DAEs
+//! `F(t, y, y') = 0` of index up to 3, as declared.
+//!
+//! The algorithm is that of Hairer & Wanner's RADAU5 (*Solving Ordinary Differential
+//! Equations II*, 2nd ed., Springer 1996, Section IV.8; index-dependent error scaling from
+//! Hairer, Lubich & Roche, *The Numerical Solution of Differential-Algebraic Systems by
+//! Runge-Kutta Methods*, LNM 1409, 1989), written for a general implicit `F` rather than
+//! `M y' = f`:
+//!
+//! * [`tableau`]: coefficients, and the transformation `T` with `T^{-1} A^{-1} T` block diagonal
+//!   (one real eigenvalue `gamma`, one complex pair `alpha ± i beta`), computed from the
+//!   eigen-decomposition;
+//! * [`newton`]: the collocation conditions `F(t_n + c_i h, y_n + Z_i, Y'_i) = 0` solved by
+//!   simplified Newton, one real and one complex `n x n` system per iteration;
+//! * [`linear`]: `dF/dy` and `dF/dy'` (from two calls of `iteration_matrix`), the real system in
+//!   the caller's [`LinearSolver`], the complex one in a dense complex LU (faer);
+//! * [`estimate`]: the embedded error estimate filtered through the real matrix, with the extra
+//!   solve on the first step and after rejections;
+//! * [`control`]: Gustafsson's predictive step-size controller;
+//! * [`dense`]: the collocation polynomial as dense output and as Newton's starting guess;
+//! * the Jacobian is kept while Newton contracts fast (rate at most
+//!   [`Options::jacobian_reuse_rate`]); the step size, and with it the factorisations, is kept
+//!   when the proposed change is small ([`Options::keep_step_window`]).
+//!
+//! Components marked as index 2 or 3 in [`Options::index`] have their error weights multiplied
+//! by `min(1, h)` and `min(1, h)^2` (RADAU5's `NIND2`/`NIND3` with the cap at `h = 1` that the
+//! BDF's [`crate::bdf::HigherIndexControl::Scale`] uses too): the local error of an index-`m`
+//! component is `O(h^(4-m))` larger than that of the index-1 ones and would otherwise force
+//! needlessly small steps or no convergence at all.
+//!
+//! ```
+//! use dpc_core::linalg::NalgebraLu;
+//! use dpc_core::radau::{Options, Radau};
+//! use dpc_core::{ImplicitDae, MatrixSink};
+//!
+//! /// y' = -y.
+//! struct Decay;
+//! impl ImplicitDae for Decay {
+//!     fn dimension(&self) -> usize { 1 }
+//!     fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+//!         out[0] = yp[0] + y[0];
+//!     }
+//!     fn iteration_matrix<S: MatrixSink + ?Sized>(
+//!         &self, _: f64, _: &[f64], _: &[f64], c: f64, m: &mut S,
+//!     ) {
+//!         m.set(0, 0, 1.0 + c);
+//!     }
+//! }
+//!
+//! let opts = Options::with_tolerances(1e-8, 1e-10);
+//! let mut radau = Radau::new(Decay, NalgebraLu::<1>::new(), opts, 0.0, &[1.0], &[-1.0])?;
+//! let mut y = [0.0];
+//! radau.solve_to(2.0, &mut y, None)?;
+//! assert!((y[0] - (-2.0f64).exp()).abs() < 1e-8);
+//! # Ok::<(), dpc_core::radau::RadauError>(())
+//! ```
+
+mod control;
+mod dense;
+mod error;
+mod estimate;
+mod linear;
+mod newton;
+mod options;
+mod stats;
+mod tableau;
+
+pub use error::{InvalidOption, RadauError, StageSystem, StepFailure};
+pub use options::Options;
+pub use stats::Stats;
+
+use control::Controller;
+use dense::Collocation;
+use estimate::EstimateWork;
+use linear::{SetupFailure, StageMatrices};
+use newton::{NewtonOutcome, StageProblem, StageWork};
+use tableau::Tableau;
+
+use crate::linalg::LinearSolver;
+use crate::ImplicitDae;
+
+/// Weighted RMS norm `sqrt(sum (v_i w_i)^2 / n)`.
+#[inline]
+pub(crate) fn wrms(v: &[f64], w: &[f64]) -> f64 {
+    let n = v.len().max(1) as f64;
+    let s: f64 = v.iter().zip(w).map(|(a, b)| (a * b) * (a * b)).sum();
+    (s / n).sqrt()
+}
+
+/// Radau IIA integrator (three stages, order 5, variable step) for `F(t, y, y') = 0`.
+///
+/// All work vectors and both factorisations' storage are allocated in [`Radau::new`]; steps
+/// allocate nothing themselves (the linear solver decides for its own part; error paths build
+/// names for the message).
+pub struct Radau<D: ImplicitDae, L: LinearSolver> {
+    dae: D,
+    opts: Options,
+    n: usize,
+    tab: Tableau,
+    sm: StageMatrices<L>,
+    /// Mapped tolerances (see [`Options`]).
+    rtol: Vec<f64>,
+    atol: Vec<f64>,
+    fnewt: f64,
+    t: f64,
+    y: Vec<f64>,
+    yp: Vec<f64>,
+    /// Step size of the next attempt (0 before the first step is chosen).
+    h: f64,
+    tstop: Option<f64>,
+    /// Polynomial of the last accepted step (valid when `stats.steps > steps_at_start`).
+    poly: Collocation,
+    steps_at_start: usize,
+    /// RADAU5's `FACCON`, carried between steps.
+    faccon: f64,
+    /// Newton contraction of the last accepted step.
+    theta: f64,
+    /// The Jacobian must be evaluated at the next step start.
+    need_jacobian: bool,
+    controller: Controller,
+    // Work vectors.
+    stages: StageWork,
+    dz: [Vec<f64>; 3],
+    est: EstimateWork,
+    w: Vec<f64>,
+    stats: Stats,
+}
+
+impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
+    /// Set up the integrator at `(t0, y0, yp0)`, which should be consistent
+    /// (`F(t0, y0, yp0) = 0`; see [`crate::bdf::consistent_initial_values`]). `yp0` enters only
+    /// the first Jacobian and the first Newton guess, so an inexact derivative of the algebraic
+    /// components (for example zero) costs iterations, not accuracy.
+    ///
+    /// # Errors
+    /// [`RadauError::DimensionMismatch`] if `y0`, `yp0` or the solver do not match
+    /// `dae.dimension()`; option errors from [`Options::validate`];
+    /// [`RadauError::NonFiniteResidual`] if `F(t0, y0, yp0)` is not finite.
+    pub fn new(
+        dae: D,
+        ls: L,
+        opts: Options,
+        t0: f64,
+        y0: &[f64],
+        yp0: &[f64],
+    ) -> Result<Self, RadauError> {
+        let n = dae.dimension();
+        for (what, found) in [
+            ("y0", y0.len()),
+            ("yp0", yp0.len()),
+            ("linear solver", ls.dimension()),
+        ] {
+            if found != n {
+                return Err(RadauError::DimensionMismatch {
+                    what,
+                    expected: n,
+                    found,
+                });
+            }
+        }
+        opts.validate(n)?;
+        if !t0.is_finite() {
+            return Err(InvalidOption::new("t0", t0, "finite").into());
+        }
+        let mut res = vec![0.0; n];
+        dae.residual(t0, y0, yp0, &mut res);
+        if let Some(i) = res.iter().position(|v| !v.is_finite()) {
+            return Err(RadauError::NonFiniteResidual {
+                t: t0,
+                equation: dae.equation_name(i),
+            });
+        }
+        let (mut rtol, mut atol) = (vec![0.0; n], vec![0.0; n]);
+        for i in 0..n {
+            let (r, a) = (opts.rtol.get(i), opts.atol.get(i));
+            let r2 = 0.1 * r.powf(2.0 / 3.0);
+            rtol[i] = r2;
+            // RADAU5 keeps atol/rtol fixed; a pure absolute tolerance maps like a relative one.
+            atol[i] = if r > 0.0 {
+                r2 * a / r
+            } else {
+                0.1 * a.powf(2.0 / 3.0)
+            };
+        }
+        let tolst = rtol
+            .iter()
+            .copied()
+            .filter(|r| *r > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let tolst = if tolst.is_finite() {
+            tolst
+        } else {
+            atol.iter().copied().fold(f64::INFINITY, f64::min)
+        };
+        let fnewt = opts
+            .newton_tolerance
+            .unwrap_or_else(|| (10.0 * f64::EPSILON / tolst).max(0.03f64.min(tolst.sqrt())));
+        let sm = StageMatrices::new(ls, n);
+        let stats = Stats {
+            residual_evaluations: 1,
+            ..Stats::default()
+        };
+        let mut poly = Collocation::new(n);
+        poly.t0 = t0;
+        poly.y0.copy_from_slice(y0);
+        let v = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        Ok(Self {
+            dae,
+            n,
+            tab: Tableau::radau_iia_3(),
+            sm,
+            rtol,
+            atol,
+            fnewt,
+            t: t0,
+            y: y0.to_vec(),
+            yp: yp0.to_vec(),
+            h: 0.0,
+            tstop: None,
+            poly,
+            steps_at_start: 0,
+            faccon: 1.0,
+            theta: 0.0,
+            need_jacobian: true,
+            controller: Controller::default(),
+            stages: StageWork::new(n),
+            dz: v(),
+            est: EstimateWork::new(n),
+            w: vec![0.0; n],
+            stats,
+            opts,
+        })
+    }
+
+    /// Restart from a new point `(t0, y0, yp0)` without allocating (for example after a jump of
+    /// the model's inputs). Statistics keep accumulating; the stop time is cleared, the step
+    /// size is chosen afresh and the Jacobian is evaluated at the first step.
+    ///
+    /// # Errors
+    /// [`RadauError::DimensionMismatch`], [`RadauError::NonFiniteResidual`] or
+    /// [`RadauError::InvalidOption`] as for [`Radau::new`].
+    pub fn reinit(&mut self, t0: f64, y0: &[f64], yp0: &[f64]) -> Result<(), RadauError> {
+        for (what, found) in [("y0", y0.len()), ("yp0", yp0.len())] {
+            if found != self.n {
+                return Err(RadauError::DimensionMismatch {
+                    what,
+                    expected: self.n,
+                    found,
+                });
+            }
+        }
+        if !t0.is_finite() {
+            return Err(InvalidOption::new("t0", t0, "finite").into());
+        }
+        let f = &mut self.est.err;
+        self.dae.residual(t0, y0, yp0, f);
+        self.stats.residual_evaluations += 1;
+        if let Some(i) = f.iter().position(|v| !v.is_finite()) {
+            return Err(RadauError::NonFiniteResidual {
+                t: t0,
+                equation: self.dae.equation_name(i),
+            });
+        }
+        self.t = t0;
+        self.y.copy_from_slice(y0);
+        self.yp.copy_from_slice(yp0);
+        self.poly.t0 = t0;
+        self.poly.h = 0.0;
+        self.poly.y0.copy_from_slice(y0);
+        self.h = 0.0;
+        self.tstop = None;
+        self.steps_at_start = self.stats.steps;
+        self.faccon = 1.0;
+        self.theta = 0.0;
+        self.need_jacobian = true;
+        self.sm.current = false;
+        self.sm.factored = false;
+        self.controller.reset();
+        Ok(())
+    }
+
+    /// The DAE being integrated.
+    pub fn dae(&self) -> &D {
+        &self.dae
+    }
+
+    /// Work counters so far.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Time reached by the last accepted step.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Solution at [`t`](Self::t).
+    pub fn y(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// Derivative at [`t`](Self::t) (the last stage derivative `Y'_3`, which satisfies
+    /// `F(t, y, y') = 0`).
+    pub fn yp(&self) -> &[f64] {
+        &self.yp
+    }
+
+    /// Step size of the last accepted step (0 before the first).
+    pub fn last_step(&self) -> f64 {
+        if self.nst() == 0 {
+            0.0
+        } else {
+            self.poly.h
+        }
+    }
+
+    /// Step size the next step will try (0 before it is chosen).
+    pub fn next_step(&self) -> f64 {
+        self.h
+    }
+
+    /// Never step past `tstop` (for example a discontinuity of the model's inputs); the step
+    /// that reaches it ends on it exactly.
+    ///
+    /// # Errors
+    /// [`RadauError::TimeOutOfRange`] if `tstop` is not ahead of the current time.
+    pub fn set_stop_time(&mut self, tstop: f64) -> Result<(), RadauError> {
+        if !(tstop > self.t && tstop.is_finite()) {
+            return Err(RadauError::TimeOutOfRange {
+                t: tstop,
+                from: self.t,
+                to: f64::INFINITY,
+            });
+        }
+        self.tstop = Some(tstop);
+        Ok(())
+    }
+
+    /// Integrate to `tout` and write `y(tout)` (and `y'(tout)` if asked) from the collocation
+    /// polynomial of the step that covers it. Returns the time the output refers to: `tout`, or
+    /// the stop time when [`set_stop_time`](Self::set_stop_time) set one before `tout` (it is
+    /// then cleared).
+    ///
+    /// # Errors
+    /// Any step failure; [`RadauError::TooManySteps`] after [`Options::max_steps`] steps in this
+    /// call; [`RadauError::TimeOutOfRange`] if `tout` lies before the last step.
+    pub fn solve_to(
+        &mut self,
+        tout: f64,
+        y_out: &mut [f64],
+        yp_out: Option<&mut [f64]>,
+    ) -> Result<f64, RadauError> {
+        if y_out.len() != self.n {
+            return Err(RadauError::DimensionMismatch {
+                what: "y_out",
+                expected: self.n,
+                found: y_out.len(),
+            });
+        }
+        let t_first = self.t - self.last_step();
+        if !(tout.is_finite() && tout >= t_first) {
+            return Err(RadauError::TimeOutOfRange {
+                t: tout,
+                from: t_first,
+                to: f64::INFINITY,
+            });
+        }
+        if self.h == 0.0 && tout > self.t {
+            self.h = self.initial_step(tout);
+        }
+        let mut steps = 0;
+        while self.t < tout {
+            if let Some(ts) = self.tstop {
+                if self.t >= ts {
+                    self.tstop = None;
+                    self.interpolate(ts, y_out, yp_out)?;
+                    return Ok(ts);
+                }
+            }
+            if steps >= self.opts.max_steps {
+                return Err(RadauError::TooManySteps {
+                    max_steps: self.opts.max_steps,
+                    tout,
+                    t: self.t,
+                });
+            }
+            self.step_internal()?;
+            steps += 1;
+        }
+        if self.tstop.is_some_and(|ts| ts <= tout && ts <= self.t) {
+            self.tstop = None;
+        }
+        self.interpolate(tout, y_out, yp_out)?;
+        Ok(tout)
+    }
+
+    /// Take one step; returns the new time.
+    ///
+    /// # Errors
+    /// [`RadauError::StepTooSmall`], [`RadauError::RepeatedFailures`],
+    /// [`RadauError::SingularMatrix`], [`RadauError::NonFiniteResidual`] when a step cannot be
+    /// completed; [`RadauError::InvalidTolerance`] when an error weight is not positive.
+    pub fn step(&mut self) -> Result<f64, RadauError> {
+        if self.h == 0.0 {
+            let t = self.tstop.unwrap_or(self.t + 1.0);
+            self.h = self.initial_step(t);
+        }
+        self.step_internal()?;
+        Ok(self.t)
+    }
+
+    /// Evaluate the collocation polynomial of the last step at `t` in `[t - h_last, t]` (the
+    /// initial values before the first step).
+    ///
+    /// # Errors
+    /// [`RadauError::TimeOutOfRange`] if `t` is outside the last step (with a round-off
+    /// margin); [`RadauError::DimensionMismatch`] for wrong output lengths.
+    pub fn interpolate(
+        &self,
+        t: f64,
+        y_out: &mut [f64],
+        yp_out: Option<&mut [f64]>,
+    ) -> Result<(), RadauError> {
+        for (what, len) in [
+            ("y_out", Some(y_out.len())),
+            ("yp_out", yp_out.as_ref().map(|v| v.len())),
+        ] {
+            if let Some(found) = len.filter(|&l| l != self.n) {
+                return Err(RadauError::DimensionMismatch {
+                    what,
+                    expected: self.n,
+                    found,
+                });
+            }
+        }
+        let hl = self.last_step();
+        let margin = 100.0 * f64::EPSILON * (self.t.abs() + hl);
+        if !(t.is_finite() && t <= self.t + margin && t >= self.t - hl - margin) {
+            return Err(RadauError::TimeOutOfRange {
+                t,
+                from: self.t - hl,
+                to: self.t,
+            });
+        }
+        if self.nst() == 0 {
+            y_out.copy_from_slice(&self.y);
+            if let Some(yp) = yp_out {
+                yp.copy_from_slice(&self.yp);
+            }
+            return Ok(());
+        }
+        self.poly.eval(&self.tab.c, t, y_out, yp_out);
+        Ok(())
+    }
+
+    /// Steps since the start of the current integration.
+    fn nst(&self) -> usize {
+        self.stats.steps - self.steps_at_start
+    }
+
+    fn hmin(&self) -> f64 {
+        self.opts.min_step.max(4.0 * f64::EPSILON * self.t.abs())
+    }
+
+    /// `0.001 |tout - t|`, reduced so that `h |y'|` of the index-0/1 components is at most half
+    /// a tolerance unit; the user's choice if given.
+    fn initial_step(&self, tout: f64) -> f64 {
+        let h = match self.opts.initial_step {
+            Some(h) => h,
+            None => {
+                let d = (tout - self.t).abs();
+                let mut h = if d > 0.0 {
+                    1e-3 * d
+                } else {
+                    1e-6 * self.t.abs().max(1.0)
+                };
+                let mut s = 0.0;
+                for i in 0..self.n {
+                    if self.opts.index_of(i) <= 1 {
+                        let v = self.yp[i]
+                            / (self.opts.rtol.get(i) * self.y[i].abs() + self.opts.atol.get(i));
+                        s += v * v;
+                    }
+                }
+                let ypnorm = (s / self.n.max(1) as f64).sqrt();
+                if ypnorm.is_finite() && ypnorm * h > 0.5 {
+                    h = 0.5 / ypnorm;
+                }
+                h
+            }
+        };
+        h.min(self.opts.max_step)
+    }
+
+    /// Error weights `min(1, h)^(m-1) / (rtol' |y_i| + atol'_i)` at the step start.
+    fn update_weights(&mut self, h: f64) -> Result<(), RadauError> {
+        let hs = h.abs().min(1.0);
+        for i in 0..self.n {
+            let d = self.rtol[i] * self.y[i].abs() + self.atol[i];
+            if !(d > 0.0 && d.is_finite()) {
+                return Err(RadauError::InvalidTolerance {
+                    which: "error weight",
+                    component: i,
+                    value: d,
+                });
+            }
+            let m = self.opts.index_of(i);
+            self.w[i] = hs.powi(i32::from(m) - 1) / d;
+        }
+        Ok(())
+    }
+
+    /// Newton's starting guess: the last step's polynomial extrapolated to the new nodes, or
+    /// `Z_i = c_i h y'_n` when there is none.
+    fn predict(&mut self, h: f64) {
+        let first = self.nst() == 0;
+        let z = &mut self.stages.z;
+        if first {
+            for (i, zi) in z.iter_mut().enumerate() {
+                let ci = self.tab.c[i] * h;
+                for (a, b) in zi.iter_mut().zip(&self.yp) {
+                    *a = ci * b;
+                }
+            }
+            return;
+        }
+        for (i, zi) in z.iter_mut().enumerate() {
+            let ti = self.t + self.tab.c[i] * h;
+            self.poly.eval(&self.tab.c, ti, zi, None);
+            for (a, b) in zi.iter_mut().zip(&self.y) {
+                *a -= b;
+            }
+        }
+    }
+
+    fn setup_error(&self, f: SetupFailure, h: f64) -> RadauError {
+        match f {
+            SetupFailure::Singular(system, col, row) => RadauError::SingularMatrix {
+                t: self.t,
+                h,
+                system,
+                unknown: col.map(|c| self.dae.unknown_name(c)),
+                equation: row.map(|r| self.dae.equation_name(r)),
+            },
+            SetupFailure::OutsidePattern(r, c) => RadauError::OutsidePattern {
+                equation: self.dae.equation_name(r),
+                unknown: self.dae.unknown_name(c),
+            },
+        }
+    }
+
+    fn step_internal(&mut self) -> Result<(), RadauError> {
+        let mut h = self.h;
+        if let Some(ts) = self.tstop {
+            // Stretch by up to 10% rather than leave a sliver before the stop time.
+            if self.t + 1.1 * h >= ts {
+                h = ts - self.t;
+            }
+        }
+        let mut newton_failures = 0;
+        let mut error_failures = 0;
+        let mut rejected = false;
+        loop {
+            h = h.min(self.opts.max_step);
+            if h < self.hmin() || h <= 0.0 {
+                return Err(RadauError::StepTooSmall {
+                    t: self.t,
+                    h,
+                    cause: if newton_failures > 0 && error_failures == 0 {
+                        StepFailure::Newton
+                    } else {
+                        StepFailure::ErrorTest
+                    },
+                });
+            }
+            if self.need_jacobian && !self.sm.current {
+                self.sm.evaluate(&self.dae, self.t, &self.y, &self.yp);
+                self.stats.jacobian_evaluations += 1;
+            }
+            self.update_weights(h)?;
+            if !self.sm.factored || self.sm.h_factored != h {
+                self.stats.factorisations += 1;
+                if let Err(f) = self
+                    .sm
+                    .factor(h, self.tab.gamma, self.tab.alpha, self.tab.beta)
+                {
+                    if let SetupFailure::OutsidePattern(..) = f {
+                        return Err(self.setup_error(f, h));
+                    }
+                    self.stats.newton_failures += 1;
+                    newton_failures += 1;
+                    if newton_failures >= self.opts.max_newton_failures {
+                        return Err(self.setup_error(f, h));
+                    }
+                    h *= 0.5;
+                    rejected = true;
+                    self.need_jacobian = true;
+                    continue;
+                }
+            }
+            self.predict(h);
+            let problem = StageProblem {
+                t: self.t,
+                h,
+                y: &self.y,
+                w: &self.w,
+                max_iterations: self.opts.max_newton_iterations,
+                fnewt: self.fnewt,
+            };
+            let outcome = newton::solve(
+                &self.dae,
+                &mut self.sm,
+                &self.tab,
+                &mut self.stats,
+                &problem,
+                &mut self.stages,
+                &mut self.dz,
+                &mut self.faccon,
+            );
+            let (iterations, theta) = match outcome {
+                NewtonOutcome::Converged { iterations, theta } => (iterations, theta),
+                NewtonOutcome::Failed { factor } => {
+                    self.stats.newton_failures += 1;
+                    newton_failures += 1;
+                    if newton_failures >= self.opts.max_newton_failures {
+                        return Err(RadauError::RepeatedFailures {
+                            t: self.t,
+                            h,
+                            failures: newton_failures,
+                            cause: StepFailure::Newton,
+                        });
+                    }
+                    h *= factor;
+                    rejected = true;
+                    self.need_jacobian = true;
+                    continue;
+                }
+                NewtonOutcome::NonFinite { equation, t } => {
+                    self.stats.newton_failures += 1;
+                    newton_failures += 1;
+                    if newton_failures >= self.opts.max_newton_failures || h * 0.5 < self.hmin() {
+                        return Err(RadauError::NonFiniteResidual {
+                            t,
+                            equation: self.dae.equation_name(equation),
+                        });
+                    }
+                    h *= 0.5;
+                    rejected = true;
+                    self.need_jacobian = true;
+                    continue;
+                }
+            };
+            let refine = self.nst() == 0 || rejected;
+            let err = match estimate::estimate(
+                &self.dae,
+                &mut self.sm,
+                &self.tab,
+                &mut self.stats,
+                self.t,
+                h,
+                &self.y,
+                &self.stages,
+                &self.w,
+                refine,
+                &mut self.est,
+            ) {
+                Ok(e) => e,
+                Err(estimate::NonFinite(equation)) => {
+                    self.stats.newton_failures += 1;
+                    newton_failures += 1;
+                    if newton_failures >= self.opts.max_newton_failures || h * 0.5 < self.hmin() {
+                        return Err(RadauError::NonFiniteResidual {
+                            t: self.t,
+                            equation: self.dae.equation_name(equation),
+                        });
+                    }
+                    h *= 0.5;
+                    rejected = true;
+                    self.need_jacobian = true;
+                    continue;
+                }
+            };
+            if err < 1.0 {
+                self.accept(h, err, iterations, theta, rejected);
+                return Ok(());
+            }
+            self.stats.error_test_failures += 1;
+            error_failures += 1;
+            if error_failures >= self.opts.max_error_test_failures {
+                return Err(RadauError::RepeatedFailures {
+                    t: self.t,
+                    h,
+                    failures: error_failures,
+                    cause: StepFailure::ErrorTest,
+                });
+            }
+            h = if self.nst() == 0 {
+                0.1 * h
+            } else {
+                h / Controller::quotient(&self.opts, err, iterations)
+            };
+            rejected = true;
+            self.need_jacobian = true;
+        }
+    }
+
+    fn accept(&mut self, h: f64, err: f64, iterations: usize, theta: f64, rejected: bool) {
+        self.stats.steps += 1;
+        let t_new = match self.tstop {
+            Some(ts) if (self.t + h - ts).abs() <= 4.0 * f64::EPSILON * ts.abs().max(h) => ts,
+            _ => self.t + h,
+        };
+        self.poly.t0 = self.t;
+        self.poly.h = h;
+        self.poly.y0.copy_from_slice(&self.y);
+        for (p, z) in self.poly.z.iter_mut().zip(&self.stages.z) {
+            p.copy_from_slice(z);
+        }
+        for k in 0..self.n {
+            self.y[k] += self.stages.z[2][k];
+        }
+        self.yp.copy_from_slice(&self.stages.yp[2]);
+        self.t = t_new;
+        self.theta = theta;
+
+        let mut h_new = self.controller.accept(&self.opts, h, err, iterations);
+        if rejected {
+            h_new = h_new.min(h);
+        }
+        h_new = h_new.min(self.opts.max_step);
+        let keep_jacobian = theta <= self.opts.jacobian_reuse_rate;
+        let (q1, q2) = self.opts.keep_step_window;
+        let ratio = h_new / h;
+        if keep_jacobian && (q1..=q2).contains(&ratio) {
+            h_new = h;
+        }
+        self.h = h_new;
+        self.need_jacobian = !keep_jacobian;
+        // The stored Jacobian belongs to the old step start from here on.
+        self.sm.current = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::NalgebraLu;
+    use crate::MatrixSink;
+
+    /// `y' = lambda y` (one component).
+    struct Scalar(f64);
+    impl ImplicitDae for Scalar {
+        fn dimension(&self) -> usize {
+            1
+        }
+        fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            out[0] = yp[0] - self.0 * y[0];
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            _: f64,
+            _: &[f64],
+            _: &[f64],
+            c: f64,
+            m: &mut S,
+        ) {
+            m.set(0, 0, c - self.0);
+        }
+    }
+
+    #[test]
+    fn one_step_is_the_stability_function() {
+        // For y' = λ y, one Radau IIA step multiplies by the (2,3)-Padé approximant
+        // R(z) = (1 + 2z/5 + z^2/20) / (1 - 3z/5 + 3z^2/20 - z^3/60), z = hλ.
+        let lam = -3.0;
+        let h = 0.2;
+        let opts = Options {
+            initial_step: Some(h),
+            newton_tolerance: Some(1e-12),
+            ..Options::with_tolerances(1.0, 1.0)
+        };
+        let mut r = Radau::new(
+            Scalar(lam),
+            NalgebraLu::<1>::new(),
+            opts,
+            0.0,
+            &[1.0],
+            &[lam],
+        )
+        .unwrap();
+        r.step().unwrap();
+        let z: f64 = h * lam;
+        let rz = (1.0 + 0.4 * z + z * z / 20.0) / (1.0 - 0.6 * z + 0.15 * z * z - z * z * z / 60.0);
+        assert!((r.t() - h).abs() < 1e-15);
+        assert!((r.y()[0] - rz).abs() < 1e-13, "{} vs {rz}", r.y()[0]);
+        // The stage derivative at the end satisfies the equation.
+        assert!((r.yp()[0] - lam * r.y()[0]).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,200 @@
+//! Simplified Newton iteration on the transformed Radau IIA stage system.
+//!
+//! The stage increments `Z_i = Y_i - y_n` satisfy the collocation conditions applied to `F`
+//! directly,
+//!
+//! ```text
+//! F(t_n + c_i h, y_n + Z_i, Y'_i) = 0,   Y'_i = (1/h) sum_j (A^{-1})_ij Z_j,   i = 1, 2, 3,
+//! ```
+//!
+//! so an implicit `F` (not only `M y' = f`) is integrated as declared. One iteration evaluates
+//! the three residuals, transforms them with `T^{-1}`, solves one real and one complex `n x n`
+//! system with the matrices of [`super::linear`] (frozen at the step start), and maps the
+//! update back with `T` (Hairer & Wanner, Section IV.8, eq. (8.5)-(8.16)).
+//!
+//! Convergence control follows RADAU5: the contraction rate `theta` is estimated from
+//! successive update norms, the iteration is declared converged when
+//! `theta/(1 - theta) |ΔZ| <= fnewt`, abandoned when `theta >= 0.99`, and stopped early with a
+//! step-size reduction when the predicted norm after the remaining iterations,
+//! `theta^(k_max - k)/(1 - theta) |ΔZ|`, still exceeds `fnewt`. The norm is the weighted RMS
+//! norm of `ΔZ` (not of the transformed `ΔW`, so the test does not depend on how the
+//! eigenvectors in `T` are scaled).
+
+use faer::c64;
+
+use super::linear::StageMatrices;
+use super::tableau::Tableau;
+use super::Stats;
+use crate::linalg::LinearSolver;
+use crate::ImplicitDae;
+
+/// Work vectors of the stage iteration.
+pub(crate) struct StageWork {
+    /// Stage increments `Z_i`.
+    pub z: [Vec<f64>; 3],
+    /// Stage derivatives `Y'_i`.
+    pub yp: [Vec<f64>; 3],
+    /// Stage residuals, then transformed residuals.
+    f: [Vec<f64>; 3],
+    /// Stage values `y_n + Z_i`.
+    ys: Vec<f64>,
+    /// Right-hand side of the complex system.
+    rc: Vec<c64>,
+}
+
+impl StageWork {
+    pub fn new(n: usize) -> Self {
+        let v = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        Self {
+            z: v(),
+            yp: v(),
+            f: v(),
+            ys: vec![0.0; n],
+            rc: vec![c64::new(0.0, 0.0); n],
+        }
+    }
+}
+
+/// How one Newton solve ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum NewtonOutcome {
+    /// Converged after `iterations` with last contraction estimate `theta`.
+    Converged { iterations: usize, theta: f64 },
+    /// Will not converge at this step size: retry with `h * factor`.
+    Failed { factor: f64 },
+    /// A residual was not finite in this equation: retry with half the step.
+    NonFinite { equation: usize, t: f64 },
+}
+
+/// Inputs of one stage solve.
+pub(crate) struct StageProblem<'a> {
+    pub t: f64,
+    pub h: f64,
+    pub y: &'a [f64],
+    /// Weights of the convergence norm (index-scaled).
+    pub w: &'a [f64],
+    pub max_iterations: usize,
+    pub fnewt: f64,
+}
+
+/// Weighted RMS norm over the three stages.
+fn stage_norm(dz: &[Vec<f64>; 3], w: &[f64]) -> f64 {
+    let n = w.len();
+    let mut s = 0.0;
+    for d in dz {
+        for (a, b) in d.iter().zip(w) {
+            s += (a * b) * (a * b);
+        }
+    }
+    (s / (3 * n).max(1) as f64).sqrt()
+}
+
+/// Stage derivatives `Y'_i = (1/h) sum_j (A^{-1})_ij Z_j`.
+pub(crate) fn stage_derivatives(tab: &Tableau, h: f64, z: &[Vec<f64>; 3], yp: &mut [Vec<f64>; 3]) {
+    let r = 1.0 / h;
+    for (i, ypi) in yp.iter_mut().enumerate() {
+        let a = tab.a_inv[i];
+        for (k, v) in ypi.iter_mut().enumerate() {
+            *v = r * (a[0] * z[0][k] + a[1] * z[1][k] + a[2] * z[2][k]);
+        }
+    }
+}
+
+/// Iterate from the starting guess in `work.z`; `faccon` carries RADAU5's `FACCON` between steps.
+// The Kronecker products with T and T^-1 index the three stage vectors at the same component.
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
+    dae: &D,
+    sm: &mut StageMatrices<L>,
+    tab: &Tableau,
+    stats: &mut Stats,
+    p: &StageProblem<'_>,
+    work: &mut StageWork,
+    dz: &mut [Vec<f64>; 3],
+    faccon: &mut f64,
+) -> NewtonOutcome {
+    let n = p.y.len();
+    let nit = p.max_iterations;
+    *faccon = faccon.max(f64::EPSILON).powf(0.8);
+    let mut theta: f64 = 0.0;
+    let mut dyno_old = 0.0;
+    let mut thq_old = 0.0;
+    let mut newt = 0;
+    loop {
+        if newt >= nit {
+            return NewtonOutcome::Failed { factor: 0.5 };
+        }
+        // Residuals at the stages.
+        stage_derivatives(tab, p.h, &work.z, &mut work.yp);
+        for i in 0..3 {
+            for k in 0..n {
+                work.ys[k] = p.y[k] + work.z[i][k];
+            }
+            let ti = p.t + tab.c[i] * p.h;
+            dae.residual(ti, &work.ys, &work.yp[i], &mut work.f[i]);
+            stats.residual_evaluations += 1;
+            if let Some(e) = work.f[i].iter().position(|v| !v.is_finite()) {
+                return NewtonOutcome::NonFinite { equation: e, t: ti };
+            }
+        }
+        // Transformed residuals R = (T^{-1} ⊗ I) F, and the two solves for -ΔW.
+        let ti = tab.t_inv;
+        for k in 0..n {
+            let (f0, f1, f2) = (work.f[0][k], work.f[1][k], work.f[2][k]);
+            dz[0][k] = -(ti[0][0] * f0 + ti[0][1] * f1 + ti[0][2] * f2);
+            let r1 = ti[1][0] * f0 + ti[1][1] * f1 + ti[1][2] * f2;
+            let r2 = ti[2][0] * f0 + ti[2][1] * f1 + ti[2][2] * f2;
+            work.rc[k] = c64::new(-r1, -r2);
+        }
+        sm.solve_real(&mut dz[0]);
+        sm.solve_complex(&mut work.rc);
+        stats.newton_iterations += 1;
+        // ΔZ = (T ⊗ I) ΔW, written over dz.
+        let t = tab.t;
+        for k in 0..n {
+            let (w0, w1, w2) = (dz[0][k], work.rc[k].re, work.rc[k].im);
+            for (i, row) in t.iter().enumerate() {
+                dz[i][k] = row[0] * w0 + row[1] * w1 + row[2] * w2;
+            }
+        }
+        newt += 1;
+        let dyno = stage_norm(dz, p.w);
+        if !dyno.is_finite() {
+            return NewtonOutcome::Failed { factor: 0.5 };
+        }
+        if newt > 1 && newt < nit {
+            let thq = dyno / dyno_old;
+            theta = if newt == 2 {
+                thq
+            } else {
+                (thq * thq_old).sqrt()
+            };
+            thq_old = thq;
+            if theta < 0.99 {
+                *faccon = theta / (1.0 - theta);
+                let remaining = (nit - 1 - newt) as i32;
+                let dyth = *faccon * dyno * theta.powi(remaining) / p.fnewt;
+                if dyth >= 1.0 {
+                    let qnewt = dyth.clamp(1e-4, 20.0);
+                    let factor = 0.8 * qnewt.powf(-1.0 / (4.0 + f64::from(remaining)));
+                    return NewtonOutcome::Failed { factor };
+                }
+            } else {
+                return NewtonOutcome::Failed { factor: 0.5 };
+            }
+        }
+        dyno_old = dyno.max(f64::EPSILON);
+        for (zi, di) in work.z.iter_mut().zip(dz.iter()) {
+            for (a, b) in zi.iter_mut().zip(di) {
+                *a += b;
+            }
+        }
+        if *faccon * dyno <= p.fnewt {
+            stage_derivatives(tab, p.h, &work.z, &mut work.yp);
+            return NewtonOutcome::Converged {
+                iterations: newt,
+                theta,
+            };
+        }
+    }
+}

@@ -1,0 +1,479 @@
+//! Index-3 problems of the Test Set for IVP Solvers (Mazzia, Iavernaro, Magherini, University of
+//! Bari, release 2.4; Lioen & de Swart, CWI) in their index-3 form, with the Test Set's reference
+//! solutions and accuracy measures: Andrews' squeezing mechanism (27 unknowns) and the car axis
+//! (10 unknowns). Shared by the Radau and BDF tests and the work-precision example.
+#![allow(dead_code)]
+// Matrix entries are written by (row, column) index, as the formulas are.
+#![allow(clippy::needless_range_loop)]
+
+use dpc_core::{ImplicitDae, MatrixSink};
+
+/// Significant correct digits `min_i -log10(|y_i - r_i| / |r_i|)` over `components`.
+pub fn scd(y: &[f64], reference: &[f64], components: &[usize]) -> f64 {
+    -components
+        .iter()
+        .map(|&i| (y[i] - reference[i]).abs() / reference[i].abs())
+        .fold(0.0f64, |m, e| {
+            if e.is_nan() || m.is_nan() {
+                f64::NAN
+            } else {
+                m.max(e)
+            }
+        })
+        .log10()
+}
+
+/// Mixed-error significant correct digits `min_i -log10(|y_i - r_i| / (atol/rtol + |r_i|))`
+/// over `components` (deTestSet's `printpr`).
+pub fn mescd(y: &[f64], reference: &[f64], components: &[usize], rtol: f64, atol: f64) -> f64 {
+    -components
+        .iter()
+        .map(|&i| (y[i] - reference[i]).abs() / (atol / rtol + reference[i].abs()))
+        .fold(0.0f64, |m, e| {
+            if e.is_nan() || m.is_nan() {
+                f64::NAN
+            } else {
+                m.max(e)
+            }
+        })
+        .log10()
+}
+
+/// Andrews' squeezing mechanism, index 3 (Test Set `andrews.f`; Hairer & Wanner, *Solving ODEs
+/// II*, Section VII.7): unknowns `y = (q, v, w, lambda)` with `q` the 7 angles
+/// `(beta, Theta, gamma, Phi, delta, Omega, epsilon)`, `v = q'`, `w = q''` and 6 multipliers;
+/// `q' = v`, `v' = w`, `0 = M(q) w - f(q, v) + G(q)^T lambda`, `0 = g(q)`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Andrews;
+
+/// Interval end of [`Andrews`].
+pub const ANDREWS_T_END: f64 = 0.03;
+
+/// Differential index per unknown: `q` 1, `v` 2, `w` and `lambda` 3 (deTestSet `ind`).
+pub fn andrews_index() -> Vec<u8> {
+    let mut v = vec![1u8; 7];
+    v.extend([2u8; 7]);
+    v.extend([3u8; 13]);
+    v
+}
+
+/// Components the Test Set scores for Andrews: the positions `y1..y7`.
+pub const ANDREWS_SCORED: [usize; 7] = [0, 1, 2, 3, 4, 5, 6];
+
+/// Reference solution at `t = 0.03` (Test Set, PSIDE at `rtol = atol = 1e-14`).
+#[allow(clippy::excessive_precision)]
+pub const ANDREWS_REF: [f64; 27] = [
+    0.1581077119629904e+2,
+    -0.1575637105984298e+2,
+    0.4082224013073101e-1,
+    -0.5347301163226948e+0,
+    0.5244099658805304e+0,
+    0.5347301163226948e+0,
+    0.1048080741042263e+1,
+    0.1139920302151208e+4,
+    -0.1424379294994111e+4,
+    0.1103291221937134e+2,
+    0.1929337464421385e+2,
+    0.5735699284790808e+0,
+    -0.1929337464421385e+2,
+    0.3231791658026955e+0,
+    -0.2463176316945196e+5,
+    0.5185037701610329e+5,
+    0.3241025686413781e+6,
+    0.5667493645176213e+6,
+    0.1674362929479361e+5,
+    -0.5667493645176222e+6,
+    0.9826520791458422e+4,
+    0.1991753333731910e+3,
+    -0.2975531228015052e+2,
+    0.2306654119098399e+2,
+    0.3145271365475927e+2,
+    0.2264249232082739e+2,
+    0.1161740700019673e+2,
+];
+
+mod andrews_constants {
+    pub const M1: f64 = 0.04325;
+    pub const M2: f64 = 0.00365;
+    pub const M3: f64 = 0.02373;
+    pub const M4: f64 = 0.00706;
+    pub const M5: f64 = 0.07050;
+    pub const M6: f64 = 0.00706;
+    pub const M7: f64 = 0.05498;
+    pub const XA: f64 = -0.06934;
+    pub const YA: f64 = -0.00227;
+    pub const XB: f64 = -0.03635;
+    pub const YB: f64 = 0.03273;
+    pub const XC: f64 = 0.014;
+    pub const YC: f64 = 0.072;
+    pub const C0: f64 = 4530.0;
+    pub const I1: f64 = 2.194e-6;
+    pub const I2: f64 = 4.410e-7;
+    pub const I3: f64 = 5.255e-6;
+    pub const I4: f64 = 5.667e-7;
+    pub const I5: f64 = 1.169e-5;
+    pub const I6: f64 = 5.667e-7;
+    pub const I7: f64 = 1.912e-5;
+    pub const D: f64 = 0.028;
+    pub const DA: f64 = 0.0115;
+    pub const E: f64 = 0.02;
+    pub const EA: f64 = 0.01421;
+    pub const RR: f64 = 0.007;
+    pub const RA: f64 = 0.00092;
+    pub const L0: f64 = 0.07785;
+    pub const SS: f64 = 0.035;
+    pub const SA: f64 = 0.01874;
+    pub const SB: f64 = 0.01043;
+    pub const SC: f64 = 0.018;
+    pub const SD: f64 = 0.02;
+    pub const TA: f64 = 0.02308;
+    pub const TB: f64 = 0.00916;
+    pub const U: f64 = 0.04;
+    pub const UA: f64 = 0.01228;
+    pub const UB: f64 = 0.00449;
+    pub const ZF: f64 = 0.02;
+    pub const ZT: f64 = 0.04;
+    pub const FA: f64 = 0.01421;
+    pub const MOM: f64 = 0.033;
+}
+
+impl Andrews {
+    /// Consistent initial values `(y0, y0')` of the Test Set (`y'_15..27 = 0`).
+    #[allow(clippy::excessive_precision)]
+    pub fn initial() -> ([f64; 27], [f64; 27]) {
+        let mut y = [0.0; 27];
+        y[0] = -0.0617138900142764496358948458001;
+        y[2] = 0.455279819163070380255912382449;
+        y[3] = 0.222668390165885884674473185609;
+        y[4] = 0.487364979543842550225598953530;
+        y[5] = -0.222668390165885884674473185609;
+        y[6] = 1.23054744454982119249735015568;
+        y[14] = 14222.4439199541138705911625887;
+        y[15] = -10666.8329399655854029433719415;
+        y[21] = 98.5668703962410896057654982170;
+        y[22] = -6.12268834425566265503114393122;
+        let mut yp = [0.0; 27];
+        yp[..14].copy_from_slice(&y[7..21]);
+        (y, yp)
+    }
+
+    /// Mass matrix `M(q)` (symmetric).
+    fn mass(q: &[f64]) -> [[f64; 7]; 7] {
+        use andrews_constants::*;
+        let (ct, sp, so) = (q[1].cos(), q[3].sin(), q[5].sin());
+        let mut m = [[0.0; 7]; 7];
+        m[0][0] = M1 * RA * RA + M2 * (RR * RR - 2.0 * DA * RR * ct + DA * DA) + I1 + I2;
+        m[1][0] = M2 * (DA * DA - DA * RR * ct) + I2;
+        m[0][1] = m[1][0];
+        m[1][1] = M2 * DA * DA + I2;
+        m[2][2] = M3 * (SA * SA + SB * SB) + I3;
+        let e = E - EA;
+        m[3][3] = M4 * e * e + I4;
+        m[4][3] = M4 * (e * e + ZT * e * sp) + I4;
+        m[3][4] = m[4][3];
+        m[4][4] = M4 * (ZT * ZT + 2.0 * ZT * e * sp + e * e) + M5 * (TA * TA + TB * TB) + I4 + I5;
+        let z = ZF - FA;
+        m[5][5] = M6 * z * z + I6;
+        m[6][5] = M6 * (z * z - U * z * so) + I6;
+        m[5][6] = m[6][5];
+        m[6][6] = M6 * (z * z - 2.0 * U * z * so + U * U) + M7 * (UA * UA + UB * UB) + I6 + I7;
+        m
+    }
+
+    /// Forces `f(q, v)`.
+    fn forces(q: &[f64], v: &[f64]) -> [f64; 7] {
+        use andrews_constants::*;
+        let (sg, cg) = (q[2].sin(), q[2].cos());
+        let xd = SD * cg + SC * sg + XB;
+        let yd = SD * sg - SC * cg + YB;
+        let lg = ((xd - XC).powi(2) + (yd - YC).powi(2)).sqrt();
+        let force = -C0 * (lg - L0) / lg;
+        let (fx, fy) = (force * (xd - XC), force * (yd - YC));
+        let e = E - EA;
+        let z = ZF - FA;
+        [
+            MOM - M2 * DA * RR * v[1] * (v[1] + 2.0 * v[0]) * q[1].sin(),
+            M2 * DA * RR * v[0] * v[0] * q[1].sin(),
+            fx * (SC * cg - SD * sg) + fy * (SD * cg + SC * sg),
+            M4 * ZT * e * v[4] * v[4] * q[3].cos(),
+            -M4 * ZT * e * v[3] * (v[3] + 2.0 * v[4]) * q[3].cos(),
+            -M6 * U * z * v[6] * v[6] * q[5].cos(),
+            M6 * U * z * v[5] * (v[5] + 2.0 * v[6]) * q[5].cos(),
+        ]
+    }
+
+    /// Constraints `g(q)`.
+    fn constraints(q: &[f64]) -> [f64; 6] {
+        use andrews_constants::*;
+        let (b, t, g, p, d, o, ep) = (q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
+        let cx = RR * b.cos() - D * (b + t).cos();
+        let cy = RR * b.sin() - D * (b + t).sin();
+        [
+            cx - SS * g.sin() - XB,
+            cy + SS * g.cos() - YB,
+            cx - E * (p + d).sin() - ZT * d.cos() - XA,
+            cy + E * (p + d).cos() - ZT * d.sin() - YA,
+            cx - ZF * (o + ep).cos() - U * ep.sin() - XA,
+            cy - ZF * (o + ep).sin() + U * ep.cos() - YA,
+        ]
+    }
+
+    /// Constraint Jacobian `G(q) = dg/dq`.
+    fn constraint_jacobian(q: &[f64]) -> [[f64; 7]; 6] {
+        use andrews_constants::*;
+        let (b, t, g, p, d, o, ep) = (q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
+        let mut m = [[0.0; 7]; 6];
+        for r in [0, 2, 4] {
+            m[r][0] = -RR * b.sin() + D * (b + t).sin();
+            m[r][1] = D * (b + t).sin();
+            m[r + 1][0] = RR * b.cos() - D * (b + t).cos();
+            m[r + 1][1] = -D * (b + t).cos();
+        }
+        m[0][2] = -SS * g.cos();
+        m[1][2] = -SS * g.sin();
+        m[2][3] = -E * (p + d).cos();
+        m[2][4] = -E * (p + d).cos() + ZT * d.sin();
+        m[3][3] = -E * (p + d).sin();
+        m[3][4] = -E * (p + d).sin() - ZT * d.cos();
+        m[4][5] = ZF * (o + ep).sin();
+        m[4][6] = ZF * (o + ep).sin() - U * ep.cos();
+        m[5][5] = -ZF * (o + ep).cos();
+        m[5][6] = -ZF * (o + ep).cos() - U * ep.sin();
+        m
+    }
+
+    /// `M(q) w - f(q, v) + G(q)^T lambda`.
+    fn dynamics(y: &[f64]) -> [f64; 7] {
+        let (q, v, w, la) = (&y[0..7], &y[7..14], &y[14..21], &y[21..27]);
+        let m = Self::mass(q);
+        let f = Self::forces(q, v);
+        let g = Self::constraint_jacobian(q);
+        let mut out = [0.0; 7];
+        for i in 0..7 {
+            out[i] = (0..7).map(|j| m[i][j] * w[j]).sum::<f64>() - f[i]
+                + (0..6).map(|r| g[r][i] * la[r]).sum::<f64>();
+        }
+        out
+    }
+}
+
+impl ImplicitDae for Andrews {
+    fn dimension(&self) -> usize {
+        27
+    }
+    fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        for i in 0..14 {
+            out[i] = yp[i] - y[i + 7];
+        }
+        out[14..21].copy_from_slice(&Self::dynamics(y));
+        out[21..27].copy_from_slice(&Self::constraints(&y[0..7]));
+    }
+    /// Analytic except the `q`- and `v`-derivatives of the seven dynamic equations, which are
+    /// central differences (relative step `1e-6`, error about `1e-12` relative): the simplified
+    /// Newton iteration needs only an approximation, and the solution does not depend on it.
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        y: &[f64],
+        _: &[f64],
+        c: f64,
+        m: &mut S,
+    ) {
+        for i in 0..14 {
+            m.set(i, i, c);
+            m.set(i, i + 7, -1.0);
+        }
+        let q = &y[0..7];
+        let mass = Self::mass(q);
+        let g = Self::constraint_jacobian(q);
+        for i in 0..7 {
+            for j in 0..7 {
+                if mass[i][j] != 0.0 {
+                    m.set(14 + i, 14 + j, mass[i][j]);
+                }
+            }
+            for r in 0..6 {
+                if g[r][i] != 0.0 {
+                    m.set(14 + i, 21 + r, g[r][i]);
+                    m.set(21 + r, i, g[r][i]);
+                }
+            }
+        }
+        let mut yy = [0.0; 27];
+        yy.copy_from_slice(y);
+        for j in 0..14 {
+            let x = yy[j];
+            let dx = 1e-6 * (1.0 + x.abs());
+            yy[j] = x + dx;
+            let fp = Self::dynamics(&yy);
+            yy[j] = x - dx;
+            let fm = Self::dynamics(&yy);
+            yy[j] = x;
+            for i in 0..7 {
+                let d = (fp[i] - fm[i]) / (2.0 * dx);
+                if d != 0.0 {
+                    m.set(14 + i, j, d);
+                }
+            }
+        }
+    }
+    fn is_differential(&self, i: usize) -> bool {
+        i < 14
+    }
+    fn unknown_name(&self, i: usize) -> String {
+        format!("y{}", i + 1)
+    }
+}
+
+/// The car axis, index 3 (Test Set `caraxis.F`; Hairer & Wanner): unknowns
+/// `(xl, yl, xr, yr, ul, vl, ur, vr, lambda1, lambda2)`, mass-matrix form
+/// `diag(1, 1, 1, 1, k, k, k, k, 0, 0) y' = phi(t, y)` with `k = M eps^2 / 2`.
+#[derive(Debug, Clone, Copy)]
+pub struct CarAxis {
+    /// `eps` (Test Set: `1e-2`).
+    pub eps: f64,
+    /// Mass `M` (10).
+    pub m: f64,
+    /// Axis length `L` (1).
+    pub l: f64,
+    /// Spring rest length `L0` (1/2).
+    pub l0: f64,
+    /// Bump amplitude `r` (0.1).
+    pub r: f64,
+    /// Bump frequency `omega` (10).
+    pub w: f64,
+    /// Gravity `g` (1).
+    pub g: f64,
+}
+
+impl Default for CarAxis {
+    fn default() -> Self {
+        Self {
+            eps: 1e-2,
+            m: 10.0,
+            l: 1.0,
+            l0: 0.5,
+            r: 0.1,
+            w: 10.0,
+            g: 1.0,
+        }
+    }
+}
+
+/// Interval end of [`CarAxis`].
+pub const CAR_AXIS_T_END: f64 = 3.0;
+
+/// Differential index per unknown (deTestSet `nind = c(4, 4, 2)`).
+pub const CAR_AXIS_INDEX: [u8; 10] = [1, 1, 1, 1, 2, 2, 2, 2, 3, 3];
+
+/// Reference solution at `t = 3` (deTestSet `reference("caraxis")`).
+#[allow(clippy::excessive_precision)]
+pub const CAR_AXIS_REF: [f64; 10] = [
+    0.493455784275402809122e-1,
+    0.496989460230171153861,
+    0.104174252488542151681e+1,
+    0.373911027265361256927,
+    -0.770583684040972357970e-1,
+    0.744686658723778553466e-2,
+    0.175568157537232222276e-1,
+    0.770341043779251976443,
+    -0.473688659084893324729e-2,
+    -0.110468033125734368808e-2,
+];
+
+impl CarAxis {
+    fn k(&self) -> f64 {
+        self.m * self.eps * self.eps / 2.0
+    }
+    fn road(&self, t: f64) -> (f64, f64) {
+        let yb = self.r * (self.w * t).sin();
+        ((self.l * self.l - yb * yb).sqrt(), yb)
+    }
+    /// Test Set initial values `(y0, y0')`.
+    pub fn initial(&self) -> ([f64; 10], [f64; 10]) {
+        (
+            [0.0, 0.5, 1.0, 0.5, -0.5, 0.0, -0.5, 0.0, 0.0, 0.0],
+            [-0.5, 0.0, -0.5, 0.0, 0.0, -self.g, 0.0, -self.g, 0.0, 0.0],
+        )
+    }
+}
+
+impl ImplicitDae for CarAxis {
+    fn dimension(&self) -> usize {
+        10
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        let (xl, yl, xr, yr) = (y[0], y[1], y[2], y[3]);
+        let (l1, l2) = (y[8], y[9]);
+        let (xb, yb) = self.road(t);
+        let ll = (xl * xl + yl * yl).sqrt();
+        let lr = ((xr - xb).powi(2) + (yr - yb).powi(2)).sqrt();
+        let k = self.k();
+        for i in 0..4 {
+            out[i] = yp[i] - y[i + 4];
+        }
+        out[4] = k * yp[4] - ((self.l0 - ll) * xl / ll + l1 * xb + 2.0 * l2 * (xl - xr));
+        out[5] =
+            k * yp[5] - ((self.l0 - ll) * yl / ll + l1 * yb + 2.0 * l2 * (yl - yr) - k * self.g);
+        out[6] = k * yp[6] - ((self.l0 - lr) * (xr - xb) / lr - 2.0 * l2 * (xl - xr));
+        out[7] = k * yp[7] - ((self.l0 - lr) * (yr - yb) / lr - 2.0 * l2 * (yl - yr) - k * self.g);
+        out[8] = xb * xl + yb * yl;
+        out[9] = (xl - xr).powi(2) + (yl - yr).powi(2) - self.l * self.l;
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        _: &[f64],
+        c: f64,
+        m: &mut S,
+    ) {
+        let (xl, yl, xr, yr) = (y[0], y[1], y[2], y[3]);
+        let l2 = y[9];
+        let (xb, yb) = self.road(t);
+        let k = self.k();
+        let l0 = self.l0;
+        for i in 0..4 {
+            m.set(i, i, c);
+            m.set(i, i + 4, -1.0);
+            m.set(i + 4, i + 4, k * c);
+        }
+        let ll3 = (xl * xl + yl * yl).powf(1.5);
+        let (dx, dy) = (xr - xb, yr - yb);
+        let lr3 = (dx * dx + dy * dy).powf(1.5);
+        // d/d(x, y) of (L0 - |p|) p / |p| = L0 p/|p| - p.
+        m.set(4, 0, -(l0 * yl * yl / ll3 - 1.0) - 2.0 * l2);
+        m.set(4, 1, l0 * xl * yl / ll3);
+        m.set(4, 2, 2.0 * l2);
+        m.set(4, 8, -xb);
+        m.set(4, 9, -2.0 * (xl - xr));
+        m.set(5, 0, l0 * xl * yl / ll3);
+        m.set(5, 1, -(l0 * xl * xl / ll3 - 1.0) - 2.0 * l2);
+        m.set(5, 3, 2.0 * l2);
+        m.set(5, 8, -yb);
+        m.set(5, 9, -2.0 * (yl - yr));
+        m.set(6, 2, -(l0 * dy * dy / lr3 - 1.0) - 2.0 * l2);
+        m.set(6, 3, l0 * dx * dy / lr3);
+        m.set(6, 0, 2.0 * l2);
+        m.set(6, 9, 2.0 * (xl - xr));
+        m.set(7, 2, l0 * dx * dy / lr3);
+        m.set(7, 3, -(l0 * dx * dx / lr3 - 1.0) - 2.0 * l2);
+        m.set(7, 1, 2.0 * l2);
+        m.set(7, 9, 2.0 * (yl - yr));
+        m.set(8, 0, xb);
+        m.set(8, 1, yb);
+        m.set(9, 0, 2.0 * (xl - xr));
+        m.set(9, 2, -2.0 * (xl - xr));
+        m.set(9, 1, 2.0 * (yl - yr));
+        m.set(9, 3, -2.0 * (yl - yr));
+    }
+    fn is_differential(&self, i: usize) -> bool {
+        i < 8
+    }
+    fn unknown_name(&self, i: usize) -> String {
+        [
+            "xl", "yl", "xr", "yr", "ul", "vl", "ur", "vr", "lambda1", "lambda2",
+        ][i]
+            .to_string()
+    }
+}
