@@ -521,25 +521,6 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
         return None;
     }
     let mut ok = true;
-    for (i, degree) in relative_degree_analysis(model).into_iter().enumerate() {
-        if degree != RelativeDegree::Unreached {
-            continue;
-        }
-        let out = &model.outputs[i];
-        let entry = tracking.entries.iter().find(|e| e.output == i);
-        let span = entry.map(|e| e.span).unwrap_or(tracking.span);
-        cx.error_at(
-            span,
-            format!(
-                "cannot track output `{}` = `{}`: no input reaches it (none of its time derivatives depends on an input, so its relative degree is undefined) and the tracking DAE could not determine the inputs; track an output that an input influences",
-                out.name, out.text
-            ),
-        );
-        ok = false;
-    }
-    if !ok {
-        return None;
-    }
     let mut rows = Vec::new();
     for i in 0..ny {
         let entry = tracking.entries.iter().find(|e| e.output == i);
@@ -616,6 +597,24 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
             combination: sum,
             row,
         });
+    }
+    // After the rows, so that the derivatives the steps need are built first and the
+    // expansion of a model with reachable outputs is the same as without this check.
+    for (i, degree) in relative_degree_analysis(model).into_iter().enumerate() {
+        if degree != RelativeDegree::Unreached {
+            continue;
+        }
+        let out = &model.outputs[i];
+        let entry = tracking.entries.iter().find(|e| e.output == i);
+        let span = entry.map(|e| e.span).unwrap_or(tracking.span);
+        cx.error_at(
+            span,
+            format!(
+                "cannot track output `{}` = `{}`: no input reaches it (none of its time derivatives depends on an input, so its relative degree is undefined and the tracking DAE cannot determine the inputs); track an output that an input influences",
+                out.name, out.text
+            ),
+        );
+        ok = false;
     }
     ok.then_some(rows)
 }

@@ -546,7 +546,11 @@ fn check_generated_names(
     let base = model.unraw().to_string();
     let taken = [
         (base.clone(), "the model type itself", true),
-        (format!("{base}Params"), "the model's parameter struct", true),
+        (
+            format!("{base}Params"),
+            "the model's parameter struct",
+            true,
+        ),
         (
             format!("{base}Reference"),
             "the reference type generated for the `references` section",

@@ -25,11 +25,11 @@ use syn::Ident;
 /// Strict and reserved keywords of all editions, and the contextual ones that cannot be
 /// bindings (`gen` is reserved from Rust 2024).
 pub const KEYWORDS: &[&str] = &[
-    "as", "async", "await", "break", "const", "continue", "crate", "dyn", "else", "enum",
-    "extern", "false", "fn", "for", "if", "impl", "in", "let", "loop", "match", "mod", "move",
-    "mut", "pub", "ref", "return", "self", "Self", "static", "struct", "super", "trait", "true",
-    "type", "unsafe", "use", "where", "while", "abstract", "become", "box", "do", "final", "gen",
-    "macro", "override", "priv", "try", "typeof", "unsized", "virtual", "yield", "union",
+    "as", "async", "await", "break", "const", "continue", "crate", "dyn", "else", "enum", "extern",
+    "false", "fn", "for", "if", "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub",
+    "ref", "return", "self", "Self", "static", "struct", "super", "trait", "true", "type",
+    "unsafe", "use", "where", "while", "abstract", "become", "box", "do", "final", "gen", "macro",
+    "override", "priv", "try", "typeof", "unsized", "virtual", "yield", "union",
 ];
 
 /// Unit and tuple variants in the prelude: a `let` with one of these names is a pattern.
@@ -37,8 +37,8 @@ pub const PRELUDE_VARIANTS: &[&str] = &["None", "Some", "Ok", "Err"];
 
 /// The primitive types of Rust.
 pub const PRIMITIVE_TYPES: &[&str] = &[
-    "bool", "char", "str", "f16", "f32", "f64", "f128", "i8", "i16", "i32", "i64", "i128",
-    "isize", "u8", "u16", "u32", "u64", "u128", "usize",
+    "bool", "char", "str", "f16", "f32", "f64", "f128", "i8", "i16", "i32", "i64", "i128", "isize",
+    "u8", "u16", "u32", "u64", "u128", "usize",
 ];
 
 /// Why `text` (a name as written, without `r#`) cannot name `what`, if it cannot.
@@ -72,7 +72,9 @@ mod tests {
 
     #[test]
     fn refuses_the_whole_class() {
-        for name in ["fn", "Self", "gen", "None", "Some", "Ok", "Err", "f64", "usize", "str"] {
+        for name in [
+            "fn", "Self", "gen", "None", "Some", "Ok", "Err", "f64", "usize", "str",
+        ] {
             assert!(refusal(name, "a state").is_some(), "{name}");
         }
         for name in ["x", "theta", "Option", "Vec", "sin", "c", "params"] {
