@@ -7,3 +7,10 @@ fn malformed_models_are_compile_errors() {
     let t = trybuild::TestCases::new();
     t.compile_fail("tests/ui/*.rs");
 }
+
+/// Expressions as deep as plain Rust accepts compile through the macro as well.
+#[test]
+fn deep_expressions_compile() {
+    let t = trybuild::TestCases::new();
+    t.pass("tests/ui-pass/*.rs");
+}

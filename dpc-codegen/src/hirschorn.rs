@@ -198,73 +198,237 @@ fn implicit_dependencies(model: &Model) -> Option<HashMap<Symbol, BTreeSet<Symbo
     Some(unknowns.into_iter().zip(deps).collect())
 }
 
+/// How the relative degree of one output was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RelativeDegree {
+    /// An input appears after this many total derivatives, taken symbolically along the
+    /// explicit equations (where cancellations are seen) and structurally through implicit
+    /// ones.
+    Symbolic(usize),
+    /// The structural (generic) value: the shortest path from the output through the
+    /// dependency graph of the equations to an input. Reported where the symbolic
+    /// derivatives grew beyond [`SWELL_FACTOR`] times the model before confirming it; it is
+    /// a lower bound, exact unless coefficients cancel.
+    Structural(usize),
+    /// No input reaches the output: no path in the dependency graph leads from it to an input
+    /// (or, symbolically, its derivatives stay free of inputs), so it cannot be tracked.
+    Unreached,
+    /// Not defined: the output's derivatives reach unknowns of structurally singular implicit
+    /// equations (a plant of higher index, such as a mechanism with position constraints).
+    Undetermined,
+}
+
+impl RelativeDegree {
+    /// The degree, or `None` where it is not defined.
+    pub fn value(self) -> Option<usize> {
+        match self {
+            RelativeDegree::Symbolic(r) | RelativeDegree::Structural(r) => Some(r),
+            RelativeDegree::Unreached | RelativeDegree::Undetermined => None,
+        }
+    }
+}
+
+/// The symbolic confirmation of a relative degree stops when a derivative of the output has
+/// more than `SWELL_FACTOR` times as many nodes as the whole model (plus [`SWELL_SLACK`]):
+/// repeated derivatives of nonlinear chains grow exponentially, the structural answer does
+/// not. The bound depends only on the model, so every call gives the same answer.
+pub const SWELL_FACTOR: usize = 8;
+
+/// Additive part of the symbolic budget, so that small models are always confirmed.
+pub const SWELL_SLACK: usize = 2_000;
+
+/// What a set of symbols reaches in one differentiation.
+#[derive(Default, Clone)]
+struct Reach {
+    states: BTreeSet<usize>,
+    input: bool,
+    undetermined: bool,
+}
+
+/// The dependency graph of the equations: per state `x_j`, what `x_j'` depends on.
+struct Structure {
+    implicit: Option<HashMap<Symbol, BTreeSet<Symbol>>>,
+    explicit: HashMap<usize, ExprId>,
+    successors: Vec<Reach>,
+}
+
+impl Structure {
+    fn new(model: &Model) -> Self {
+        let mut st = Structure {
+            implicit: implicit_dependencies(model),
+            explicit: explicit_rhs(model),
+            successors: Vec::new(),
+        };
+        st.successors = (0..model.states.len())
+            .map(|j| match st.explicit.get(&j) {
+                Some(&f) => st.expand(model, model.graph.vars(f)),
+                None => st.expand_symbol(model, Symbol::StateDot(j)),
+            })
+            .collect();
+        st
+    }
+
+    /// States, inputs and undetermined unknowns behind `vars`, with explicit `x_j'` and the
+    /// implicitly determined unknowns replaced by what they depend on.
+    fn expand(&self, model: &Model, vars: BTreeSet<Var>) -> Reach {
+        let mut out = Reach::default();
+        for v in vars {
+            let r = self.expand_symbol(model, model.symbols.symbol(v));
+            out.states.extend(r.states);
+            out.input |= r.input;
+            out.undetermined |= r.undetermined;
+        }
+        out
+    }
+
+    fn expand_symbol(&self, model: &Model, s: Symbol) -> Reach {
+        let mut out = Reach::default();
+        match s {
+            Symbol::State(j) => {
+                out.states.insert(j);
+            }
+            Symbol::Input(_) | Symbol::InputDot(_) => out.input = true,
+            Symbol::StateDot(j) if self.explicit.contains_key(&j) => {
+                // An explicit right-hand side is free of derivatives: one level.
+                for v in model.graph.vars(self.explicit[&j]) {
+                    match model.symbols.symbol(v) {
+                        Symbol::StateDot(_) => out.undetermined = true,
+                        other => {
+                            let r = self.expand_symbol(model, other);
+                            out.states.extend(r.states);
+                            out.input |= r.input;
+                            out.undetermined |= r.undetermined;
+                        }
+                    }
+                }
+            }
+            Symbol::StateDot(_) | Symbol::Algebraic(_) | Symbol::AlgebraicDot(_) => {
+                match self.implicit.as_ref().and_then(|m| m.get(&s)) {
+                    Some(deps) => {
+                        for d in deps {
+                            match d {
+                                Symbol::State(j) => {
+                                    out.states.insert(*j);
+                                }
+                                Symbol::Input(_) => out.input = true,
+                                _ => {}
+                            }
+                        }
+                    }
+                    None => out.undetermined = true,
+                }
+            }
+            Symbol::Time
+            | Symbol::Param(_)
+            | Symbol::IterationCoefficient
+            | Symbol::TrackingInput(_)
+            | Symbol::TrackingCoefficient { .. } => {}
+        }
+        out
+    }
+
+    /// Breadth-first search from `start`, which is reached after `level` derivatives: the
+    /// first level at which an input appears (checked before an undetermined unknown, as the
+    /// symbolic derivative does). Linear in the size of the dependency graph.
+    fn search(&self, start: Reach, level: usize) -> RelativeDegree {
+        let mut visited: BTreeSet<usize> = start.states.clone();
+        let mut frontier = start;
+        let mut k = level;
+        loop {
+            if frontier.input {
+                return RelativeDegree::Structural(k);
+            }
+            if frontier.undetermined {
+                return RelativeDegree::Undetermined;
+            }
+            if frontier.states.is_empty() {
+                return RelativeDegree::Unreached;
+            }
+            let mut next = Reach::default();
+            for j in &frontier.states {
+                let r = &self.successors[*j];
+                next.input |= r.input;
+                next.undetermined |= r.undetermined;
+                for &s in &r.states {
+                    if visited.insert(s) {
+                        next.states.insert(s);
+                    }
+                }
+            }
+            frontier = next;
+            k += 1;
+        }
+    }
+}
+
 /// Per output, its relative degree, or `None` where it is not defined.
 pub fn relative_degrees(model: &mut Model) -> Vec<Option<usize>> {
-    let implicit = implicit_dependencies(model);
-    let outputs: Vec<ExprId> = model.outputs.iter().map(|o| o.expr).collect();
-    outputs
+    relative_degree_analysis(model)
         .into_iter()
-        .map(|h| relative_degree(model, h, implicit.as_ref()))
+        .map(RelativeDegree::value)
         .collect()
 }
 
-fn relative_degree(
+/// Per output, its relative degree and how it was found.
+///
+/// Structural first: a breadth-first search on the dependency graph of the equations
+/// (through the implicit ones by the matching of [`implicit_dependencies`]), linear in the
+/// model. Then symbolically, by repeated total derivatives along the explicit equations,
+/// which sees cancellations, but only while the derivative stays within the budget of
+/// [`SWELL_FACTOR`]; beyond it the structural value is reported. The derivatives are
+/// memoised in the graph, so the Hirschorn steps of [`tracking_rows`] reuse them.
+pub fn relative_degree_analysis(model: &mut Model) -> Vec<RelativeDegree> {
+    let st = Structure::new(model);
+    let roots: Vec<ExprId> = model
+        .equations
+        .iter()
+        .map(|e| e.residual)
+        .chain(model.outputs.iter().map(|o| o.expr))
+        .collect();
+    let budget = SWELL_FACTOR * model.graph.size(&roots) + SWELL_SLACK;
+    let outputs: Vec<ExprId> = model.outputs.iter().map(|o| o.expr).collect();
+    outputs
+        .into_iter()
+        .map(|h| {
+            let structural = st.search(st.expand(model, model.graph.vars(h)), 0);
+            if structural == RelativeDegree::Unreached {
+                // No path to an input: exact, whatever the symbolic form.
+                return structural;
+            }
+            symbolic_relative_degree(model, &st, h, budget).unwrap_or(structural)
+        })
+        .collect()
+}
+
+/// The relative degree by total derivatives along the explicit equations, continued
+/// structurally from the first derivative that needs an implicit equation; `None` if a
+/// derivative grows beyond `budget` nodes first.
+fn symbolic_relative_degree(
     model: &mut Model,
+    st: &Structure,
     h: ExprId,
-    implicit: Option<&HashMap<Symbol, BTreeSet<Symbol>>>,
-) -> Option<usize> {
+    budget: usize,
+) -> Option<RelativeDegree> {
     let limit = model.states.len() + model.algebraic.len() + 1;
     let mut e = h;
     for r in 0..=limit {
         match total_derivative(model, e) {
-            Ok(next) => e = next,
-            Err(Obstacle::Input(_)) => return Some(r),
-            Err(_) => {
-                // Continue structurally from the symbols of h^(r).
-                let implicit = implicit?;
-                let explicit = explicit_rhs(model);
-                let expand = |vars: BTreeSet<Var>| -> BTreeSet<Symbol> {
-                    let mut out = BTreeSet::new();
-                    for v in vars {
-                        let s = model.symbols.symbol(v);
-                        match s {
-                            Symbol::State(_) | Symbol::Input(_) | Symbol::Time => {
-                                out.insert(s);
-                            }
-                            _ => {
-                                if let Some(d) = implicit.get(&s) {
-                                    out.extend(d.iter().copied());
-                                }
-                            }
-                        }
-                    }
-                    out
-                };
-                let mut d = expand(model.graph.vars(e));
-                for r in r..=limit {
-                    if d.iter().any(|s| matches!(s, Symbol::Input(_))) {
-                        return Some(r);
-                    }
-                    let mut next = BTreeSet::new();
-                    for s in &d {
-                        if let Symbol::State(j) = s {
-                            match explicit.get(j) {
-                                Some(&f) => next.extend(expand(model.graph.vars(f))),
-                                None => {
-                                    if let Some(dep) = implicit.get(&Symbol::StateDot(*j)) {
-                                        next.extend(dep.iter().copied());
-                                    }
-                                }
-                            }
-                        }
-                    }
-                    d = next;
+            Ok(next) => {
+                e = next;
+                if model.graph.size(&[e]) > budget {
+                    return None;
                 }
-                return None;
+            }
+            Err(Obstacle::Input(_)) => return Some(RelativeDegree::Symbolic(r)),
+            Err(_) => {
+                return Some(match st.search(st.expand(model, model.graph.vars(e)), r) {
+                    RelativeDegree::Structural(k) => RelativeDegree::Symbolic(k),
+                    other => other,
+                });
             }
         }
     }
-    None
+    Some(RelativeDegree::Unreached)
 }
 
 /// `W(s)` as text, e.g. `(s + 2)(s + 3)`, `s`, or `1` for no step.
@@ -356,8 +520,8 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
         );
         return None;
     }
-    let mut rows = Vec::new();
     let mut ok = true;
+    let mut rows = Vec::new();
     for i in 0..ny {
         let entry = tracking.entries.iter().find(|e| e.output == i);
         let roots = entry.map(|e| e.roots.clone()).unwrap_or_default();
@@ -433,6 +597,24 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
             combination: sum,
             row,
         });
+    }
+    // After the rows, so that the derivatives the steps need are built first and the
+    // expansion of a model with reachable outputs is the same as without this check.
+    for (i, degree) in relative_degree_analysis(model).into_iter().enumerate() {
+        if degree != RelativeDegree::Unreached {
+            continue;
+        }
+        let out = &model.outputs[i];
+        let entry = tracking.entries.iter().find(|e| e.output == i);
+        let span = entry.map(|e| e.span).unwrap_or(tracking.span);
+        cx.error_at(
+            span,
+            format!(
+                "cannot track output `{}` = `{}`: no input reaches it (none of its time derivatives depends on an input, so its relative degree is undefined and the tracking DAE cannot determine the inputs); track an output that an input influences",
+                out.name, out.text
+            ),
+        );
+        ok = false;
     }
     ok.then_some(rows)
 }

@@ -18,6 +18,7 @@ pub mod emit;
 pub mod hirschorn;
 pub mod ir;
 pub mod lower;
+pub mod names;
 pub mod parse;
 pub mod symbolic;
 pub mod text;
@@ -46,10 +47,18 @@ pub fn try_expand(input: TokenStream) -> syn::Result<TokenStream> {
 }
 
 /// Lower a model without emitting code, for inspection and tests.
+///
+/// Parsing and lowering work on `syn`'s expression trees, whose parser, printer (`span()`,
+/// `to_token_stream()`) and destructor recurse once per nesting level; they run on a stack
+/// sized from the input by [`parse::with_front_end_stack`]. The passes after lowering work
+/// on the hash-consed graph and do not recurse along the expression's depth.
 pub fn lower_model(input: TokenStream) -> syn::Result<ir::Model> {
-    let def: parse::ModelDef = syn::parse2(input)?;
-    let mut cx = ctxt::Ctxt::new();
-    let model = lower::lower(def, &mut cx);
+    let (model, cx) = parse::with_front_end_stack(&input, || {
+        let def = parse::parse_model(input.clone())?;
+        let mut cx = ctxt::Ctxt::new();
+        let model = lower::lower(def, &mut cx);
+        Ok::<_, syn::Error>((model, cx))
+    })?;
     cx.check()?;
     model.ok_or_else(|| {
         syn::Error::new(

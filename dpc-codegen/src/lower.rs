@@ -16,6 +16,7 @@ use crate::text::expr_text;
 use proc_macro2::Span;
 use quote::ToTokens;
 use std::collections::{HashMap, HashSet};
+use syn::ext::IdentExt;
 use syn::spanned::Spanned;
 use syn::{Attribute, BinOp, Expr, Ident, Lit, UnOp};
 
@@ -170,7 +171,21 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                     SectionBody::Params(list) => {
                         for p in list {
                             let docs = lw.doc_attrs(&p.attrs, "a parameter");
-                            let default = numeric_literal(&p.default).unwrap_or_else(|| {
+                            let default = match numeric_literal(&p.default) {
+                                Some(v) if !v.is_finite() => {
+                                    lw.cx.error_spanned_by(
+                                        &p.default,
+                                        format!(
+                                            "the default of parameter `{}` is out of range for `f64`: `{}` overflows to infinity (the largest finite value is about 1.8e308)",
+                                            p.name,
+                                            expr_text(&p.default)
+                                        ),
+                                    );
+                                    Some(0.0)
+                                }
+                                other => other,
+                            };
+                            let default = default.unwrap_or_else(|| {
                                 lw.cx.error_spanned_by(
                                     &p.default,
                                     format!(
@@ -248,6 +263,10 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                     &o.name,
                                     format!("duplicate output `{}`", o.name),
                                 );
+                                continue;
+                            }
+                            if let Some(msg) = crate::names::check(&o.name, "an output") {
+                                lw.cx.error_spanned_by(&o.name, msg);
                                 continue;
                             }
                             let docs = lw.doc_attrs(&o.attrs, "an output");
@@ -357,6 +376,13 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                             let mut roots = Vec::new();
                             for r in &entry.roots {
                                 match numeric_literal(r) {
+                                    Some(a) if !a.is_finite() => lw.cx.error_spanned_by(
+                                        r,
+                                        format!(
+                                            "`{}` is out of range for `f64` (it overflows to infinity); a negated root of W(s) must be a finite number",
+                                            expr_text(r)
+                                        ),
+                                    ),
                                     Some(a) if a >= 0.0 => roots.push(a),
                                     Some(a) => lw.cx.error_spanned_by(
                                         r,
@@ -373,6 +399,17 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                         ),
                                     ),
                                 }
+                            }
+                            let coefficients =
+                                crate::hirschorn::polynomial_from_negated_roots(&roots);
+                            if coefficients.iter().any(|c| !c.is_finite()) {
+                                lw.cx.error_at(
+                                    entry.bracket_span,
+                                    format!(
+                                        "the coefficients of W(s) = {} overflow `f64`; use smaller roots",
+                                        crate::hirschorn::polynomial_text(&roots)
+                                    ),
+                                );
                             }
                             let span = entry
                                 .output
@@ -396,6 +433,8 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
             }
         }
     }
+
+    check_generated_names(&def, &tracking, !references.is_empty(), lw.cx);
 
     // Required sections.
     if states.is_empty() && !def.items.iter().any(|i| is_section(i, "states")) {
@@ -481,6 +520,52 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
         graph: lw.graph,
         symbols: lw.symbols,
     })
+}
+
+/// The model's name, the tracking type's name and the items the expansion declares from
+/// them (`<Model>`, `<Model>Params`, the tracking type, `<Model>Reference`) must be usable
+/// type names and pairwise distinct.
+fn check_generated_names(
+    def: &ModelDef,
+    tracking: &Option<Tracking>,
+    has_references: bool,
+    cx: &mut Ctxt,
+) {
+    let model = &def.name;
+    if let Some(msg) = crate::names::check(model, "a model") {
+        cx.error_spanned_by(model, msg);
+    }
+    let Some(tracking) = tracking else {
+        return;
+    };
+    let ty = &tracking.type_name;
+    if let Some(msg) = crate::names::check(ty, "a tracking type") {
+        cx.error_spanned_by(ty, msg);
+        return;
+    }
+    let base = model.unraw().to_string();
+    let taken = [
+        (base.clone(), "the model type itself", true),
+        (
+            format!("{base}Params"),
+            "the model's parameter struct",
+            true,
+        ),
+        (
+            format!("{base}Reference"),
+            "the reference type generated for the `references` section",
+            has_references,
+        ),
+    ];
+    let name = ty.unraw().to_string();
+    if let Some((_, what, _)) = taken.iter().find(|(n, _, on)| *on && *n == name) {
+        cx.error_spanned_by(
+            ty,
+            format!(
+                "the tracking type cannot be named `{name}`: the expansion already declares `{name}` as {what}; choose another name, e.g. `{base}Tracking`"
+            ),
+        );
+    }
 }
 
 fn plural(n: usize) -> &'static str {
@@ -605,7 +690,7 @@ impl Lowerer<'_> {
     }
 
     fn declare(&mut self, name: &Ident, binding: Binding) {
-        let s = name.to_string();
+        let s = name.unraw().to_string();
         if s == "t" {
             self.cx
                 .error_spanned_by(name, "`t` is reserved for time; choose another name");
@@ -616,6 +701,10 @@ impl Lowerer<'_> {
                 name,
                 format!("`{s}` contains `__`, which is reserved for generated code; choose another name"),
             );
+            return;
+        }
+        if let Some(msg) = crate::names::check(name, binding.describe()) {
+            self.cx.error_spanned_by(name, msg);
             return;
         }
         if CONSTANTS.iter().any(|(c, _)| *c == s) {
@@ -728,6 +817,16 @@ impl Lowerer<'_> {
             Expr::Paren(p) => self.lower_expr(&p.expr, place),
             Expr::Group(g) => self.lower_expr(&g.expr, place),
             Expr::Lit(l) => match numeric_literal(e) {
+                Some(v) if !v.is_finite() => {
+                    self.cx.error_spanned_by(
+                        l,
+                        format!(
+                            "the literal `{}` is out of range for `f64`: it overflows to infinity (the largest finite value is about 1.8e308)",
+                            l.lit.to_token_stream()
+                        ),
+                    );
+                    None
+                }
                 Some(v) => Some(self.graph.constant(v)),
                 None => {
                     self.cx.error_spanned_by(
@@ -853,7 +952,7 @@ impl Lowerer<'_> {
     }
 
     fn lower_name(&mut self, ident: &Ident, place: Place) -> Option<ExprId> {
-        let s = ident.to_string();
+        let s = ident.unraw().to_string();
         if s == "t" {
             return Some(self.symbol(Symbol::Time));
         }

@@ -15,7 +15,8 @@
 //!             | 'tracking' Ident '{' (Ident ':' '[' expr,* ']'),* '}'
 //! ```
 
-use proc_macro2::Span;
+use proc_macro2::{Span, TokenStream, TokenTree};
+use syn::ext::IdentExt;
 use syn::parse::{Parse, ParseStream};
 use syn::punctuated::Punctuated;
 use syn::{braced, bracketed, Attribute, Expr, Ident, Token, Visibility};
@@ -148,16 +149,69 @@ pub struct TrackingEntry {
     pub roots: Vec<Expr>,
 }
 
+/// Stack that `syn` may need per unit of [`nesting_bound`]: its expression parser recurses
+/// through about ten functions per parenthesis or prefix operator, some KiB each in an
+/// unoptimised build (measured: 2.3 KiB per parenthesis and 5.6 KiB per Horner level with
+/// optimisations), so this leaves a wide margin.
+const STACK_PER_LEVEL: usize = 32 * 1024;
+
+/// Stack kept free for everything else `syn` does.
+const STACK_BASE: usize = 1024 * 1024;
+
+/// Parse the body of a `model!` invocation (call it inside [`with_front_end_stack`]).
+pub fn parse_model(input: TokenStream) -> syn::Result<ModelDef> {
+    syn::parse2(input)
+}
+
+/// Runs `f`, the work on `syn`'s trees for `input`, on a stack deep enough for them.
+///
+/// `syn` parses, prints and drops expressions by recursion, so its stack use grows with the
+/// depth of the user's expression (measured: a 1000-deep Horner expression overflowed the
+/// 8 MiB `rustc` gives a macro inside `syn`'s parser, where plain Rust compiles it). `f` runs
+/// on a stack with at least [`STACK_BASE`] + [`STACK_PER_LEVEL`] × [`nesting_bound`] bytes
+/// free, grown on this thread (the proc-macro API is tied to it) only when the current one
+/// has less.
+pub fn with_front_end_stack<R>(input: &TokenStream, f: impl FnOnce() -> R) -> R {
+    let need = STACK_BASE.saturating_add(STACK_PER_LEVEL.saturating_mul(nesting_bound(input)));
+    stacker::maybe_grow(need, need, f)
+}
+
+/// An upper bound on the recursion depth of a recursive-descent parse of `tokens`, in
+/// levels: along every path into the token tree, the groups entered plus, in each, the
+/// longest run of punctuation (prefix operators such as `- - x` nest without a group).
+/// Computed with an explicit stack, linear in the number of tokens.
+pub fn nesting_bound(tokens: &TokenStream) -> usize {
+    let mut deepest = 0;
+    let mut stack: Vec<(TokenStream, usize)> = vec![(tokens.clone(), 0)];
+    while let Some((stream, above)) = stack.pop() {
+        let (mut run, mut longest) = (0usize, 0usize);
+        let mut groups = Vec::new();
+        for tt in stream {
+            match tt {
+                TokenTree::Punct(_) => {
+                    run += 1;
+                    longest = longest.max(run);
+                }
+                TokenTree::Group(g) => {
+                    run = 0;
+                    groups.push(g.stream());
+                }
+                TokenTree::Ident(_) | TokenTree::Literal(_) => run = 0,
+            }
+        }
+        let here = above + 1 + longest;
+        deepest = usize::max(deepest, here);
+        stack.extend(groups.into_iter().map(|g| (g, here)));
+    }
+    deepest
+}
+
 impl Parse for ModelDef {
     fn parse(input: ParseStream) -> syn::Result<Self> {
         let attrs = input.call(Attribute::parse_outer)?;
         let vis: Visibility = input.parse()?;
-        let name: Ident = input.parse().map_err(|e| {
-            syn::Error::new(
-                e.span(),
-                "expected the model's name, e.g. `pub Wheel { ... }`",
-            )
-        })?;
+        let name: Ident = user_ident(input, "a model")
+            .map_err(|e| keyword_or(e, "expected the model's name, e.g. `pub Wheel { ... }`"))?;
         let body;
         let brace = braced!(body in input);
         let mut items = Vec::new();
@@ -183,7 +237,7 @@ impl Parse for Item {
     fn parse(input: ParseStream) -> syn::Result<Self> {
         if input.peek(Token![let]) {
             let let_token: Token![let] = input.parse()?;
-            let name: Ident = input.parse()?;
+            let name: Ident = user_ident(input, "a `let` intermediate")?;
             input.parse::<Token![=]>()?;
             let expr: Expr = input.parse()?;
             input.parse::<Token![;]>().map_err(|e| {
@@ -215,7 +269,12 @@ impl Parse for Item {
             "states" | "algebraic" | "inputs" => {
                 let content;
                 body_span = braced!(content in input).span.join();
-                let names = comma_list(&content, parse_name)?;
+                let what = match kw.as_str() {
+                    "states" => "a state",
+                    "algebraic" => "an algebraic unknown",
+                    _ => "an input",
+                };
+                let names = comma_list(&content, |c| parse_name(c, what))?;
                 match kw.as_str() {
                     "states" => SectionBody::States(names),
                     "algebraic" => SectionBody::Algebraic(names),
@@ -255,9 +314,9 @@ impl Parse for Item {
                 })?)
             }
             "tracking" => {
-                let type_name: Ident = input.parse().map_err(|e| {
-                    syn::Error::new(
-                        e.span(),
+                let type_name: Ident = user_ident(input, "a tracking type").map_err(|e| {
+                    keyword_or(
+                        e,
                         "expected the name of the generated tracking type, e.g. `tracking WheelTracking { theta: [5.0] }`",
                     )
                 })?;
@@ -310,16 +369,40 @@ fn comma_list<T>(
     Ok(out)
 }
 
-fn parse_name(input: ParseStream) -> syn::Result<NameDef> {
+/// Marker in the message of a keyword error, so callers keep it instead of a generic one.
+const KEYWORD_MARK: &str = "is a Rust keyword";
+
+/// An identifier that names `what`; a keyword gets an error saying so on its token.
+fn user_ident(input: ParseStream, what: &str) -> syn::Result<Ident> {
+    if input.peek(Ident::peek_any) && !input.peek(Ident) {
+        let kw = input.call(Ident::parse_any)?;
+        let msg = crate::names::refusal(&kw.to_string(), what).unwrap_or_else(|| {
+            format!("`{kw}` {KEYWORD_MARK} and cannot name {what}; choose another name")
+        });
+        return Err(syn::Error::new(kw.span(), msg));
+    }
+    input.parse()
+}
+
+/// `e` if it is a keyword error from [`user_ident`], else an error with `message` at its span.
+fn keyword_or(e: syn::Error, message: &str) -> syn::Error {
+    if e.to_string().contains(KEYWORD_MARK) {
+        e
+    } else {
+        syn::Error::new(e.span(), message)
+    }
+}
+
+fn parse_name(input: ParseStream, what: &str) -> syn::Result<NameDef> {
     Ok(NameDef {
         attrs: input.call(Attribute::parse_outer)?,
-        name: input.parse()?,
+        name: user_ident(input, what)?,
     })
 }
 
 fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
     let attrs = input.call(Attribute::parse_outer)?;
-    let name: Ident = input.parse()?;
+    let name: Ident = user_ident(input, "a parameter")?;
     input.parse::<Token![=]>().map_err(|e| {
         syn::Error::new(
             e.span(),
@@ -335,7 +418,7 @@ fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
 
 fn parse_output(input: ParseStream) -> syn::Result<OutputDef> {
     let attrs = input.call(Attribute::parse_outer)?;
-    let name: Ident = input.parse()?;
+    let name: Ident = user_ident(input, "an output")?;
     let expr = if input.peek(Token![=]) {
         input.parse::<Token![=]>()?;
         Some(input.parse()?)

@@ -31,10 +31,20 @@ fn precedence(expr: &Expr) -> u8 {
             _ => COMPARE,
         },
         Expr::Unary(_) => PREFIX,
-        Expr::Paren(p) => precedence(&p.expr),
-        Expr::Group(g) => precedence(&g.expr),
+        Expr::Paren(_) | Expr::Group(_) => precedence(strip_parentheses(expr)),
         Expr::Lit(l) if lit_is_negative(&l.lit) => PREFIX,
         _ => POSTFIX,
+    }
+}
+
+/// `expr` without the parentheses (and invisible groups) around it.
+pub fn strip_parentheses(mut expr: &Expr) -> &Expr {
+    loop {
+        match expr {
+            Expr::Paren(p) => expr = &p.expr,
+            Expr::Group(g) => expr = &g.expr,
+            _ => return expr,
+        }
     }
 }
 
@@ -42,80 +52,99 @@ fn lit_is_negative(lit: &Lit) -> bool {
     lit.to_token_stream().to_string().starts_with('-')
 }
 
-fn write_operand(expr: &Expr, min: u8, out: &mut String) {
-    if precedence(expr) < min {
-        out.push('(');
-        write_expr(expr, out);
-        out.push(')');
-    } else {
-        write_expr(expr, out);
+/// One piece of pending output: text, or an expression still to be written.
+enum Piece<'a> {
+    Text(&'static str),
+    Owned(String),
+    /// An expression, parenthesised if it binds more loosely than the given level.
+    Operand(&'a Expr, u8),
+}
+
+/// Writes `expr` with an explicit stack of pending pieces (pushed in reverse), so that the
+/// depth of the user's expression costs heap, not call stack.
+fn write_expr(expr: &Expr, out: &mut String) {
+    let mut todo = vec![Piece::Operand(expr, ASSIGN)];
+    while let Some(piece) = todo.pop() {
+        let (expr, min) = match piece {
+            Piece::Text(t) => {
+                out.push_str(t);
+                continue;
+            }
+            Piece::Owned(t) => {
+                out.push_str(&t);
+                continue;
+            }
+            Piece::Operand(e, min) => (e, min),
+        };
+        if precedence(expr) < min {
+            out.push('(');
+            todo.push(Piece::Text(")"));
+        }
+        // Parentheses of the source are dropped; the precedence decides.
+        let expr = strip_parentheses(expr);
+        // Pieces are pushed last first.
+        match expr {
+            Expr::Assign(a) => {
+                todo.push(Piece::Operand(&a.right, ASSIGN));
+                todo.push(Piece::Text(" = "));
+                todo.push(Piece::Operand(&a.left, ASSIGN));
+            }
+            Expr::Binary(b) => {
+                let p = precedence(expr);
+                // Left-associative: the left operand may share the level, the right may not
+                // (also for `+` and `*`: `a + (b + c)` keeps the user's grouping).
+                todo.push(Piece::Operand(&b.right, p + 1));
+                todo.push(Piece::Text(" "));
+                todo.push(Piece::Owned(b.op.to_token_stream().to_string()));
+                todo.push(Piece::Text(" "));
+                todo.push(Piece::Operand(&b.left, p));
+            }
+            Expr::Unary(u) => {
+                todo.push(Piece::Operand(&u.expr, PREFIX));
+                todo.push(Piece::Text(match u.op {
+                    UnOp::Neg(_) => "-",
+                    UnOp::Not(_) => "!",
+                    _ => "*",
+                }));
+            }
+            Expr::Call(c) => {
+                todo.push(Piece::Text(")"));
+                push_arguments(&mut todo, c.args.iter());
+                todo.push(Piece::Text("("));
+                todo.push(Piece::Operand(&c.func, ASSIGN));
+            }
+            Expr::MethodCall(m) => {
+                todo.push(Piece::Text(")"));
+                push_arguments(&mut todo, m.args.iter());
+                todo.push(Piece::Text("("));
+                todo.push(Piece::Owned(m.method.to_string()));
+                todo.push(Piece::Text("."));
+                todo.push(Piece::Operand(&m.receiver, POSTFIX));
+            }
+            Expr::Path(p) => {
+                let segs: Vec<String> = p
+                    .path
+                    .segments
+                    .iter()
+                    .map(|s| s.ident.to_string())
+                    .collect();
+                out.push_str(&segs.join("::"));
+            }
+            Expr::Lit(l) => out.push_str(&l.lit.to_token_stream().to_string()),
+            other => out.push_str(&other.to_token_stream().to_string()),
+        }
     }
 }
 
-fn write_expr(expr: &Expr, out: &mut String) {
-    match expr {
-        Expr::Paren(p) => write_expr(&p.expr, out),
-        Expr::Group(g) => write_expr(&g.expr, out),
-        Expr::Assign(a) => {
-            write_expr(&a.left, out);
-            out.push_str(" = ");
-            write_expr(&a.right, out);
+/// Pushes `a, b, c` (reversed, for the stack).
+fn push_arguments<'a>(todo: &mut Vec<Piece<'a>>, args: impl DoubleEndedIterator<Item = &'a Expr>) {
+    let mut first = true;
+    for a in args.rev() {
+        if !first {
+            todo.push(Piece::Text(", "));
         }
-        Expr::Binary(b) => {
-            let p = precedence(expr);
-            let op = b.op.to_token_stream().to_string();
-            // Left-associative: the left operand may share the level, the right may not
-            // (except for the associative `+` and `*`, where `a + (b + c)` reads as `a + b + c`
-            // only if we print the parentheses; keep them to show the user's grouping).
-            write_operand(&b.left, p, out);
-            out.push(' ');
-            out.push_str(&op);
-            out.push(' ');
-            write_operand(&b.right, p + 1, out);
-        }
-        Expr::Unary(u) => {
-            match u.op {
-                UnOp::Neg(_) => out.push('-'),
-                UnOp::Not(_) => out.push('!'),
-                _ => out.push('*'),
-            }
-            write_operand(&u.expr, PREFIX, out);
-        }
-        Expr::Call(c) => {
-            write_expr(&c.func, out);
-            out.push('(');
-            for (i, a) in c.args.iter().enumerate() {
-                if i > 0 {
-                    out.push_str(", ");
-                }
-                write_expr(a, out);
-            }
-            out.push(')');
-        }
-        Expr::MethodCall(m) => {
-            write_operand(&m.receiver, POSTFIX, out);
-            out.push('.');
-            out.push_str(&m.method.to_string());
-            out.push('(');
-            for (i, a) in m.args.iter().enumerate() {
-                if i > 0 {
-                    out.push_str(", ");
-                }
-                write_expr(a, out);
-            }
-            out.push(')');
-        }
-        Expr::Path(p) => {
-            let segs: Vec<String> = p
-                .path
-                .segments
-                .iter()
-                .map(|s| s.ident.to_string())
-                .collect();
-            out.push_str(&segs.join("::"));
-        }
-        Expr::Lit(l) => out.push_str(&l.lit.to_token_stream().to_string()),
-        other => out.push_str(&other.to_token_stream().to_string()),
+        first = false;
+        todo.push(Piece::Operand(a, ASSIGN));
     }
 }
 
