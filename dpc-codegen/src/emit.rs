@@ -17,33 +17,14 @@
 //! exported as pattern constants. Function parameters use `__`-prefixed names, which the DSL
 //! forbids in user names, so user names can be bound as plain locals without shadowing.
 
-use crate::hirschorn::TrackingRow;
+use crate::derive::{
+    Block, DaeDerivatives, Derived, Layout, ReferenceDerivatives, Source, TrackingDerivatives,
+};
 use crate::ir::{Model, Symbol};
 use crate::symbolic::{ExprId, Var};
 use proc_macro2::{Ident, Span, TokenStream};
 use quote::{format_ident, quote};
-use std::collections::{BTreeMap, BTreeSet};
-
-/// A Jacobian block: the structurally non-zero entries `(row, col, expr)`.
-pub struct Block {
-    /// Non-zero entries in row-major order.
-    pub entries: Vec<(usize, usize, ExprId)>,
-}
-
-impl Block {
-    fn pattern(&self) -> TokenStream {
-        let items = self.entries.iter().map(|(i, j, _)| quote!((#i, #j)));
-        quote!(&[#(#items),*])
-    }
-}
-
-/// Jacobian of `rows` with respect to the variables of `symbols`, skipping structural zeros.
-pub fn jacobian(model: &mut Model, rows: &[ExprId], symbols: &[Symbol]) -> Block {
-    let vars: Vec<Var> = symbols.iter().map(|s| model.var(*s)).collect();
-    Block {
-        entries: model.graph.jacobian(rows, &vars),
-    }
-}
+use std::collections::BTreeSet;
 
 /// Straight-line code for a set of roots, with the locals it needs bound from the
 /// `__`-prefixed function parameters.
@@ -72,62 +53,16 @@ fn local_ident(model: &Model, symbol: Symbol) -> Ident {
     }
 }
 
-/// How the unknowns and inputs of one generated type map to the slices its routines take.
-///
-/// A plant and its tracking DAE share one graph and one set of symbols; they differ only in
-/// which symbols are states, algebraic unknowns and inputs (in the tracking DAE the plant's
-/// inputs are algebraic unknowns and the reference combinations `w_i` are the inputs).
-pub struct Layout {
-    /// Symbols read from `__x` (and whose derivatives are read from `__xdot`).
-    pub states: Vec<Symbol>,
-    /// Symbols read from `__z`.
-    pub algebraic: Vec<Symbol>,
-    /// Symbols read from `__u`.
-    pub inputs: Vec<Symbol>,
-}
-
-impl Layout {
-    /// The layout of the plant itself.
-    pub fn plant(model: &Model) -> Self {
-        Layout {
-            states: (0..model.states.len()).map(Symbol::State).collect(),
-            algebraic: (0..model.algebraic.len()).map(Symbol::Algebraic).collect(),
-            inputs: (0..model.inputs.len()).map(Symbol::Input).collect(),
+fn source_tokens(source: Source) -> TokenStream {
+    match source {
+        Source::Time => quote!(__t),
+        Source::State(k) => quote!(__x[#k]),
+        Source::StateDot(k) => quote!(__xdot[#k]),
+        Source::Algebraic(k) => quote!(__z[#k]),
+        Source::Input(k) => quote!(__u[#k]),
+        Source::Param(_) | Source::WCoefficient(_) | Source::IterationCoefficient => {
+            unreachable!("parameters and coefficients are bound by name")
         }
-    }
-
-    /// The derivative symbols of the states.
-    pub fn state_dots(&self) -> Vec<Symbol> {
-        self.states
-            .iter()
-            .map(|s| match s {
-                Symbol::State(i) => Symbol::StateDot(*i),
-                other => unreachable!("layout state {other:?} is not a state"),
-            })
-            .collect()
-    }
-
-    /// Where the value of `symbol` comes from inside a generated routine.
-    fn source_of(&self, symbol: Symbol) -> TokenStream {
-        let find = |list: &[Symbol], s: Symbol| list.iter().position(|x| *x == s);
-        if symbol == Symbol::Time {
-            return quote!(__t);
-        }
-        if let Symbol::StateDot(i) = symbol {
-            if let Some(k) = find(&self.states, Symbol::State(i)) {
-                return quote!(__xdot[#k]);
-            }
-        }
-        if let Some(k) = find(&self.states, symbol) {
-            return quote!(__x[#k]);
-        }
-        if let Some(k) = find(&self.algebraic, symbol) {
-            return quote!(__z[#k]);
-        }
-        if let Some(k) = find(&self.inputs, symbol) {
-            return quote!(__u[#k]);
-        }
-        unreachable!("symbol {symbol:?} has no place in this layout; the checks exclude it")
     }
 }
 
@@ -142,17 +77,17 @@ fn routine(model: &Model, layout: &Layout, roots: &[ExprId]) -> Routine {
     let degrees = crate::hirschorn::w_degrees(model);
     for s in symbols {
         let local = local_ident(model, s);
-        match s {
-            Symbol::Param(_) => prelude.extend(quote!(let #local: f64 = self.params.#local;)),
-            Symbol::TrackingCoefficient { output, power } => {
-                let k = crate::hirschorn::coefficient_index(&degrees, output, power);
+        match layout.source(s, &degrees) {
+            Some(Source::Param(_)) => prelude.extend(quote!(let #local: f64 = self.params.#local;)),
+            Some(Source::WCoefficient(k)) => {
                 prelude.extend(quote!(let #local: f64 = self.w_coefficients[#k];));
             }
-            Symbol::IterationCoefficient => {}
-            _ => {
-                let src = layout.source_of(s);
+            Some(Source::IterationCoefficient) => {}
+            Some(source) => {
+                let src = source_tokens(source);
                 prelude.extend(quote!(let #local: f64 = #src;));
             }
+            None => unreachable!("symbol {s:?} has no place in this layout; the checks exclude it"),
         }
     }
     let code = model.graph.emit_rust_prefixed(
@@ -178,94 +113,26 @@ fn doc_lines(text: &str) -> TokenStream {
     quote!(#(#lines)*)
 }
 
+/// The structural non-zero positions of a block as a slice literal.
+fn pattern(block: &Block) -> TokenStream {
+    let items = block.entries.iter().map(|(i, j, _)| quote!((#i, #j)));
+    quote!(&[#(#items),*])
+}
+
 fn str_list(items: impl IntoIterator<Item = String>) -> TokenStream {
     let items: Vec<String> = items.into_iter().collect();
     quote!(&[#(#items),*])
 }
 
-/// Human-readable listing of a model: declarations, intermediates, equations, outputs.
-pub fn listing(model: &Model) -> String {
-    let mut s = format!("model {}\n", model.name);
-    if !model.params.is_empty() {
-        let ps: Vec<String> = model
-            .params
-            .iter()
-            .map(|p| format!("{} = {:?}", p.name, p.default))
-            .collect();
-        s += &format!("  params     {}\n", ps.join(", "));
-    }
-    let names = |d: &[crate::ir::Decl]| {
-        d.iter()
-            .map(|x| x.name.to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    s += &format!("  states     {}\n", names(&model.states));
-    if !model.algebraic.is_empty() {
-        s += &format!("  algebraic  {}\n", names(&model.algebraic));
-    }
-    if !model.inputs.is_empty() {
-        s += &format!("  inputs     {}\n", names(&model.inputs));
-    }
-    for l in &model.intermediates {
-        s += &format!("  let {} = {}\n", l.name, l.text);
-    }
-    s += "  equations\n";
-    for (i, e) in model.equations.iter().enumerate() {
-        s += &format!("    [{i}] {}\n", e.text);
-    }
-    if !model.outputs.is_empty() {
-        s += "  outputs\n";
-        for o in &model.outputs {
-            s += &format!("    {} = {}\n", o.name, o.text);
-        }
-    }
-    s
-}
+pub use crate::derive::listing;
 
-/// One generated type implementing `dpc::core::DaeModel`: the plant, or its tracking DAE.
-pub struct DaeType {
-    /// Name of the generated type.
-    pub name: Ident,
-    /// Doc attributes for the type.
-    pub docs: Vec<syn::Attribute>,
-    /// Which symbols are states, algebraic unknowns and inputs.
-    pub layout: Layout,
-    /// Residual rows.
-    pub residuals: Vec<ExprId>,
-    /// Text of each residual row.
-    pub equation_texts: Vec<String>,
-    /// Output expressions and names.
-    pub outputs: Vec<(String, ExprId)>,
-    /// Readable listing of the type's equations.
-    pub listing: String,
-    /// For a tracking DAE, per output the compiled monic coefficients of `W_i` (lowest power
-    /// first): the type then holds the coefficients in use in a field `w_coefficients`.
-    pub w_defaults: Option<Vec<Vec<f64>>>,
-}
-
-/// Emit all items for a lowered model: the parameter struct, the plant type, and, with a
-/// `tracking` section, the tracking DAE (`rows` from [`crate::hirschorn::tracking_rows`]);
-/// with a `references` section, the reference type.
-pub fn emit_model(model: &mut Model, rows: Option<&[TrackingRow]>) -> TokenStream {
+/// Emit all items for a lowered model from its derivatives ([`crate::derive::derive`]): the
+/// parameter struct, the plant type, and, with a `tracking` section, the tracking DAE; with a
+/// `references` section, the reference type.
+pub fn emit_model(model: &Model, derived: &Derived) -> TokenStream {
     let params = emit_params(model);
-    let plant = DaeType {
-        name: model.name.clone(),
-        docs: model.attrs.clone(),
-        layout: Layout::plant(model),
-        residuals: model.equations.iter().map(|e| e.residual).collect(),
-        equation_texts: model.equations.iter().map(|e| e.text.clone()).collect(),
-        outputs: model
-            .outputs
-            .iter()
-            .map(|o| (o.name.to_string(), o.expr))
-            .collect(),
-        listing: listing(model),
-        w_defaults: None,
-    };
-    let plant_tokens = emit_dae_type(model, &plant);
-    let relative_degrees = crate::hirschorn::relative_degrees(model);
-    let degrees = option_list(&relative_degrees);
+    let plant_tokens = emit_dae_type(model, &derived.plant, &model.attrs, None);
+    let degrees = option_list(&derived.relative_degrees);
     let name = &model.name;
     let diagnostics = quote! {
         impl #name {
@@ -275,11 +142,14 @@ pub fn emit_model(model: &mut Model, rows: Option<&[TrackingRow]>) -> TokenStrea
             pub const RELATIVE_DEGREES: &'static [::core::option::Option<usize>] = #degrees;
         }
     };
-    let tracking = match rows {
-        Some(rows) => emit_tracking(model, rows, &relative_degrees),
+    let tracking = match &derived.tracking {
+        Some(t) => emit_tracking(model, t, &derived.relative_degrees),
         None => TokenStream::new(),
     };
-    let references = emit_references(model, rows);
+    let references = match &derived.references {
+        Some(r) => emit_references(model, r),
+        None => TokenStream::new(),
+    };
     quote!(#params #plant_tokens #diagnostics #tracking #references)
 }
 
@@ -294,91 +164,28 @@ fn option_list(values: &[Option<usize>]) -> TokenStream {
 /// The tracking DAE type: the plant equations plus one constraint row per output, in the
 /// unknowns `(X, [Z; U])` with the inputs `w`.
 fn emit_tracking(
-    model: &mut Model,
-    rows: &[TrackingRow],
+    model: &Model,
+    tracking: &TrackingDerivatives,
     relative_degrees: &[Option<usize>],
 ) -> TokenStream {
-    let Some(tracking) = model.tracking.clone() else {
-        return TokenStream::new();
-    };
-    let mut layout = Layout::plant(model);
-    let inputs = std::mem::take(&mut layout.inputs);
-    layout.algebraic.extend(inputs);
-    layout.inputs = (0..model.outputs.len())
-        .map(Symbol::TrackingInput)
-        .collect();
-
-    let mut residuals: Vec<ExprId> = model.equations.iter().map(|e| e.residual).collect();
-    let mut texts: Vec<String> = model.equations.iter().map(|e| e.text.clone()).collect();
-    let mut listing_text = listing(model);
-    let input_names: Vec<String> = model.inputs.iter().map(|d| d.name.to_string()).collect();
-    let w_names: Vec<String> = model
-        .outputs
-        .iter()
-        .map(|o| format!("w_{}", o.name))
-        .collect();
-    listing_text += &format!(
-        "tracking {}: the equations above, with {} as algebraic unknowns and inputs {}, plus\n",
-        tracking.type_name,
-        input_names.join(", "),
-        w_names.join(", ")
-    );
-    for row in rows {
-        let out = model.outputs[row.output].name.to_string();
-        let roots: Vec<f64> = tracking
-            .entries
-            .iter()
-            .find(|e| e.output == row.output)
-            .map(|e| e.roots.clone())
-            .unwrap_or_default();
-        listing_text += &format!(
-            "  output {out}: W(s) = {}\n",
-            crate::hirschorn::polynomial_text(&roots)
-        );
-        for (k, d) in row.derivatives.iter().enumerate().skip(1) {
-            let order = match k {
-                1 => "d/dt".to_string(),
-                _ => format!("d^{k}/dt^{k}"),
-            };
-            listing_text += &format!("    {order} {out} = {}\n", model.display(*d));
-        }
-        let text = format!("{} == w_{out}", model.display(row.combination));
-        listing_text += &format!("    {text}\n");
-        residuals.push(row.row);
-        texts.push(text);
-    }
     let plant_name = model.name.clone();
     let doc = format!(
         " The tracking DAE of [`{plant_name}`]: its equations plus `W_i(d/dt) h_i = w_i` per output, in the unknowns (states, algebraic unknowns and inputs of the plant); the inputs are `w_i = W_i(d/dt) xi_i` (see `dpc::core::TrackingDae`). The degrees of the `W_i` are fixed at compile time; their coefficients are read from the value, start as the compiled ones and can be changed with `dpc::core::TrackingDae::set_w_roots`."
     );
-    let ty = DaeType {
-        name: tracking.type_name.clone(),
-        docs: vec![syn::parse_quote!(#[doc = #doc])],
-        layout,
-        residuals,
-        equation_texts: texts,
-        outputs: model
-            .outputs
-            .iter()
-            .map(|o| (o.name.to_string(), o.expr))
-            .collect(),
-        listing: listing_text,
-        w_defaults: Some(rows.iter().map(|r| r.coefficients.clone()).collect()),
-    };
-    let tokens = emit_dae_type(model, &ty);
-    let name = &tracking.type_name;
-    let coeffs = rows.iter().map(|r| {
-        let c = &r.coefficients;
-        quote!(&[#(#c),*])
-    });
+    let docs: Vec<syn::Attribute> = vec![syn::parse_quote!(#[doc = #doc])];
+    let tokens = emit_dae_type(model, &tracking.dae, &docs, Some(&tracking.w_defaults));
+    let name = &tracking.dae.name;
+    let coeffs = tracking.w_defaults.iter().map(|c| quote!(&[#(#c),*]));
     let degrees = option_list(relative_degrees);
-    let plant_nz = model.algebraic.len();
+    let plant_nz = tracking.plant_algebraic;
     // Output i owns w_coefficients[start..end]: its monic coefficients, lowest power first.
     let mut start = 0;
-    let ranges: Vec<TokenStream> = rows
+    let ranges: Vec<TokenStream> = tracking
+        .w_defaults
         .iter()
-        .map(|r| {
-            let (i, end) = (r.output, start + r.coefficients.len());
+        .enumerate()
+        .map(|(i, c)| {
+            let end = start + c.len();
             let arm = quote!(#i => #start..#end,);
             start = end;
             arm
@@ -433,46 +240,12 @@ fn emit_tracking(
 
 /// The reference type `NameReference` for a `references` section: `xi_i(t)` and its exact
 /// derivatives up to one more than the tracking DAE needs.
-fn emit_references(model: &mut Model, rows: Option<&[TrackingRow]>) -> TokenStream {
-    if model.references.is_empty() {
-        return TokenStream::new();
-    }
+fn emit_references(model: &Model, references: &ReferenceDerivatives) -> TokenStream {
     let m = model.outputs.len();
-    let needed = rows
-        .map(|r| {
-            r.iter()
-                .map(|r| r.coefficients.len() - 1)
-                .max()
-                .unwrap_or(0)
-        })
-        .unwrap_or(0);
-    let max_order = needed + 1;
-    let time = model.var(Symbol::Time);
-    // roots[k * m + i] = d^k xi_i / dt^k.
-    let mut per_output: Vec<Vec<ExprId>> = Vec::new();
-    for i in 0..m {
-        let r = model
-            .references
-            .iter()
-            .find(|r| r.output == i)
-            .map(|r| r.expr)
-            .expect("lowering checks that every output has a reference");
-        let mut ds = vec![r];
-        for k in 0..max_order {
-            let d = model.graph.diff(ds[k], time);
-            ds.push(d);
-        }
-        per_output.push(ds);
-    }
-    let roots: Vec<ExprId> = (0..=max_order)
-        .flat_map(|k| per_output.iter().map(move |ds| ds[k]))
-        .collect();
-    let layout = Layout {
-        states: vec![],
-        algebraic: vec![],
-        inputs: vec![],
-    };
-    let r = routine(model, &layout, &roots);
+    let max_order = references.max_order;
+    let roots = &references.roots;
+    let layout = Layout::time_only();
+    let r = routine(model, &layout, roots);
     let (prelude, stmts) = (r.prelude, r.statements);
     let n = roots.len();
     let values = r.roots;
@@ -480,15 +253,10 @@ fn emit_references(model: &mut Model, rows: Option<&[TrackingRow]>) -> TokenStre
     let params_name = format_ident!("{}Params", model.name);
     let vis = &model.vis;
     let plant = &model.name;
-    let texts: Vec<String> = (0..m)
-        .map(|i| {
-            let r = model
-                .references
-                .iter()
-                .find(|r| r.output == i)
-                .expect("checked");
-            format!(" * `{} = {}`", model.outputs[i].name, r.text)
-        })
+    let texts: Vec<String> = references
+        .texts
+        .iter()
+        .map(|t| format!(" * `{t}`"))
         .collect();
     let doc = format!(
         " The references declared for [`{plant}`], with exact derivatives up to order {max_order} generated symbolically:"
@@ -594,10 +362,19 @@ fn sink_writes(
 }
 
 /// Emit one type implementing `DaeModel` with its fixed-size conveniences.
-pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
+///
+/// `docs` are the type's doc attributes; `w_defaults` (for a tracking DAE, per output the
+/// compiled monic coefficients of `W_i`) gives the type a field `w_coefficients` holding the
+/// coefficients in use.
+pub fn emit_dae_type(
+    model: &Model,
+    ty: &DaeDerivatives,
+    docs: &[syn::Attribute],
+    w_defaults: Option<&[Vec<f64>]>,
+) -> TokenStream {
     let name = ty.name.clone();
     let vis = model.vis.clone();
-    let attrs = ty.docs.clone();
+    let attrs = docs.to_vec();
     let params_name = format_ident!("{}Params", model.name);
     let layout = &ty.layout;
 
@@ -607,40 +384,14 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
     let ny = ty.outputs.len();
     let neq = ty.residuals.len();
 
-    let residuals = ty.residuals.clone();
-    let f_xdot = jacobian(model, &residuals, &layout.state_dots());
-    let f_x = jacobian(model, &residuals, &layout.states);
-    let f_z = jacobian(model, &residuals, &layout.algebraic);
-    let f_u = jacobian(model, &residuals, &layout.inputs);
-    let outputs: Vec<ExprId> = ty.outputs.iter().map(|o| o.1).collect();
-    let h_x = jacobian(model, &outputs, &layout.states);
-    let h_z = jacobian(model, &outputs, &layout.algebraic);
-    let h_u = jacobian(model, &outputs, &layout.inputs);
-
-    // Iteration matrix [dF/dx + c dF/dx' | dF/dz], assembled symbolically so the sum of the
-    // two blocks is one expression per entry.
-    let c_var = model.var(Symbol::IterationCoefficient);
-    let c = model.graph.var(c_var);
-    let mut iteration: BTreeMap<(usize, usize), ExprId> = BTreeMap::new();
-    for &(i, j, e) in &f_x.entries {
-        iteration.insert((i, j), e);
-    }
-    for &(i, j, e) in &f_xdot.entries {
-        let scaled = model.graph.mul(c, e);
-        let entry = match iteration.get(&(i, j)) {
-            Some(&prev) => model.graph.add(prev, scaled),
-            None => scaled,
-        };
-        iteration.insert((i, j), entry);
-    }
-    for &(i, j, e) in &f_z.entries {
-        iteration.insert((i, nx + j), e);
-    }
-    let model = &*model;
+    let residuals = &ty.residuals;
+    let (f_xdot, f_x, f_z, f_u) = (&ty.f_xdot, &ty.f_x, &ty.f_z, &ty.f_u);
+    let (h_x, h_z, h_u) = (&ty.h_x, &ty.h_z, &ty.h_u);
+    let outputs = ty.output_exprs();
 
     // Routines: each schedules all of its roots together (CSE across them).
     let residual_code = {
-        let r = routine(model, layout, &residuals);
+        let r = routine(model, layout, residuals);
         let (prelude, stmts) = (r.prelude, r.statements);
         let writes = r
             .roots
@@ -651,16 +402,12 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
     };
     let evaluate_code = {
         let blocks = [
-            (quote!(__f_xdot), &f_xdot),
-            (quote!(__f_x), &f_x),
-            (quote!(__f_z), &f_z),
-            (quote!(__f_u), &f_u),
+            (quote!(__f_xdot), f_xdot),
+            (quote!(__f_x), f_x),
+            (quote!(__f_z), f_z),
+            (quote!(__f_u), f_u),
         ];
-        let mut roots = residuals.clone();
-        for (_, b) in &blocks {
-            roots.extend(b.entries.iter().map(|e| e.2));
-        }
-        let r = routine(model, layout, &roots);
+        let r = routine(model, layout, &ty.evaluate_roots());
         let (prelude, stmts) = (r.prelude, r.statements);
         let mut it = r.roots.into_iter();
         let mut writes: Vec<TokenStream> = (0..neq)
@@ -673,13 +420,15 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
         quote!(#prelude #(#stmts)* #(#writes)*)
     };
     let iteration_code = {
-        let roots: Vec<ExprId> = iteration.values().copied().collect();
+        let roots: Vec<ExprId> = ty.iteration.exprs().collect();
         let r = routine(model, layout, &roots);
         let (prelude, stmts) = (r.prelude, r.statements);
-        let writes = iteration
-            .keys()
+        let writes = ty
+            .iteration
+            .entries
+            .iter()
             .zip(r.roots)
-            .map(|((i, j), v)| quote!(__out.set(#i, #j, #v);));
+            .map(|((i, j, _), v)| quote!(__out.set(#i, #j, #v);));
         quote!(#prelude #(#stmts)* #(#writes)*)
     };
     let outputs_code = {
@@ -694,15 +443,11 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
     };
     let output_jac_code = {
         let blocks = [
-            (quote!(__h_x), &h_x),
-            (quote!(__h_z), &h_z),
-            (quote!(__h_u), &h_u),
+            (quote!(__h_x), h_x),
+            (quote!(__h_z), h_z),
+            (quote!(__h_u), h_u),
         ];
-        let roots: Vec<ExprId> = blocks
-            .iter()
-            .flat_map(|(_, b)| b.entries.iter().map(|e| e.2))
-            .collect();
-        let r = routine(model, layout, &roots);
+        let r = routine(model, layout, &ty.output_jacobian_roots());
         let (prelude, stmts) = (r.prelude, r.statements);
         let writes = sink_writes(&mut r.roots.into_iter(), &blocks);
         quote!(#prelude #(#stmts)* #(#writes)*)
@@ -717,11 +462,11 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
     let param_names = str_list(model.params.iter().map(|p| p.name.to_string()));
     let equations = str_list(ty.equation_texts.iter().cloned());
     let (p_xdot, p_x, p_z, p_u, p_hx) = (
-        f_xdot.pattern(),
-        f_x.pattern(),
-        f_z.pattern(),
-        f_u.pattern(),
-        h_x.pattern(),
+        pattern(f_xdot),
+        pattern(f_x),
+        pattern(f_z),
+        pattern(f_u),
+        pattern(h_x),
     );
     let model_name = name.to_string();
     let (param_get, param_set): (Vec<TokenStream>, Vec<TokenStream>) = model
@@ -737,7 +482,7 @@ pub fn emit_dae_type(model: &mut Model, ty: &DaeType) -> TokenStream {
         })
         .unzip();
     // A tracking DAE carries the coefficients of W in use; a plant only its parameters.
-    let (w_field, w_init, default_impl, derives, new_doc) = match &ty.w_defaults {
+    let (w_field, w_init, default_impl, derives, new_doc) = match w_defaults {
         Some(per_output) => {
             let all: Vec<f64> = per_output.iter().flatten().copied().collect();
             let n = all.len();

@@ -5,15 +5,21 @@
 //! data flow:
 //!
 //! ```text
-//! parse (syn, spans) -> lower (names, checks, symbolic graph) -> derivatives -> emit (quote)
+//! parse (syn, spans) -> lower (names, checks, symbolic graph) -> derive -> emit (quote)
 //! ```
 //!
 //! * [`parse`]: the DSL's syntax;
 //! * [`lower`]: name resolution, structural checks, lowering into [`ir::Model`];
 //! * [`symbolic`]: the hash-consed expression graph, derivatives, CSE and Rust emission;
-//! * [`emit`]: the generated parameter struct, model type and `DaeModel` implementation.
+//! * [`hirschorn`]: relative degrees and the tracking rows of the stabilised Hirschorn steps;
+//! * [`derive`]: every root to be evaluated (residual, Jacobian blocks, iteration matrix,
+//!   outputs, tracking DAE, references) as symbolic data, for emission and for run-time
+//!   evaluation alike;
+//! * [`emit`]: the derived roots as the generated parameter struct, model type and `DaeModel`
+//!   implementation (tokens only).
 
 pub mod ctxt;
+pub mod derive;
 pub mod emit;
 pub mod hirschorn;
 pub mod ir;
@@ -36,6 +42,14 @@ pub fn expand(input: TokenStream) -> TokenStream {
 
 /// Like [`expand`], but returns the errors instead of turning them into tokens.
 pub fn try_expand(input: TokenStream) -> syn::Result<TokenStream> {
+    let (model, derived) = derive_model(input)?;
+    Ok(emit::emit_model(&model, &derived))
+}
+
+/// Parse, lower, check and differentiate a model: the lowered model (whose graph holds every
+/// expression) and everything to be evaluated ([`derive::Derived`]), or all errors found.
+/// [`try_expand`] emits Rust from the result; a run-time model evaluates the same roots.
+pub fn derive_model(input: TokenStream) -> syn::Result<(ir::Model, derive::Derived)> {
     let mut model = lower_model(input)?;
     let mut cx = ctxt::Ctxt::new();
     let tracking = match model.tracking {
@@ -43,7 +57,8 @@ pub fn try_expand(input: TokenStream) -> syn::Result<TokenStream> {
         None => None,
     };
     cx.check()?;
-    Ok(emit::emit_model(&mut model, tracking.as_deref()))
+    let derived = derive::derive(&mut model, tracking.as_deref());
+    Ok((model, derived))
 }
 
 /// Lower a model without emitting code, for inspection and tests.
