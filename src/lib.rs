@@ -7,4 +7,5 @@
 
 pub use dpc_core as core;
 pub use dpc_macros::model;
+pub use dpc_runtime as runtime;
 pub use nalgebra;

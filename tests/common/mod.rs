@@ -2,6 +2,8 @@
 
 #![allow(dead_code)]
 
+pub mod model_text;
+
 use dpc::core::model::{DaeModel, Structure};
 use dpc::nalgebra::DMatrix;
 
