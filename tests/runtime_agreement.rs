@@ -208,11 +208,7 @@ fn same_values<A: DaeModel, B: DaeModel>(a: &A, b: &B, p: &Point) {
 
 /// Parameters `i` of both set to `values[i]` (values near the defaults, so that the models
 /// stay in their domain).
-fn with_params<A: DaeModel, B: DaeModel>(a: &A, b: &B, scales: &[f64]) -> (A, B)
-where
-    A: Sized,
-    B: Sized,
-{
+fn with_params<A: DaeModel, B: DaeModel>(a: &A, b: &B, scales: &[f64]) -> (A, B) {
     let mut pa = a.params().clone();
     let mut pb = b.params().clone();
     for i in 0..a.structure().n_params() {
