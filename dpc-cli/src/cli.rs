@@ -31,9 +31,10 @@ enum Command {
     Sweep(simulate::SweepArgs),
     /// List the models scenarios can name.
     Models,
-    /// Print a model's listing, dimensions, relative degrees and W.
+    /// Print a model's listing, dimensions, relative degrees and W; for a plant file
+    /// (FILE.dpc) also its diagnostics, or its errors as FILE:LINE:COLUMN lines.
     Model {
-        /// The model's name (see `dpc models`).
+        /// The model's name (see `dpc models`), or the path of a plant file ending in .dpc.
         name: String,
     },
 }
@@ -47,6 +48,23 @@ pub enum CliError {
     /// `dpc analyze`: the system file is unreadable, malformed or has no analysis.
     #[error("{0}")]
     Analyze(String),
+    /// `dpc model FILE.dpc`: the plant file cannot be read or compiled.
+    #[error(transparent)]
+    PlantFile(#[from] dpc::runtime::PlantFileError),
+}
+
+impl CliError {
+    /// The error as printed: the errors of a plant file as their `FILE:LINE:COLUMN: message`
+    /// lines (whether `dpc model` or a scenario named the file), anything else as one line
+    /// `error: ...`.
+    fn report(&self) -> String {
+        match self {
+            CliError::PlantFile(e) | CliError::Scenario(ScenarioError::PlantFile(e)) => {
+                e.to_string()
+            }
+            other => format!("error: {other}"),
+        }
+    }
 }
 
 /// Run the `dpc` command line on the models of `registry`, with the process's arguments;
@@ -87,6 +105,11 @@ fn run(registry: &Registry, cli: Cli) -> ExitCode {
             }
             Ok(())
         }
+        Command::Model { name } if crate::plant_file::is_plant_file(&name) => {
+            crate::plant_file::describe(std::path::Path::new(&name))
+                .map(|text| print!("{text}"))
+                .map_err(CliError::from)
+        }
         Command::Model { name } => registry
             .get(&name)
             .map(|m| print!("{}", m.describe()))
@@ -94,8 +117,8 @@ fn run(registry: &Registry, cli: Cli) -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(msg) => {
-            eprintln!("error: {msg}");
+        Err(e) => {
+            eprintln!("{}", e.report());
             ExitCode::FAILURE
         }
     }

@@ -28,6 +28,7 @@
 //! ```
 
 pub mod cli;
+pub mod plant_file;
 pub mod plot;
 pub mod registry;
 pub mod report;
@@ -69,6 +70,17 @@ pub enum ScenarioError {
     /// The model does not exist.
     #[error(transparent)]
     UnknownModel(#[from] registry::UnknownModel),
+    /// The plant file a scenario names cannot be read or compiled: every error, one
+    /// `FILE:LINE:COLUMN: message` line each.
+    #[error(transparent)]
+    PlantFile(dpc::runtime::PlantFileError),
+    /// The plant file a scenario names has no `tracking` section, so there is no tracking DAE
+    /// to control it with.
+    #[error("{path}: the plant file has no `tracking` section; a scenario needs its tracking DAE")]
+    NoTracking {
+        /// The plant file.
+        path: String,
+    },
     /// The design of the preliminary feedback could not be made.
     #[error("{0}")]
     Setup(String),

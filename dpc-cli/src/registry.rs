@@ -21,7 +21,8 @@
 //! assert_eq!(err, "unknown model `bicycle`; the known models are: wheel");
 //! ```
 
-use std::sync::Arc;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 use dpc::core::linalg::{FaerDenseLu, LinearSolver};
 use dpc::core::model::DaeModel;
@@ -260,10 +261,12 @@ pub struct UnknownModel {
     pub known: Vec<String>,
 }
 
-/// The models of a command line, in the order `dpc models` lists them.
+/// The models of a command line, in the order `dpc models` lists them; plant files that
+/// scenarios name are read once and kept.
 #[derive(Default)]
 pub struct Registry {
     models: Vec<Box<dyn ScenarioModel>>,
+    files: Mutex<Vec<(PathBuf, Arc<dyn ScenarioModel>)>>,
 }
 
 impl Registry {
@@ -303,11 +306,29 @@ impl Registry {
             })
     }
 
-    /// Run `scenario` on the model it names.
+    /// Run `scenario` on the model it names: a registered model, or a plant file (a `model`
+    /// ending in `.dpc`, see [`crate::plant_file`]).
     ///
     /// # Errors
-    /// [`ScenarioError::UnknownModel`] and the errors of [`ScenarioModel::run`].
+    /// [`ScenarioError::UnknownModel`], the errors of [`crate::plant_file::load`] and those
+    /// of [`ScenarioModel::run`].
     pub fn run(&self, scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError> {
-        self.get(&scenario.model)?.run(scenario, label)
+        match crate::plant_file::scenario_path(scenario) {
+            Some(path) => self.plant_file(&path, &scenario.model)?.run(scenario, label),
+            None => self.get(&scenario.model)?.run(scenario, label),
+        }
+    }
+
+    /// The model of the plant file at `path`, read on first use (the runs of a sweep share
+    /// it).
+    fn plant_file(&self, path: &Path, name: &str) -> Result<Arc<dyn ScenarioModel>, ScenarioError> {
+        // A panic elsewhere while the lock was held leaves the list intact: keep using it.
+        let mut files = self.files.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, model)) = files.iter().find(|(p, _)| p == path) {
+            return Ok(Arc::clone(model));
+        }
+        let model: Arc<dyn ScenarioModel> = crate::plant_file::load(path, name)?.into();
+        files.push((path.to_path_buf(), Arc::clone(&model)));
+        Ok(model)
     }
 }

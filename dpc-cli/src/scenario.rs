@@ -61,7 +61,8 @@ pub struct Scenario {
     /// A title for plots and summaries.
     #[serde(default)]
     pub title: Option<String>,
-    /// The model's name (see `dpc models`).
+    /// The model's name (see `dpc models`), or the path of a plant file ending in `.dpc`,
+    /// relative to the scenario file (see [`crate::plant_file`]).
     pub model: String,
     /// Initial plant state.
     pub x0: Vec<f64>,
@@ -109,6 +110,10 @@ pub struct Scenario {
     /// beside the main run in the plots, e.g. `["prefeedback=false"]`.
     #[serde(default)]
     pub compare: Vec<String>,
+    /// The file the scenario was read from (not a key): a plant file's path is relative to
+    /// it.
+    #[serde(skip)]
+    pub source: Option<std::path::PathBuf>,
 }
 
 fn default_delta() -> f64 {
@@ -436,7 +441,9 @@ impl Scenario {
             path: path.display().to_string(),
             message: e.to_string(),
         })?;
-        Self::parse(&path.display().to_string(), &text, overrides)
+        let mut scenario = Self::parse(&path.display().to_string(), &text, overrides)?;
+        scenario.source = Some(path.to_path_buf());
+        Ok(scenario)
     }
 
     /// Parse scenario text (`origin` names it in errors) and apply `overrides`.

@@ -67,15 +67,17 @@ pub struct Diagnostic {
 }
 
 /// Why a plant file cannot be used.
-#[derive(Debug, Error)]
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum PlantFileError {
     /// The file could not be read.
-    #[error("{path}: cannot read: {source}")]
+    #[error("{path}: cannot read: {message}")]
     Read {
         /// The file.
         path: String,
+        /// What kind of failure the system reported.
+        kind: std::io::ErrorKind,
         /// The system's reason.
-        source: std::io::Error,
+        message: String,
     },
     /// The file is not UTF-8 text.
     #[error(
@@ -136,9 +138,10 @@ fn position(text: &str, offset: usize) -> (usize, usize) {
 pub fn load(path: impl AsRef<Path>) -> Result<RuntimeModel, PlantFileError> {
     let path = path.as_ref();
     let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| PlantFileError::Read {
+    let bytes = std::fs::read(path).map_err(|e| PlantFileError::Read {
         path: name.clone(),
-        source,
+        kind: e.kind(),
+        message: e.to_string(),
     })?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let offset = e.utf8_error().valid_up_to();

@@ -215,7 +215,10 @@ fn unreadable_files_are_typed_errors() {
 
     let missing = dir.join("missing.dpc");
     let err = load(&missing).unwrap_err();
-    assert!(matches!(err, PlantFileError::Read { .. }), "{err}");
+    assert!(
+        matches!(err, PlantFileError::Read { kind: std::io::ErrorKind::NotFound, .. }),
+        "{err}"
+    );
     assert!(
         err.to_string()
             .starts_with(&format!("{}: cannot read: ", missing.display())),
