@@ -69,7 +69,11 @@ pub fn describe(path: &Path) -> Result<String, PlantFileError> {
     let mut s = match entry(&model, &path.display().to_string(), summary) {
         Some(entry) => entry.describe(),
         None => {
-            let mut s = format!("{}: plant file (model {})\n\n", path.display(), model.name());
+            let mut s = format!(
+                "{}: plant file (model {})\n\n",
+                path.display(),
+                model.name()
+            );
             s += model.listing();
             s += "\nno tracking section: scenarios cannot run this plant until it declares one\n";
             s

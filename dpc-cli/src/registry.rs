@@ -314,7 +314,9 @@ impl Registry {
     /// of [`ScenarioModel::run`].
     pub fn run(&self, scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError> {
         match crate::plant_file::scenario_path(scenario) {
-            Some(path) => self.plant_file(&path, &scenario.model)?.run(scenario, label),
+            Some(path) => self
+                .plant_file(&path, &scenario.model)?
+                .run(scenario, label),
             None => self.get(&scenario.model)?.run(scenario, label),
         }
     }

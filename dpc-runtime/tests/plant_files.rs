@@ -216,7 +216,13 @@ fn unreadable_files_are_typed_errors() {
     let missing = dir.join("missing.dpc");
     let err = load(&missing).unwrap_err();
     assert!(
-        matches!(err, PlantFileError::Read { kind: std::io::ErrorKind::NotFound, .. }),
+        matches!(
+            err,
+            PlantFileError::Read {
+                kind: std::io::ErrorKind::NotFound,
+                ..
+            }
+        ),
         "{err}"
     );
     assert!(
