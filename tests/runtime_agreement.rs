@@ -344,3 +344,24 @@ proptest! {
         }
     }
 }
+
+/// The repository's plant file `scenarios/wheel.dpc` holds the compiled `Wheel`'s text (up to
+/// layout and plain comments), so the closed-loop agreement of the two in
+/// `dpc-cli/tests/plant_files.rs` compares the same model.
+#[test]
+fn the_wheel_plant_file_is_the_compiled_wheels_text() {
+    use std::str::FromStr;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let file = std::fs::read_to_string(root.join("scenarios/wheel.dpc")).unwrap();
+    let source = std::fs::read_to_string(root.join("models/src/wheel.rs")).unwrap();
+    let wheel = invocations(&source)
+        .into_iter()
+        .find(|m| m.body.contains("pub Wheel {"))
+        .expect("Wheel in models/src/wheel.rs");
+    let tokens = |text: &str| {
+        proc_macro2::TokenStream::from_str(text)
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(tokens(&file), tokens(&wheel.body));
+}
