@@ -200,6 +200,24 @@ fn a_scenario_runs_on_a_plant_file_relative_to_it() {
     }
 }
 
+/// A plant that exists only as a plant file tracks its reference: the late error stays an
+/// order of magnitude below the reference's amplitude (0.2).
+#[test]
+fn the_tanks_scenario_tracks_on_a_plant_of_its_own() {
+    let registry = Registry::new();
+    let scenario = Scenario::load(
+        &scenarios().join("tanks.toml"),
+        &Overrides::parse(["t_end=10"]).unwrap(),
+    )
+    .unwrap();
+    let run = registry.run(&scenario, "tanks").unwrap();
+    let closed = &run.closed_loop;
+    assert!(closed.divergence.is_none(), "{:?}", closed.divergence);
+    assert!(closed.samples.last().unwrap().t >= 10.0 - scenario.h);
+    let late = closed.max_abs_error_since(7.5);
+    assert!(late[0] < 0.02, "late error {late:?}");
+}
+
 /// The closed loop of the wheel scenario on the plant file and on the compiled wheel agree to
 /// the integrator's tolerance over the whole run.
 #[test]
