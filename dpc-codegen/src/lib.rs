@@ -12,7 +12,7 @@
 //! * [`lower`]: name resolution, structural checks, lowering into [`ir::Model`];
 //! * [`symbolic`]: the hash-consed expression graph, derivatives, CSE and Rust emission;
 //! * [`hirschorn`]: relative degrees and the tracking rows of the stabilised Hirschorn steps;
-//! * [`derive`]: every root to be evaluated (residual, Jacobian blocks, iteration matrix,
+//! * [`derive`](mod@derive): every root to be evaluated (residual, Jacobian blocks, iteration matrix,
 //!   outputs, tracking DAE, references) as symbolic data, for emission and for run-time
 //!   evaluation alike;
 //! * [`emit`]: the derived roots as the generated parameter struct, model type and `DaeModel`

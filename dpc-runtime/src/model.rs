@@ -587,7 +587,7 @@ impl DaeModel for RuntimePlant {
 /// the coefficients of `W` in use held in the value (as generated tracking types do).
 ///
 /// Made from the parameters of a file without a `tracking` section
-/// ([`TrackingDae::from_params`]), it is a DAE with no equations, unknowns or outputs, named
+/// ([`DaeModel::from_params`]), it is a DAE with no equations, unknowns or outputs, named
 /// `NAME (no tracking section)`; [`RuntimeModel::tracking`] returns `None` for such a file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RuntimeTracking {
