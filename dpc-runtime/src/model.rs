@@ -110,12 +110,9 @@ impl DaeTapes {
         }
     }
 
+    /// Root `i` into `out[i]` for every root: a wrong length panics, as in generated code.
     fn residual(&self, args: &Args<'_>, out: &mut [f64]) {
-        self.residual.eval(args, |v| {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = v.get(i);
-            }
-        });
+        self.residual.eval(args, |v| v.copy_into(out, v.len()));
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -135,9 +132,7 @@ impl DaeTapes {
     {
         let s = &self.structure;
         self.evaluate.eval(args, |v| {
-            for (i, o) in residual.iter_mut().enumerate() {
-                *o = v.get(i);
-            }
+            v.copy_into(residual, s.n_equations());
             let mut k = s.n_equations();
             k = write(v, k, &s.pattern_f_xdot, f_xdot);
             k = write(v, k, &s.pattern_f_x, f_x);
@@ -152,11 +147,7 @@ impl DaeTapes {
     }
 
     fn outputs(&self, args: &Args<'_>, out: &mut [f64]) {
-        self.outputs.eval(args, |v| {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = v.get(i);
-            }
-        });
+        self.outputs.eval(args, |v| v.copy_into(out, v.len()));
     }
 
     fn output_jacobians<A, B, C>(&self, args: &Args<'_>, h_x: &mut A, h_z: &mut B, h_u: &mut C)

@@ -188,8 +188,11 @@ impl Tape {
         args: &Args<'_>,
         read: impl FnOnce(Values<'_>) -> R,
     ) -> R {
-        regs.clear();
-        regs.extend_from_slice(&self.template);
+        // Registers from `first` on are written by the instructions before they are read.
+        if regs.len() < self.template.len() {
+            regs.resize(self.template.len(), 0.0);
+        }
+        regs[..self.first].copy_from_slice(&self.template[..self.first]);
         for &(r, source) in &self.loads {
             regs[r as usize] = args.value(source);
         }
@@ -225,5 +228,18 @@ impl Values<'_> {
     /// The value of root `k` (in the order compiled).
     pub fn get(&self, k: usize) -> f64 {
         self.regs[self.roots[k] as usize]
+    }
+
+    /// Number of roots.
+    pub fn len(&self) -> usize {
+        self.roots.len()
+    }
+
+    /// Roots `0..n` into `out[..n]`; panics if `out` is shorter (a wrong buffer length is a
+    /// programming error, as for generated code).
+    pub fn copy_into(&self, out: &mut [f64], n: usize) {
+        for (k, o) in out[..n].iter_mut().enumerate() {
+            *o = self.get(k);
+        }
     }
 }

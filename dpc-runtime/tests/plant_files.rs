@@ -266,3 +266,13 @@ fn values_are_send_sync_and_clone() {
     check::<dpc_runtime::RuntimeReference>();
     check::<dpc_runtime::RuntimeParams>();
 }
+
+/// A buffer of the wrong length is a programming error that panics, as in generated code,
+/// never a residual silently cut short.
+#[test]
+#[should_panic]
+fn a_short_residual_buffer_panics() {
+    let plant = parse("cart.dpc", CART).unwrap().plant();
+    let mut r = [0.0; 1];
+    plant.residual(0.0, &[1.0, 0.25], &[0.3, 1.5], &[], &[0.5], &mut r);
+}
