@@ -1,6 +1,6 @@
 //! The cost of a plant file's evaluation against the compiled model of the same text: per
 //! call of the residual plus the iteration matrix (what the integrator evaluates per Newton
-//! iteration), for the wheel and for a chain of 12 masses. The ratio is quoted in README.md.
+//! iteration), for the wheel and for a chain of 12 masses. The ratios are quoted in README.md.
 //!
 //! Run with `cargo bench --bench runtime_model`.
 

@@ -85,6 +85,7 @@ impl Func {
     }
 
     /// Numerical value, exactly as the emitted `x.name()` computes it.
+    #[inline]
     pub fn apply(self, x: f64) -> f64 {
         match self {
             Func::Sqrt => x.sqrt(),
