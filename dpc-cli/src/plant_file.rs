@@ -19,8 +19,9 @@ pub fn is_plant_file(model: &str) -> bool {
     Path::new(model).extension().is_some_and(|e| e == "dpc")
 }
 
-/// The plant file a scenario names, resolved against the scenario file's directory; `None`
-/// when its `model` is a registered name.
+/// The plant file a scenario names, resolved against the scenario file's directory (the
+/// current directory for a scenario parsed from text); `None` when its `model` is a
+/// registered name.
 pub fn scenario_path(scenario: &Scenario) -> Option<PathBuf> {
     if !is_plant_file(&scenario.model) {
         return None;

@@ -199,7 +199,6 @@ struct ReferencePart {
 }
 
 /// A plant file, compiled: shared (behind an `Arc`) by every value made from it.
-#[derive(Debug)]
 struct Compiled {
     origin: String,
     name: String,
@@ -211,6 +210,16 @@ struct Compiled {
     analysis: Vec<RelativeDegree>,
     relative_degrees: Vec<Option<usize>>,
     defaults: Vec<f64>,
+}
+
+impl fmt::Debug for Compiled {
+    /// The model's name and origin (the tapes are long and say little).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Compiled")
+            .field("name", &self.name)
+            .field("origin", &self.origin)
+            .finish_non_exhaustive()
+    }
 }
 
 /// A compiled plant file: the source of its plant, tracking DAE and reference values.
