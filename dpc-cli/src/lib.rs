@@ -37,7 +37,9 @@ pub mod sweep;
 
 pub use cli::main;
 
+use dpc::core::design::DesignError;
 use dpc::core::dpc::DpcError;
+use dpc::core::linear::LinearError;
 use dpc::core::reference::ReferenceError;
 use dpc::core::simulate::SimulateError;
 use dpc::core::tracking::TrackingError;
@@ -69,9 +71,14 @@ pub enum ScenarioError {
     /// The model does not exist.
     #[error(transparent)]
     UnknownModel(#[from] registry::UnknownModel),
-    /// The design of the preliminary feedback could not be made.
-    #[error("{0}")]
-    Setup(String),
+    /// The design of the preliminary feedback could not be made: the nominal could not be
+    /// trimmed, the linearisation or the analysis failed, or the tracking DAE's relative
+    /// degrees are not the plant's at the nominal.
+    #[error("design: {0}")]
+    Design(DesignError),
+    /// The linear sampled-data prediction of the designed loop failed.
+    #[error("sampled-data prediction: {0}")]
+    SampledPrediction(LinearError),
     /// The reference assembled from the scenario's terms does not fit the model.
     #[error(transparent)]
     Reference(ReferenceError),

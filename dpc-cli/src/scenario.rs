@@ -18,6 +18,7 @@
 //! [design]                        # how K_n is built (needed when prefeedback = true)
 //! poles = [-5.0, -5.0, -5.0]      # of Abar_4 + Bbar_2 K_2; a real or [re, im] each
 //! nominal = { state = [1.5707963267948966, 0.0, 0.0, 0.0, -6.0], rate = [0.0, -6.0, 0.0, 0.0, 0.0], input = [0.0, 0.0] }
+//!                                 # or in part, the rest trimmed: see NominalMotion
 //! about = "reference"             # or "nominal" (default): where x - x0(t) is taken
 //! reference_state = { theta = "theta", psi = "psi", dtheta = "theta'", dpsi = "psi'" }
 //!
@@ -206,7 +207,9 @@ pub struct Design {
     /// Poles of `Abar_4 + Bbar_2 K_2`; absent: the analysis' default.
     #[serde(default)]
     pub poles: Option<Vec<Pole>>,
-    /// The nominal motion `x0(t) = state + t * rate`, `u0 = input`.
+    /// The nominal motion `x0(t) = state + t * rate`, `z0`, `u0`, in full or in part (the
+    /// rest trimmed); absent: the equilibrium nearest `x0`.
+    #[serde(default)]
     pub nominal: NominalMotion,
     /// Where the deviation coordinates `x - x0(t)` of the feedback are taken.
     #[serde(default)]
@@ -229,18 +232,60 @@ pub enum About {
     Reference,
 }
 
-/// A steady nominal motion `x0(t) = state + t * rate` with constant input `u0`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// A steady nominal motion `x0(t) = state + t * rate` with constant algebraic unknowns `z0`
+/// and input `u0`, given in full or in part: what is not given is solved for by the trim
+/// solver ([`dpc::core::design::trim`]) so that the model's equations hold at `t = 0`.
+///
+/// Each of `state`, `rate`, `algebraic` and `input` is either an array (every entry fixed)
+/// or a table by name (the named entries fixed, the others solved for). Absent `state`,
+/// `algebraic` or `input`: solved for; absent `rate`: all zero (an equilibrium). `guess`
+/// gives starting values for entries that are solved for, by name (`der(psi)` for a rate);
+/// states without a guess start from `x0`, everything else from zero.
+///
+/// ```toml
+/// [design.nominal]                  # the wheel upright, heading rate -6, no torque
+/// state = { theta = 1.5707963267948966, psi = 0.0, dtheta = 0.0, dpsi = -6.0 }
+/// rate = { theta = 0.0, dtheta = 0.0, dphi = 0.0, dpsi = 0.0 }
+/// input = [0.0, 0.0]
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NominalMotion {
     /// `x0(0)`.
-    pub state: Vec<f64>,
-    /// `x0'`, constant (zeros: an operating point).
     #[serde(default)]
-    pub rate: Option<Vec<f64>>,
-    /// `u0`; absent: zeros.
+    pub state: Option<Values>,
+    /// `x0'`, constant.
     #[serde(default)]
-    pub input: Option<Vec<f64>>,
+    pub rate: Option<Values>,
+    /// `z0`, constant.
+    #[serde(default)]
+    pub algebraic: Option<Values>,
+    /// `u0`, constant.
+    #[serde(default)]
+    pub input: Option<Values>,
+    /// Starting values of entries that are solved for, by name.
+    #[serde(default)]
+    pub guess: BTreeMap<String, f64>,
+}
+
+/// Values of a vector of the model: all of them in order, or some of them by name.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Values {
+    /// Every entry, in the model's order.
+    All(Vec<f64>),
+    /// Some entries, by name.
+    Named(BTreeMap<String, f64>),
+}
+
+impl Values {
+    /// The values given, in order (array) or by name.
+    pub fn values(&self) -> Box<dyn Iterator<Item = f64> + '_> {
+        match self {
+            Values::All(v) => Box::new(v.iter().copied()),
+            Values::Named(m) => Box::new(m.values().copied()),
+        }
+    }
 }
 
 /// The simulated plant.
@@ -561,12 +606,22 @@ impl Scenario {
             );
         }
         if let Some(design) = &self.design {
-            finite("design.nominal.state", &design.nominal.state)?;
-            if let Some(rate) = &design.nominal.rate {
-                finite("design.nominal.rate", rate)?;
+            let n = &design.nominal;
+            for (what, values) in [
+                ("state", &n.state),
+                ("rate", &n.rate),
+                ("algebraic", &n.algebraic),
+                ("input", &n.input),
+            ] {
+                if let Some(values) = values {
+                    finite(
+                        &format!("design.nominal.{what}"),
+                        &values.values().collect::<Vec<_>>(),
+                    )?;
+                }
             }
-            if let Some(input) = &design.nominal.input {
-                finite("design.nominal.input", input)?;
+            for (name, value) in &n.guess {
+                finite(&format!("design.nominal.guess.{name}"), &[*value])?;
             }
             for p in design.poles.iter().flatten() {
                 let c = p.complex();

@@ -74,6 +74,41 @@ pub fn simulate(registry: &Registry, args: &SimulateArgs) -> Result<(), Scenario
     runs.push(registry.run(&scenario, &main_label)?);
     let summary = write_run(&args.out, &runs[0])?;
     if let Some(d) = &summary.linear_design {
+        let n = &d.nominal;
+        if !n.solved_for.is_empty() {
+            let value = |name: &str| -> Option<f64> {
+                match name.strip_prefix("der(").and_then(|r| r.strip_suffix(')')) {
+                    Some(state) => n.rate.get(state).copied(),
+                    None => [&n.state, &n.algebraic, &n.input]
+                        .iter()
+                        .find_map(|m| m.get(name).copied()),
+                }
+            };
+            println!(
+                "nominal completed by the trim solver ({} iterations, residual {:.1e}): {}",
+                n.trim_iterations,
+                n.trim_residual,
+                n.solved_for
+                    .iter()
+                    .map(|name| match value(name) {
+                        Some(v) => format!("{name} = {v:.6}"),
+                        None => name.clone(),
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        if n.free_directions > 0 {
+            println!(
+                "note: the nominal is not unique ({} free direction(s)); the trim solver took the solution nearest the guesses (x0 for states)",
+                n.free_directions
+            );
+        }
+        if let Some(where_) = &n.not_steady {
+            println!(
+                "note: the nominal is not a steady motion up to t_end: {where_}; K_n is designed at t = 0"
+            );
+        }
         println!(
             "linear analysis of the controller's model: DPC alone predicted {}; eig(Abar_4) = [{}]",
             if d.dpc_stable_without_prefeedback {
