@@ -49,7 +49,9 @@ pub struct Summary {
     pub controller_events: Vec<ControllerEvent>,
     /// The largest round-off level `eps * delta^-nu` of a control update over the run: the
     /// relative rounding error of the extracted control, which grows as `delta` shrinks
-    /// while the truncation error falls; compare it with the accuracy wanted.
+    /// while the truncation error falls; compare it with the accuracy wanted. At 1 or more
+    /// the controls carry no correct digit; written as `"inf"` when it exceeds the largest
+    /// double.
     pub roundoff_level: f64,
     /// Wall-clock time of the simulation, in seconds.
     pub wall_time_s: f64,
@@ -113,15 +115,23 @@ fn write_error(path: &Path, e: impl std::fmt::Display) -> ScenarioError {
     }
 }
 
-/// Write `summary.json` and `trajectory.csv` of `run` into `dir` (created if needed).
+/// Write `summary.json` and `trajectory.csv` of `run` into `dir` (created if needed; the
+/// callers write into a [`crate::output::Staging`] directory that is moved into place when
+/// everything is written). Infinite numbers in `summary.json` are written as `"inf"` or
+/// `"-inf"` ([`crate::json`]).
 ///
 /// # Errors
-/// [`ScenarioError::Write`] when a file cannot be written.
+/// [`ScenarioError::Write`] when a file cannot be written, [`ScenarioError::NotFinite`] when
+/// a number of the summary is NaN.
 pub fn write_run(dir: &Path, run: &RunResult) -> Result<Summary, ScenarioError> {
     std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
     let summary = Summary::of(run);
     let path = dir.join("summary.json");
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| write_error(&path, e))?;
+    let json =
+        crate::json::to_string_pretty(&summary).map_err(|cause| ScenarioError::NotFinite {
+            path: path.display().to_string(),
+            cause,
+        })?;
     std::fs::write(&path, json + "\n").map_err(|e| write_error(&path, e))?;
     write_trajectory(&dir.join("trajectory.csv"), run)?;
     Ok(summary)

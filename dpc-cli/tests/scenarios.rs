@@ -273,11 +273,12 @@ fn bad_scenarios_give_one_error_line() {
     for (name, text, extra, expected) in cases {
         let path = dir.join(name);
         std::fs::write(&path, text).unwrap();
+        let out = dir.join("out");
         let mut args = vec![
             "simulate",
             path.to_str().unwrap(),
             "--out",
-            dir.to_str().unwrap(),
+            out.to_str().unwrap(),
         ];
         args.extend(extra);
         let o = dpc(&args);
