@@ -214,7 +214,7 @@ pub enum ValueError {
         values: Vec<f64>,
     },
     /// A single value is NaN or infinite.
-    #[error("`{key}` = {} is not a finite number", Num(*value))]
+    #[error("`{key}` is non-finite ({})", Num(*value))]
     NotFinite {
         /// The key, with the index of the entry (`design.poles[0]`).
         key: String,
@@ -229,6 +229,16 @@ pub enum ValueError {
         /// The value.
         value: f64,
         /// The largest magnitude accepted ([`largest_magnitude`]).
+        limit: f64,
+    },
+    /// A non-zero entry of a system matrix is too small to compute with.
+    #[error("`{key}` = {} is below {limit:.1e} in magnitude (and not zero), where products with it underflow to zero; scale the system", Num(*value))]
+    TooSmall {
+        /// The key, with the indices of the entry (`b[2][0]`).
+        key: String,
+        /// The value.
+        value: f64,
+        /// The smallest non-zero magnitude accepted, `sqrt(f64::MIN_POSITIVE)`.
         limit: f64,
     },
     /// A size that sets the work of the run exceeds its limit.
