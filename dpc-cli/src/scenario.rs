@@ -166,7 +166,7 @@ pub fn largest_magnitude() -> f64 {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ValueError {
     /// A time, step or tolerance is not a positive finite number.
-    #[error("`{key}` must be a positive number, found {}", Num(*value))]
+    #[error("`{key}` must be a positive finite number, found {}", Num(*value))]
     NotPositive {
         /// The key.
         key: String,
@@ -287,14 +287,22 @@ fn count(n: f64) -> String {
     }
 }
 
-/// One value finite and at most [`largest_magnitude`] in magnitude.
-pub(crate) fn check_scalar(key: &str, value: f64) -> Result<(), ValueError> {
-    if !value.is_finite() {
+/// One value finite.
+fn finite_scalar(key: &str, value: f64) -> Result<(), ValueError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
         Err(ValueError::NotFinite {
             key: key.to_string(),
             value,
         })
-    } else if value.abs() > largest_magnitude() {
+    }
+}
+
+/// One value finite and at most [`largest_magnitude`] in magnitude.
+pub(crate) fn check_scalar(key: &str, value: f64) -> Result<(), ValueError> {
+    finite_scalar(key, value)?;
+    if value.abs() > largest_magnitude() {
         Err(ValueError::TooLarge {
             key: key.to_string(),
             value,
@@ -631,6 +639,22 @@ pub(crate) fn parse_value(text: &str) -> toml::Value {
 pub(crate) fn value_text(v: &toml::Value) -> String {
     match v {
         toml::Value::String(s) => s.clone(),
+        other => element_text(other),
+    }
+}
+
+/// A value inside a list: strings quoted, numbers readable ([`Num`]).
+fn element_text(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(f) => Num(*f).to_string(),
+        toml::Value::Array(items) => format!(
+            "[{}]",
+            items
+                .iter()
+                .map(element_text)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
         other => other.to_string(),
     }
 }
@@ -763,10 +787,10 @@ impl Scenario {
             check_w_roots(&format!("w.{name}"), roots)?;
         }
         for (name, value) in &self.plant.params {
-            check_finite(&format!("plant.params.{name}"), &[*value])?;
+            finite_scalar(&format!("plant.params.{name}"), *value)?;
         }
         for (name, value) in &self.controller.params {
-            check_finite(&format!("controller.params.{name}"), &[*value])?;
+            finite_scalar(&format!("controller.params.{name}"), *value)?;
         }
         if let Some(reference) = &self.reference {
             for (name, terms) in reference {
@@ -940,7 +964,10 @@ t_end = 1.0
         let e = Scenario::parse("s.toml", MINIMAL, &Overrides::parse(["h=-1"]).unwrap())
             .unwrap_err()
             .to_string();
-        assert!(e.contains("`h` must be a positive number"), "{e}");
+        assert!(
+            e.contains("`h` must be a positive finite number, found -1"),
+            "{e}"
+        );
 
         let e = Overrides::parse(["h"]).unwrap_err().to_string();
         assert!(e.contains("key=value"), "{e}");
