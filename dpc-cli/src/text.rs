@@ -14,27 +14,10 @@
 //! assert_eq!(short(&"x".repeat(500)).len(), 80 + "... (500 characters)".len());
 //! ```
 
-use std::fmt;
-
 /// A number as a person would write it: plain decimals between `1e-4` and `1e9`, scientific
-/// notation outside (never hundreds of zeros), `inf`, `-inf` and `NaN` by name.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Num(pub f64);
-
-impl fmt::Display for Num {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let x = self.0;
-        if x.is_nan() {
-            f.write_str("NaN")
-        } else if x.is_infinite() {
-            f.write_str(if x > 0.0 { "inf" } else { "-inf" })
-        } else if x == 0.0 || (1e-4..1e9).contains(&x.abs()) {
-            write!(f, "{x}")
-        } else {
-            write!(f, "{x:e}")
-        }
-    }
-}
+/// notation outside (never hundreds of zeros), `inf`, `-inf` and `NaN` by name. The one
+/// formatter of numbers in messages, shared with the closed loop's divergence causes.
+pub use dpc::core::numeric::Readable as Num;
 
 /// How many entries of a list a message quotes.
 const EXCERPT_ENTRIES: usize = 4;

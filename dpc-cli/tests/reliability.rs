@@ -210,6 +210,17 @@ fn messages_quote_short_excerpts_and_readable_numbers() {
     let err = one_error_line(&simulate(&wheel(), &out, &["w.theta=[inf]"]));
     assert!(err.contains("`w.theta[0]` is non-finite (inf)"), "{err}");
     assert!(!out.exists(), "failed runs wrote {}", out.display());
+
+    // A run that diverges at once on a huge state says so in numbers one can read.
+    let o = simulate(
+        &wheel(),
+        &out,
+        &["t_end=0.5", "compare=[]", "x0=[1e300, 0.0, 0.0, 0.0, -6.0]"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = stdout(&o);
+    assert!(report.contains("DIVERGED at t = 0: tracking error of theta = 1e300 exceeds the bound |theta - ref| <= 1000"), "{report}");
+    assert!(!report.contains("0000000"), "{report}");
 }
 
 const LINEAR: &str = "a = [[0.0, 0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, -3.0, 0.0], [6.54, 0.0, 5.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0]]
