@@ -30,6 +30,11 @@
 //! growth = 4.0                    # default 4
 //! max_delta = 0.05                # default: h
 //! retries = 5                     # default: as many as reach max_delta
+//!
+//! [limits]                        # the work of one run, checked before it starts
+//! samples = 100000                # t_end / h + 1 (default 100000)
+//! nu = 20                         # largest nu (default 20)
+//! retries = 100                   # retry-ladder steps per sample (default 100)
 //! ```
 //!
 //! Every key is documented on [`Scenario`]; unknown keys are errors. The reference defaults to
@@ -37,7 +42,7 @@
 //! terms per output. `[plant]` sets the simulated plant's tolerances and parameters (a plant
 //! that differs from the controller's model, for mismatch studies), `[controller]` the
 //! controller model's parameters and its retry ladder, `[divergence]` the bounds that stop a
-//! run.
+//! run, `[limits]` the sizes a run may reach ([`Limits`]).
 //!
 //! [`Overrides`] change any key from the command line (`--set h=0.1`,
 //! `--set plant.params.m=1.2`): the same mechanism runs sweeps and the comparison runs that
