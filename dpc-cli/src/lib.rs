@@ -76,7 +76,7 @@ pub enum ScenarioError {
     },
     /// A `--set` assignment is malformed.
     #[error("bad override: {0}")]
-    Override(String),
+    Override(scenario::OverrideError),
     /// The model does not exist.
     #[error(transparent)]
     UnknownModel(#[from] registry::UnknownModel),

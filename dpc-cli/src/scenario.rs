@@ -611,20 +611,53 @@ impl Overrides {
     }
 }
 
+/// Why a `--set` assignment (or an entry of `compare`) is malformed; the assignment is quoted
+/// as a short excerpt.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum OverrideError {
+    /// No `=`.
+    #[error("`{}` is not of the form key=value", short(item))]
+    NotAssignment {
+        /// The assignment.
+        item: String,
+    },
+    /// An empty key or an empty part of a dotted key.
+    #[error(
+        "`{}` has an empty key; expected a dotted path such as plant.params.m",
+        short(item)
+    )]
+    EmptyKey {
+        /// The assignment.
+        item: String,
+    },
+    /// A swept key with an empty value among its values.
+    #[error("`{}` has an empty value; expected key=v1,v2,...", short(item))]
+    EmptyValue {
+        /// The assignment.
+        item: String,
+    },
+    /// A dotted key goes through a value that is not a table.
+    #[error("cannot set `{}`: `{part}` is not a table", short(key))]
+    NotATable {
+        /// The dotted key.
+        key: String,
+        /// Its part that names a value, not a table.
+        part: String,
+    },
+}
+
 /// `key=value` split at the first `=`, both parts trimmed.
 pub(crate) fn split_assignment(item: &str) -> Result<(&str, &str), ScenarioError> {
     let Some((key, value)) = item.split_once('=') else {
-        return Err(ScenarioError::Override(format!(
-            "`{}` is not of the form key=value",
-            short(item)
-        )));
+        return Err(ScenarioError::Override(OverrideError::NotAssignment {
+            item: item.to_string(),
+        }));
     };
     let key = key.trim();
     if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(ScenarioError::Override(format!(
-            "`{}` has an empty key; expected a dotted path such as plant.params.m",
-            short(item)
-        )));
+        return Err(ScenarioError::Override(OverrideError::EmptyKey {
+            item: item.to_string(),
+        }));
     }
     Ok((key, value.trim()))
 }
@@ -904,9 +937,10 @@ fn set_path(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<()
         current = match entry {
             toml::Value::Table(t) => t,
             _ => {
-                return Err(ScenarioError::Override(format!(
-                    "cannot set `{key}`: `{part}` is not a table"
-                )))
+                return Err(ScenarioError::Override(OverrideError::NotATable {
+                    key: key.to_string(),
+                    part: part.to_string(),
+                }))
             }
         };
     }

@@ -11,7 +11,9 @@ use crate::output::{unique_names, Staging};
 use crate::plot::{sweep_figure, SweepSeries};
 use crate::registry::Registry;
 use crate::report::{write_run, Summary};
-use crate::scenario::{parse_value, split_assignment, value_text, Overrides, Scenario};
+use crate::scenario::{
+    parse_value, split_assignment, value_text, OverrideError, Overrides, Scenario,
+};
 use crate::ScenarioError;
 
 /// One swept key and its values.
@@ -47,10 +49,9 @@ impl Axis {
         }
         out.push(&values[start..]);
         if out.iter().any(|v| v.trim().is_empty()) {
-            return Err(ScenarioError::Override(format!(
-                "`{}` has an empty value; expected key=v1,v2,...",
-                crate::text::short(text)
-            )));
+            return Err(ScenarioError::Override(OverrideError::EmptyValue {
+                item: text.to_string(),
+            }));
         }
         Ok(Self {
             key: key.to_string(),
