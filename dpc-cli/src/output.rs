@@ -30,6 +30,12 @@ pub enum OutputError {
         /// The file earlier results would hold.
         marker: &'static str,
     },
+    /// The target is the working directory or contains it.
+    #[error("--out {path} contains the working directory, which a run would replace; give a directory below it")]
+    ContainsWorkingDirectory {
+        /// The target.
+        path: String,
+    },
     /// A file system operation failed.
     #[error("cannot {action} {path}: {message}")]
     Io {
@@ -114,6 +120,12 @@ impl Staging {
                 .map_err(|e| OutputError::io("resolve", parent, &e))?
                 .join(name)
         };
+        if std::env::current_dir()
+            .and_then(std::fs::canonicalize)
+            .is_ok_and(|cwd| cwd.starts_with(&target))
+        {
+            return Err(OutputError::ContainsWorkingDirectory { path: shown });
+        }
         let (dir, prefix) = sibling(&target, "partial").ok_or(OutputError::NotResults {
             path: shown,
             marker,
@@ -297,6 +309,24 @@ mod tests {
         let file = root.join("notes.txt");
         let e = Staging::new(&file, "summary.json").unwrap_err();
         assert!(matches!(e, OutputError::NotADirectory { .. }), "{e}");
+        // The working directory itself (empty or not) is never moved away.
+        let cwd = std::env::current_dir().unwrap();
+        let e = Staging::new(&cwd, "summary.json").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                OutputError::ContainsWorkingDirectory { .. } | OutputError::NotResults { .. }
+            ),
+            "{e}"
+        );
+        let e = Staging::new(cwd.parent().unwrap(), "summary.json").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                OutputError::ContainsWorkingDirectory { .. } | OutputError::NotResults { .. }
+            ),
+            "{e}"
+        );
         let _ = std::fs::remove_dir_all(&root);
     }
 
