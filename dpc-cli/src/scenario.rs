@@ -186,6 +186,13 @@ pub enum ValueError {
         /// Its value.
         value: f64,
     },
+    /// The plant's relative tolerance cannot be met (below the machine epsilon) or asks for
+    /// no accuracy (1 or more).
+    #[error("`plant.rtol` must lie between the machine epsilon {:.1e} and 1, found {}", f64::EPSILON, Num(*value))]
+    Tolerance {
+        /// The tolerance given.
+        value: f64,
+    },
     /// The retry ladder's growth is not above 1.
     #[error("`controller.retry.growth` must be a number above 1, found {}", Num(*value))]
     Growth {
@@ -775,6 +782,11 @@ impl Scenario {
         positive("t_end", self.t_end)?;
         positive("delta", self.delta)?;
         positive("plant.rtol", self.plant.rtol)?;
+        if !(f64::EPSILON..1.0).contains(&self.plant.rtol) {
+            return Err(ValueError::Tolerance {
+                value: self.plant.rtol,
+            });
+        }
         positive("plant.atol", self.plant.atol)?;
         bound("divergence.tracking_error", self.divergence.tracking_error)?;
         for (name, value) in &self.divergence.output {

@@ -207,6 +207,15 @@ fn messages_quote_short_excerpts_and_readable_numbers() {
         err.contains("`w.theta[0]` = 1e308 is beyond 1.3e154"),
         "{err}"
     );
+    for rtol in ["1e-300", "1000"] {
+        let err = one_error_line(&simulate(&wheel(), &out, &[&format!("plant.rtol={rtol}")]));
+        assert!(
+            err.contains(&format!(
+                "`plant.rtol` must lie between the machine epsilon 2.2e-16 and 1, found {rtol}"
+            )),
+            "{err}"
+        );
+    }
     let err = one_error_line(&simulate(&wheel(), &out, &["w.theta=[inf]"]));
     assert!(err.contains("`w.theta[0]` is non-finite (inf)"), "{err}");
     assert!(!out.exists(), "failed runs wrote {}", out.display());
