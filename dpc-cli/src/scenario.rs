@@ -407,7 +407,7 @@ pub fn scalar_reference(terms: &[Term]) -> Box<dyn ScalarReference + Send + Sync
 
 /// A real pole or an `[re, im]` pair.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a real number or an [re, im] pair")]
 pub enum Pole {
     /// A real pole.
     Real(f64),

@@ -272,6 +272,11 @@ fn analyze_reports_errors_and_poles_never_nan() {
             "w = [[1e308], [5.0]]\n",
             "`w[0][0]` = 1e308 is beyond",
         ),
+        (
+            "triple.toml",
+            "points = [[1.0, 2.0, 3.0]]\n",
+            ":4:10: a real number or an [re, im] pair",
+        ),
     ] {
         let err = one_error_line(&analyze(&dir, name, &format!("{LINEAR}{extra}"), false));
         assert!(err.contains(needle), "{name}: {err}");

@@ -127,7 +127,7 @@ pub enum MatrixProblem {
 }
 
 #[derive(Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a real number or an [re, im] pair")]
 enum Number {
     Real(f64),
     Pair([f64; 2]),
