@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::output::{unique_names, Staging};
 use crate::plot::{sweep_figure, SweepSeries};
 use crate::registry::Registry;
-use crate::report::{write_run, Summary};
+use crate::report::{write_run, Digest};
 use crate::scenario::{
     parse_value, split_assignment, value_text, OverrideError, Overrides, Scenario,
 };
@@ -106,8 +106,8 @@ pub struct SweepRow {
     pub overrides: Overrides,
     /// The directory of its results under `runs/`.
     pub directory: String,
-    /// Its summary, or why it could not run.
-    pub outcome: Result<Summary, ScenarioError>,
+    /// What the sweep keeps of its summary, or why it could not run.
+    pub outcome: Result<Digest, ScenarioError>,
 }
 
 /// Run every combination of `axes` on the scenario at `path`, writing per-run results under
@@ -163,7 +163,8 @@ pub fn sweep(
             let directory = names[index].clone();
             let outcome = Scenario::load(path, &overrides)
                 .and_then(|s| registry.run(&s, &label))
-                .and_then(|r| write_run(&runs_dir.join(&directory), &r));
+                .and_then(|r| write_run(&runs_dir.join(&directory), &r))
+                .map(|summary| summary.digest());
             bar.inc(1);
             SweepRow {
                 overrides,
@@ -243,17 +244,20 @@ fn write_table(path: &Path, axes: &[Axis], rows: &[SweepRow]) -> Result<(), Scen
             Ok(s) => {
                 fields.push(if s.diverged { "diverged" } else { "ok" }.into());
                 fields.push(s.t_diverged.map_or(String::new(), |t| format!("{t}")));
+                // An output this run's model does not have (a swept `model`) stays empty.
                 for o in &outputs {
-                    fields.push(format!(
-                        "{:e}",
-                        s.max_abs_error.get(o).copied().unwrap_or(f64::NAN)
-                    ));
+                    fields.push(
+                        s.max_abs_error
+                            .get(o)
+                            .map_or(String::new(), |v| format!("{v:e}")),
+                    );
                 }
                 for o in &outputs {
-                    fields.push(format!(
-                        "{:e}",
-                        s.final_error.get(o).copied().unwrap_or(f64::NAN)
-                    ));
+                    fields.push(
+                        s.final_error
+                            .get(o)
+                            .map_or(String::new(), |v| format!("{v:e}")),
+                    );
                 }
                 fields.extend([
                     s.samples.to_string(),

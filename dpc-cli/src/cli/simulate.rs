@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use crate::output::{unique_names, Staging};
 use crate::plot::closed_loop_figure;
 use crate::registry::Registry;
-use crate::report::{write_run, Summary};
+use crate::report::{write_run, Digest};
 use crate::run::RunResult;
 use crate::scenario::{Overrides, Scenario};
 use crate::sweep::{self, Axis};
@@ -46,7 +46,7 @@ pub struct SweepArgs {
     pub max_runs: usize,
 }
 
-fn describe(summary: &Summary) -> String {
+fn describe(summary: &Digest) -> String {
     let verdict = match (summary.t_diverged, &summary.divergence_cause) {
         (Some(t), Some(cause)) => format!("DIVERGED at t = {}: {cause}", Num(t)),
         _ => "no divergence".to_string(),
@@ -158,12 +158,12 @@ fn write_all(
             );
         }
     }
-    println!("{}", describe(&summary));
+    println!("{}", describe(&summary.digest()));
     let names = unique_names(compared.iter().map(|(_, label)| label.clone()));
     for ((s, label), name) in compared.iter().zip(names) {
         let r = registry.run(s, label)?;
         let summary = write_run(&dir.join("compare").join(name), &r)?;
-        println!("{}", describe(&summary));
+        println!("{}", describe(&summary.digest()));
         runs.push(r);
     }
     let refs: Vec<&RunResult> = runs.iter().collect();
