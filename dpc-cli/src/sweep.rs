@@ -243,7 +243,10 @@ fn write_table(path: &Path, axes: &[Axis], rows: &[SweepRow]) -> Result<(), Scen
         match &row.outcome {
             Ok(s) => {
                 fields.push(if s.diverged { "diverged" } else { "ok" }.into());
-                fields.push(s.t_diverged.map_or(String::new(), |t| format!("{t}")));
+                fields.push(
+                    s.t_diverged
+                        .map_or(String::new(), |t| crate::text::Num(t).to_string()),
+                );
                 // An output this run's model does not have (a swept `model`) stays empty.
                 for o in &outputs {
                     fields.push(
