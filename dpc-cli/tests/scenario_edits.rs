@@ -1,5 +1,4 @@
-//! A seeded property test of the command line: random edits of the repository's wheel
-//! scenario (`--set` with values that are wrong in type, sign, magnitude or finiteness) never
+//! A seeded property test of the command line: random edits of the repository's scenarios (`--set` with values that are wrong in type, sign, magnitude or finiteness) never
 //! panic, and a run that writes results never writes NaN, or null for a number, into
 //! `summary.json` (the per-output errors, the final time, the round-off level).
 
@@ -7,22 +6,36 @@ use std::path::PathBuf;
 
 use dpc::core::linalg::NalgebraLu;
 use dpc_cli::registry::{Entry, Registry};
-use dpc_models::{Wheel, WheelReference, WheelTracking};
+use dpc_models::{
+    FlexibleJoint, FlexibleJointReference, FlexibleJointTracking, Wheel, WheelReference,
+    WheelTracking,
+};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 
-/// The wheel as the `dpc` binary registers it.
+/// The wheel and the flexible-joint arm as the `dpc` binary registers them.
 fn registry() -> Registry {
-    Registry::new().model(
-        Entry::new(
-            "wheel",
-            "the paper's rolling wheel",
-            Wheel::default(),
-            WheelTracking::default(),
+    Registry::new()
+        .model(
+            Entry::new(
+                "wheel",
+                "the paper's rolling wheel",
+                Wheel::default(),
+                WheelTracking::default(),
+            )
+            .reference(WheelReference::default())
+            .solver(NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new),
         )
-        .reference(WheelReference::default())
-        .solver(NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new),
-    )
+        .model(
+            Entry::new(
+                "flexible-joint",
+                "a flexible-joint arm",
+                FlexibleJoint::default(),
+                FlexibleJointTracking::default(),
+            )
+            .reference(FlexibleJointReference::default())
+            .solver(NalgebraLu::<{ FlexibleJointTracking::N_EQUATIONS }>::new),
+        )
 }
 
 /// Positive times, tolerances and bounds, and what is wrong with them.
@@ -116,10 +129,14 @@ const EDITS: &[(&str, &[&str])] = &[
 #[test]
 fn random_scenario_edits_never_panic_nor_write_nan() {
     let registry = registry();
-    let wheel = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    let scenarios = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("..")
-        .join("scenarios")
-        .join("wheel.toml");
+        .join("scenarios");
+    let files = [
+        scenarios.join("wheel.toml"),
+        scenarios.join("wheel-hold-correction.toml"),
+        scenarios.join("flexible-joint.toml"),
+    ];
     let root = std::env::temp_dir().join(format!("dpc-cli-edits-{}", std::process::id()));
     let config = Config {
         cases: 128,
@@ -134,44 +151,47 @@ fn random_scenario_edits_never_panic_nor_write_nan() {
     });
     let written = std::cell::Cell::new(0);
     runner
-        .run(&proptest::collection::vec(edit, 1..4), |edits| {
-            let out = root.join("out");
-            let _ = std::fs::remove_dir_all(&out);
-            let mut args = vec![
-                "dpc".to_string(),
-                "simulate".into(),
-                wheel.display().to_string(),
-                "--out".into(),
-                out.display().to_string(),
-            ];
-            // Short runs; a larger edit meets the sample limit (an error, not a long run).
-            for set in ["t_end=0.5", "compare=[]", "limits.samples=2000"]
-                .iter()
-                .map(|s| s.to_string())
-                .chain(edits.iter().cloned())
-            {
-                args.extend(["--set".to_string(), set]);
-            }
-            dpc_cli::cli::main_with_args(&registry, &args);
-            let Ok(text) = std::fs::read_to_string(out.join("summary.json")) else {
-                return Ok(());
-            };
-            written.set(written.get() + 1);
-            let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-            // No number is NaN (serde_json would have written null) nor written as "NaN".
-            prop_assert!(!has_nan(&v), "{edits:?}: {text}");
-            for key in ["t_final", "roundoff_level", "wall_time_s"] {
-                prop_assert!(number(&v[key]), "{edits:?}: {key} = {}", v[key]);
-            }
-            for key in ["final_error", "max_abs_error"] {
-                let map = v[key].as_object().unwrap();
-                prop_assert_eq!(map.len(), 2, "{:?}: {}", edits, key);
-                for (name, value) in map {
-                    prop_assert!(number(value), "{edits:?}: {key}.{name} = {value}");
+        .run(
+            &(0..files.len(), proptest::collection::vec(edit, 1..4)),
+            |(file, edits)| {
+                let out = root.join("out");
+                let _ = std::fs::remove_dir_all(&out);
+                let mut args = vec![
+                    "dpc".to_string(),
+                    "simulate".into(),
+                    files[file].display().to_string(),
+                    "--out".into(),
+                    out.display().to_string(),
+                ];
+                // Short runs; a larger edit meets the sample limit (an error, not a long run).
+                for set in ["t_end=0.5", "compare=[]", "limits.samples=2000"]
+                    .iter()
+                    .map(|s| s.to_string())
+                    .chain(edits.iter().cloned())
+                {
+                    args.extend(["--set".to_string(), set]);
                 }
-            }
-            Ok(())
-        })
+                dpc_cli::cli::main_with_args(&registry, &args);
+                let Ok(text) = std::fs::read_to_string(out.join("summary.json")) else {
+                    return Ok(());
+                };
+                written.set(written.get() + 1);
+                let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+                // No number is NaN (serde_json would have written null) nor written as "NaN".
+                prop_assert!(!has_nan(&v), "{edits:?}: {text}");
+                for key in ["t_final", "roundoff_level", "wall_time_s"] {
+                    prop_assert!(number(&v[key]), "{edits:?}: {key} = {}", v[key]);
+                }
+                for key in ["final_error", "max_abs_error"] {
+                    let map = v[key].as_object().unwrap();
+                    prop_assert!(!map.is_empty(), "{:?}: {}", edits, key);
+                    for (name, value) in map {
+                        prop_assert!(number(value), "{edits:?}: {key}.{name} = {value}");
+                    }
+                }
+                Ok(())
+            },
+        )
         .unwrap();
     let _ = std::fs::remove_dir_all(&root);
     // The edits are not all rejected: some runs write results to check.
