@@ -2,8 +2,8 @@
 //! dispatches to a subcommand (each in its own module with its own argument struct) and turns
 //! an error into one stderr line and exit status 1.
 
-mod analyze;
-mod simulate;
+pub mod analyze;
+pub mod simulate;
 
 use std::process::ExitCode;
 
@@ -45,8 +45,8 @@ pub enum CliError {
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
     /// `dpc analyze`: the system file is unreadable, malformed or has no analysis.
-    #[error("{0}")]
-    Analyze(String),
+    #[error(transparent)]
+    Analyze(#[from] analyze::AnalyzeError),
 }
 
 /// Run the `dpc` command line on the models of `registry`, with the process's arguments;

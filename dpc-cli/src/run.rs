@@ -24,7 +24,7 @@ use dpc::core::linear::AnalysisOptions;
 use dpc::core::model::{self, set_parameter_by_name, DaeModel, Structure};
 use dpc::core::prefeedback::{ReferenceNominal, ReferenceState, SteadyMotion};
 use dpc::core::reference::{Components, Reference, ReferenceError};
-use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions};
+use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions, Sample};
 use dpc::core::tracking::{negated_real_roots, TrackingError};
 use dpc::core::TrackingDae;
 use serde::Serialize;
@@ -279,7 +279,7 @@ impl Runner<'_> {
                     "`w.{name}` has {found} root(s), but model `{}` is compiled with deg W = {expected} for `{name}` (the degree decides the symbolic derivatives); only the roots can change at run time, more or fewer Hirschorn steps need a change of the model's `tracking` section",
                     self.scenario.model
                 )),
-                other => self.invalid(format!("`w.{name}` = {roots:?}: {other}")),
+                other => self.invalid(format!("`w.{name}` = {}: {other}", crate::text::excerpt(roots))),
             })?;
         }
         Ok(())
@@ -468,8 +468,13 @@ where
         max_consecutive_failures: s.plant.max_consecutive_failures,
     };
     let start = Instant::now();
-    let closed_loop =
+    let mut closed_loop =
         simulate(&plant, &mut dpc, &s.x0, &options).map_err(ScenarioError::Simulation)?;
+    if closed_loop.samples.is_empty() {
+        closed_loop
+            .samples
+            .push(initial_sample(&plant, &dpc, &s.x0));
+    }
     let wall_time = start.elapsed().as_secs_f64();
 
     Ok(RunResult {
@@ -485,6 +490,36 @@ where
         closed_loop,
         wall_time,
     })
+}
+
+/// The sample at `t = 0` of a run that stopped before its first control (a state already
+/// outside its bound): the outputs with no input applied yet (and the algebraic unknowns at
+/// zero, as the closed loop starts them), the reference and the errors, so that the summary
+/// reports the errors the run stopped with.
+fn initial_sample<P, T, R, L>(plant: &P, dpc: &Dpc<T, R, L>, x0: &[f64]) -> Sample
+where
+    P: DaeModel,
+    T: TrackingDae,
+    R: Reference,
+    L: LinearSolver,
+{
+    let structure = plant.structure();
+    let u = vec![0.0; structure.n_inputs()];
+    let mut y = vec![0.0; structure.n_outputs()];
+    plant.outputs(0.0, x0, &vec![0.0; structure.n_algebraic()], &u, &mut y);
+    let mut reference = vec![0.0; y.len()];
+    let error = match dpc.reference().derivatives(0.0, 0, &mut reference) {
+        Ok(()) => y.iter().zip(&reference).map(|(a, b)| a - b).collect(),
+        Err(_) => vec![f64::NAN; y.len()],
+    };
+    Sample {
+        t: 0.0,
+        x: x0.to_vec(),
+        u,
+        y,
+        reference,
+        error,
+    }
 }
 
 // ---------------------------------------------------------------------------------------

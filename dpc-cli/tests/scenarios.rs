@@ -394,7 +394,7 @@ fn bad_scenarios_give_one_error_line() {
             "nominal-guess-nan.toml",
             wheel.clone(),
             vec!["--set", "design.nominal.guess.dphi=nan"],
-            "`design.nominal.guess.dphi` has a non-finite entry",
+            "`design.nominal.guess.dphi` is non-finite",
         ),
         (
             // A lean rate with the lean velocity fixed at zero: der(theta) = dtheta cannot
@@ -408,11 +408,12 @@ fn bad_scenarios_give_one_error_line() {
     for (name, text, extra, expected) in cases {
         let path = dir.join(name);
         std::fs::write(&path, text).unwrap();
+        let out = dir.join("out");
         let mut args = vec![
             "simulate",
             path.to_str().unwrap(),
             "--out",
-            dir.to_str().unwrap(),
+            out.to_str().unwrap(),
         ];
         args.extend(extra);
         let o = dpc(&args);
