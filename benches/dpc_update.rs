@@ -20,7 +20,7 @@ fn bench(c: &mut Criterion) {
         let mut dpc = Dpc::new(
             WheelTracking::default(),
             WheelReference::default(),
-            NalgebraLu::<7>::new(),
+            NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
             DpcOptions {
                 extraction,
                 ..DpcOptions::default()

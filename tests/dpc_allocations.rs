@@ -58,7 +58,7 @@ fn wheel_control_updates_do_not_allocate() {
         let mut dpc = Dpc::new(
             WheelTracking::default(),
             reference.clone(),
-            NalgebraLu::<7>::new(),
+            NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
             DpcOptions {
                 extraction,
                 ..DpcOptions::default()

@@ -39,7 +39,7 @@ fn dpc_control(x: &[f64], delta: f64, extraction: Extraction) -> [f64; 2] {
     let mut dpc = Dpc::new(
         WheelLinearTracking::default(),
         zero_reference(),
-        NalgebraLu::<7>::new(),
+        NalgebraLu::<{ WheelLinearTracking::N_EQUATIONS }>::new(),
         opts,
     )
     .unwrap();
@@ -109,7 +109,7 @@ fn reference_feedforward_matches_r_xi() {
     let mut dpc = Dpc::new(
         WheelLinearTracking::default(),
         reference,
-        NalgebraLu::<7>::new(),
+        NalgebraLu::<{ WheelLinearTracking::N_EQUATIONS }>::new(),
         DpcOptions {
             delta: 5e-4,
             ..DpcOptions::default()
@@ -141,7 +141,7 @@ fn bad_inputs_are_typed_errors() {
         Dpc::new(
             WheelLinearTracking::default(),
             zero_reference(),
-            NalgebraLu::<7>::new(),
+            NalgebraLu::<{ WheelLinearTracking::N_EQUATIONS }>::new(),
             opts,
         )
     };
@@ -174,7 +174,7 @@ fn bad_inputs_are_typed_errors() {
         Dpc::new(
             WheelLinearTracking::default(),
             zero_reference(),
-            NalgebraLu::<5>::new(),
+            NalgebraLu::<{ WheelLinearTracking::N_EQUATIONS - 2 }>::new(),
             DpcOptions::default()
         ),
         Err(DpcError::Dimension { .. })
@@ -213,7 +213,7 @@ fn with_prefeedback_the_update_converges_to_the_prefed_law() {
     let mut dpc = Dpc::new(
         WheelLinearTracking::default(),
         zero_reference(),
-        NalgebraLu::<7>::new(),
+        NalgebraLu::<{ WheelLinearTracking::N_EQUATIONS }>::new(),
         DpcOptions {
             delta: 5e-4,
             ..DpcOptions::default()

@@ -63,7 +63,7 @@ fn run(
     let mut dpc = Dpc::new(
         WheelTracking::default(),
         WheelReference::default(),
-        NalgebraLu::<7>::new(),
+        NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
         DpcOptions {
             delta: 1e-3,
             extraction,

@@ -2,8 +2,8 @@
 //! dispatches to a subcommand (each in its own module with its own argument struct) and turns
 //! an error into one stderr line and exit status 1.
 
-mod analyze;
-mod simulate;
+pub mod analyze;
+pub mod simulate;
 
 use std::process::ExitCode;
 
@@ -46,8 +46,8 @@ pub enum CliError {
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
     /// `dpc analyze`: the system file is unreadable, malformed or has no analysis.
-    #[error("{0}")]
-    Analyze(String),
+    #[error(transparent)]
+    Analyze(#[from] analyze::AnalyzeError),
     /// `dpc model FILE.dpc`: the plant file cannot be read or compiled.
     #[error(transparent)]
     PlantFile(#[from] dpc::runtime::PlantFileError),
@@ -55,14 +55,46 @@ pub enum CliError {
 
 impl CliError {
     /// The error as printed: the errors of a plant file as their `FILE:LINE:COLUMN: message`
-    /// lines (whether `dpc model` or a scenario named the file), anything else as one line
-    /// `error: ...`.
+    /// lines (whether `dpc model` or a scenario named the file), followed for a run by one line
+    /// on what became of its output directory; anything else as one line `error: ...`.
     fn report(&self) -> String {
-        match self {
-            CliError::PlantFile(e) | CliError::Scenario(ScenarioError::PlantFile(e)) => {
-                e.to_string()
+        let scenario = match self {
+            CliError::PlantFile(e) => return e.to_string(),
+            CliError::Scenario(e) => e,
+            other => return format!("error: {other}"),
+        };
+        let outcome = |target: &str, previous: bool| {
+            if previous {
+                format!("the previous results in {target} are unchanged")
+            } else {
+                format!("nothing was written to {target}")
             }
-            other => format!("error: {other}"),
+        };
+        match scenario {
+            ScenarioError::PlantFile(e) => e.to_string(),
+            ScenarioError::NotWritten {
+                target,
+                previous,
+                cause,
+            } => match cause.as_ref() {
+                ScenarioError::PlantFile(e) => {
+                    format!("{e}\nerror: {}", outcome(target, *previous))
+                }
+                _ => format!("error: {self}"),
+            },
+            ScenarioError::SweepFailed {
+                runs,
+                first,
+                target,
+                previous,
+            } => match first.as_ref() {
+                ScenarioError::PlantFile(e) => format!(
+                    "{e}\nerror: all {runs} runs of the sweep failed; {}",
+                    outcome(target, *previous)
+                ),
+                _ => format!("error: {self}"),
+            },
+            _ => format!("error: {self}"),
         }
     }
 }

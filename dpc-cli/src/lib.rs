@@ -28,6 +28,8 @@
 //! ```
 
 pub mod cli;
+pub mod json;
+pub mod output;
 pub mod plant_file;
 pub mod plot;
 pub mod registry;
@@ -35,10 +37,13 @@ pub mod report;
 pub mod run;
 pub mod scenario;
 pub mod sweep;
+pub mod text;
 
 pub use cli::main;
 
+use dpc::core::design::DesignError;
 use dpc::core::dpc::DpcError;
+use dpc::core::linear::LinearError;
 use dpc::core::reference::ReferenceError;
 use dpc::core::simulate::SimulateError;
 use dpc::core::tracking::TrackingError;
@@ -64,9 +69,17 @@ pub enum ScenarioError {
         /// What is wrong.
         message: String,
     },
+    /// A value of the scenario is out of range (or sets more work than its limit).
+    #[error("{origin}: {cause}")]
+    Value {
+        /// The file the scenario came from.
+        origin: String,
+        /// What is wrong, by the key the user wrote.
+        cause: scenario::ValueError,
+    },
     /// A `--set` assignment is malformed.
     #[error("bad override: {0}")]
-    Override(String),
+    Override(scenario::OverrideError),
     /// The model does not exist.
     #[error(transparent)]
     UnknownModel(#[from] registry::UnknownModel),
@@ -81,9 +94,14 @@ pub enum ScenarioError {
         /// The plant file.
         path: String,
     },
-    /// The design of the preliminary feedback could not be made.
-    #[error("{0}")]
-    Setup(String),
+    /// The design of the preliminary feedback could not be made: the nominal could not be
+    /// trimmed, the linearisation or the analysis failed, or the tracking DAE's relative
+    /// degrees are not the plant's at the nominal.
+    #[error("design: {0}")]
+    Design(DesignError),
+    /// The linear sampled-data prediction of the designed loop failed.
+    #[error("sampled-data prediction: {0}")]
+    SampledPrediction(LinearError),
     /// The reference assembled from the scenario's terms does not fit the model.
     #[error(transparent)]
     Reference(ReferenceError),
@@ -102,6 +120,48 @@ pub enum ScenarioError {
     /// The closed loop could not start.
     #[error("simulation: {0}")]
     Simulation(SimulateError),
+    /// The results could not be put in place.
+    #[error(transparent)]
+    Output(#[from] output::OutputError),
+    /// A run or the writing of its results failed after the output directory was checked;
+    /// nothing of it reached the output directory.
+    #[error("{cause}; {}", if *previous { format!("the previous results in {target} are unchanged") } else { format!("nothing was written to {target}") })]
+    NotWritten {
+        /// The output directory.
+        target: String,
+        /// Whether it holds earlier results (left as they were).
+        previous: bool,
+        /// What failed.
+        cause: Box<ScenarioError>,
+    },
+    /// Every run of a sweep failed.
+    #[error("all {runs} runs of the sweep failed, the first with: {first}; {}", if *previous { format!("the previous results in {target} are unchanged") } else { format!("nothing was written to {target}") })]
+    SweepFailed {
+        /// The number of runs.
+        runs: usize,
+        /// The error of the first run.
+        first: Box<ScenarioError>,
+        /// The output directory.
+        target: String,
+        /// Whether it holds earlier results (left as they were).
+        previous: bool,
+    },
+    /// A sweep has more combinations than its limit.
+    #[error("the sweep has {} combinations ({}), more than --max-runs = {limit}; raise it deliberately (--max-runs N) if the sweep is meant to be this large", sizes.iter().try_fold(1_usize, |n, k| n.checked_mul(*k)).map_or("more than 2^64".to_string(), |n| n.to_string()), text::short(&sizes.iter().map(ToString::to_string).collect::<Vec<_>>().join(" x ")))]
+    TooManyRuns {
+        /// The number of values of each swept key.
+        sizes: Vec<usize>,
+        /// The limit in force.
+        limit: usize,
+    },
+    /// A number to be written is NaN: a quantity that could not be computed.
+    #[error("{path}: {cause}")]
+    NotFinite {
+        /// The file it was to be written to.
+        path: String,
+        /// The key of the number.
+        cause: json::JsonError,
+    },
     /// Writing results failed.
     #[error("cannot write {path}: {message}")]
     Write {

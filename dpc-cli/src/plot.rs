@@ -60,7 +60,7 @@ fn panel<DB: DrawingBackend>(
     title: &str,
     t_end: f64,
     curves: &[Curve],
-) -> Result<(), String> {
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let finite = curves
         .iter()
         .flat_map(|c| c.points.iter().map(|p| p.1))
@@ -77,26 +77,20 @@ fn panel<DB: DrawingBackend>(
         .margin(8)
         .x_label_area_size(30)
         .y_label_area_size(64)
-        .build_cartesian_2d(0.0..t_end.max(1e-9), (lo - pad)..(hi + pad))
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(0.0..t_end.max(1e-9), (lo - pad)..(hi + pad))?;
     let span = hi - lo + 2.0 * pad;
     chart
         .configure_mesh()
         .x_desc("t [s]")
         .y_label_formatter(&|v| tick(*v, span))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     for c in curves {
         let color = c.color;
         let points = c.points.iter().copied().filter(|p| p.1.is_finite());
         let anno = if c.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(points, 6, 4, color.stroke_width(1)))
-                .map_err(|e| e.to_string())?
+            chart.draw_series(DashedLineSeries::new(points, 6, 4, color.stroke_width(1)))?
         } else {
-            chart
-                .draw_series(LineSeries::new(points, color.stroke_width(1)))
-                .map_err(|e| e.to_string())?
+            chart.draw_series(LineSeries::new(points, color.stroke_width(1)))?
         };
         anno.label(c.name.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
@@ -105,8 +99,7 @@ fn panel<DB: DrawingBackend>(
         .configure_series_labels()
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     Ok(())
 }
 
@@ -147,8 +140,8 @@ fn column_title(run: &RunResult) -> String {
 fn draw_closed_loop<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     runs: &[&RunResult],
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
     let Some(first) = runs.first() else {
         return Ok(());
     };
@@ -157,9 +150,7 @@ fn draw_closed_loop<DB: DrawingBackend>(
     let columns = root.split_evenly((1, runs.len()));
     for (run, column) in runs.iter().zip(&columns) {
         let t_end = run.scenario.t_end;
-        let column = column
-            .titled(&column_title(run), ("sans-serif", 17))
-            .map_err(|e| e.to_string())?;
+        let column = column.titled(&column_title(run), ("sans-serif", 17))?;
         let panels = column.split_evenly((rows, 1));
         for (i, name) in outputs.iter().enumerate() {
             panel(
@@ -207,7 +198,7 @@ fn draw_closed_loop<DB: DrawingBackend>(
             .collect();
         panel(&panels[outputs.len() + 1], "control inputs", t_end, &inputs)?;
     }
-    root.present().map_err(|e| e.to_string())
+    root.present()
 }
 
 /// Write `stem.svg` and `stem.png` with one column per run; returns the two paths.
@@ -245,8 +236,8 @@ fn draw_sweep<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     parameter: &str,
     series: &[SweepSeries],
-) -> Result<(), String> {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
     let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
     let (x_lo, x_hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))
@@ -284,15 +275,13 @@ fn draw_sweep<DB: DrawingBackend>(
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(70)
-        .build_cartesian_2d(x_lo..x_hi, (y_lo..y_hi).log_scale())
-        .map_err(|e| e.to_string())?;
+        .build_cartesian_2d(x_lo..x_hi, (y_lo..y_hi).log_scale())?;
     chart
         .configure_mesh()
         .x_desc(parameter)
         .y_desc("max |e|")
         .y_label_formatter(&|v| format!("{v:.0e}"))
-        .draw()
-        .map_err(|e| e.to_string())?;
+        .draw()?;
     for (k, s) in series.iter().enumerate() {
         let color = PALETTE[k % PALETTE.len()];
         let ok: Vec<(f64, f64)> = s
@@ -301,30 +290,24 @@ fn draw_sweep<DB: DrawingBackend>(
             .filter_map(|&(x, y)| y.filter(|v| v.is_finite() && *v > 0.0).map(|y| (x, y)))
             .collect();
         chart
-            .draw_series(LineSeries::new(ok.iter().copied(), color.stroke_width(2)))
-            .map_err(|e| e.to_string())?
+            .draw_series(LineSeries::new(ok.iter().copied(), color.stroke_width(2)))?
             .label(s.name.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
-        chart
-            .draw_series(ok.iter().map(|&p| Circle::new(p, 3, color.filled())))
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(
-                s.points
-                    .iter()
-                    .filter(|p| p.1.is_none())
-                    .map(|&(x, _)| Cross::new((x, y_hi / 2.0), 6, color.stroke_width(2))),
-            )
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(ok.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
+        chart.draw_series(
+            s.points
+                .iter()
+                .filter(|p| p.1.is_none())
+                .map(|&(x, _)| Cross::new((x, y_hi / 2.0), 6, color.stroke_width(2))),
+        )?;
     }
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperLeft)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
-        .draw()
-        .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())
+        .draw()?;
+    root.present()
 }
 
 /// Write `stem.svg` and `stem.png` of a sweep.

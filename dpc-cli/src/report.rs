@@ -49,7 +49,9 @@ pub struct Summary {
     pub controller_events: Vec<ControllerEvent>,
     /// The largest round-off level `eps * delta^-nu` of a control update over the run: the
     /// relative rounding error of the extracted control, which grows as `delta` shrinks
-    /// while the truncation error falls; compare it with the accuracy wanted.
+    /// while the truncation error falls; compare it with the accuracy wanted. At 1 or more
+    /// the controls carry no correct digit; written as `"inf"` when it exceeds the largest
+    /// double.
     pub roundoff_level: f64,
     /// Wall-clock time of the simulation, in seconds.
     pub wall_time_s: f64,
@@ -104,6 +106,62 @@ impl Summary {
     pub fn worst_late_error(&self) -> f64 {
         max_or_nan(self.max_abs_error.values().copied())
     }
+
+    /// The numbers a sweep keeps of this run.
+    pub fn digest(&self) -> Digest {
+        Digest {
+            label: self.label.clone(),
+            diverged: self.diverged,
+            t_diverged: self.t_diverged,
+            divergence_cause: self.divergence_cause.clone(),
+            final_error: self.final_error.clone(),
+            max_abs_error: self.max_abs_error.clone(),
+            samples: self.samples,
+            newton_iterations: self.newton_iterations,
+            retries: self.retries,
+            failed_samples: self.failed_samples,
+            roundoff_level: self.roundoff_level,
+            wall_time_s: self.wall_time_s,
+        }
+    }
+}
+
+/// What a sweep keeps of each run for its table, its plot and its report lines: the verdict
+/// and a few numbers per output, not the samples, events or scenario (those are in the run's
+/// own `summary.json`), so that a sweep's memory does not grow with the length of its runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Digest {
+    /// The overrides that made this run.
+    pub label: String,
+    /// Whether the run diverged.
+    pub diverged: bool,
+    /// When it diverged.
+    pub t_diverged: Option<f64>,
+    /// Why it diverged.
+    pub divergence_cause: Option<String>,
+    /// Per output, the tracking error at the last sample.
+    pub final_error: BTreeMap<String, f64>,
+    /// Per output, the largest `|y - reference|` over the last quarter of the run.
+    pub max_abs_error: BTreeMap<String, f64>,
+    /// Number of samples.
+    pub samples: usize,
+    /// Newton iterations of the controller over the run.
+    pub newton_iterations: usize,
+    /// Extraction retries with a larger `delta` over the run.
+    pub retries: usize,
+    /// Samples on which the controller failed.
+    pub failed_samples: usize,
+    /// The largest round-off level `eps * delta^-nu` of a control update.
+    pub roundoff_level: f64,
+    /// Wall-clock time of the simulation, in seconds.
+    pub wall_time_s: f64,
+}
+
+impl Digest {
+    /// The largest late error over the outputs (NaN if any is NaN).
+    pub fn worst_late_error(&self) -> f64 {
+        max_or_nan(self.max_abs_error.values().copied())
+    }
 }
 
 fn write_error(path: &Path, e: impl std::fmt::Display) -> ScenarioError {
@@ -113,15 +171,23 @@ fn write_error(path: &Path, e: impl std::fmt::Display) -> ScenarioError {
     }
 }
 
-/// Write `summary.json` and `trajectory.csv` of `run` into `dir` (created if needed).
+/// Write `summary.json` and `trajectory.csv` of `run` into `dir` (created if needed; the
+/// callers write into a [`crate::output::Staging`] directory that is moved into place when
+/// everything is written). Infinite numbers in `summary.json` are written as `"inf"` or
+/// `"-inf"` ([`crate::json`]).
 ///
 /// # Errors
-/// [`ScenarioError::Write`] when a file cannot be written.
+/// [`ScenarioError::Write`] when a file cannot be written, [`ScenarioError::NotFinite`] when
+/// a number of the summary is NaN.
 pub fn write_run(dir: &Path, run: &RunResult) -> Result<Summary, ScenarioError> {
     std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
     let summary = Summary::of(run);
     let path = dir.join("summary.json");
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| write_error(&path, e))?;
+    let json =
+        crate::json::to_string_pretty(&summary).map_err(|cause| ScenarioError::NotFinite {
+            path: path.display().to_string(),
+            cause,
+        })?;
     std::fs::write(&path, json + "\n").map_err(|e| write_error(&path, e))?;
     write_trajectory(&dir.join("trajectory.csv"), run)?;
     Ok(summary)

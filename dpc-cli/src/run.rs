@@ -4,31 +4,35 @@
 //! controller and simulate. [`run`] is generic over the plant, the tracking DAE and the linear
 //! solver, so each model gets its own monomorphised copy of the loop.
 //!
-//! The design of the preliminary feedback (`SteadyMotion`, `w_roots`, `design`,
-//! `sampled_prediction`, `feedback_nominal`, `copy_params`, `negated_real_roots`) is kept
-//! together in the second half of this file.
+//! The design of the preliminary feedback is [`dpc::core::design`]'s chain (trim ->
+//! linearise -> analyse -> `K_n` -> law); the second half of this file only turns the
+//! scenario's `[design]` table into its inputs (the trim problem, `W`, the poles, the nominal
+//! the law is taken about) and its results into the [`DesignReport`].
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use std::time::Instant;
 
-use std::sync::Arc;
-
+use dpc::core::design::{
+    check_steady, design, trim, Design, DesignError, DesignOptions, Trim, TrimError, TrimOptions,
+    TrimProblem, TrimValue,
+};
 use dpc::core::dpc::{Dpc, DpcOptions};
 use dpc::core::linalg::LinearSolver;
-use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
-use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
-use dpc::core::linearize::{linearize, OperatingPoint};
-use dpc::core::model::{self, set_parameter_by_name, DaeModel};
-use dpc::core::prefeedback::{Nominal, Prefeedback, ReferenceNominal, ReferenceState};
+use dpc::core::linear::sampled::CriticalPeriod;
+use dpc::core::linear::AnalysisOptions;
+use dpc::core::model::{self, set_parameter_by_name, DaeModel, Structure};
+use dpc::core::prefeedback::{ReferenceNominal, ReferenceState, SteadyMotion};
 use dpc::core::reference::{Components, Reference, ReferenceError};
-use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions};
-use dpc::core::tracking::TrackingError;
+use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions, Sample};
+use dpc::core::tracking::{negated_real_roots, TrackingError};
 use dpc::core::TrackingDae;
-use dpc::nalgebra::DMatrix;
 use serde::Serialize;
 
 use crate::registry::Entry;
-use crate::scenario::{scalar_reference, About, NominalMotion, Scenario};
+use crate::scenario::{
+    scalar_reference, About, Design as DesignTable, NominalMotion, Scenario, Values,
+};
 use crate::ScenarioError;
 
 /// Names of the model's variables, in order.
@@ -70,6 +74,8 @@ pub struct RetryInUse {
 /// What the linear analysis of the controller's model said.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DesignReport {
+    /// The nominal motion designed about, as the trim solver completed it.
+    pub nominal: NominalReport,
     /// Eigenvalues of `Abar_4` as `[re, im]`.
     pub abar4_eigenvalues: Vec<[f64; 2]>,
     /// Whether DPC without preliminary feedback is predicted stable (Theorem 3.2).
@@ -84,6 +90,33 @@ pub struct DesignReport {
     /// one linearisation (and so one constant `K_n`) serves the whole run, as for a steady
     /// motion in a cyclic coordinate.
     pub linearisation_drift: f64,
+}
+
+/// The nominal motion `x0(t) = state + t * rate`, `z0`, `u0` of a design, every entry by
+/// name, and what the trim solver did to complete the scenario's partial specification.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NominalReport {
+    /// `x0(0)` by state name.
+    pub state: BTreeMap<String, f64>,
+    /// `x0'` by state name.
+    pub rate: BTreeMap<String, f64>,
+    /// `z0` by name of the algebraic unknown.
+    pub algebraic: BTreeMap<String, f64>,
+    /// `u0` by input name.
+    pub input: BTreeMap<String, f64>,
+    /// The entries the scenario did not fix and the trim solver computed (`der(x)` for a
+    /// rate), in the model's order.
+    pub solved_for: Vec<String>,
+    /// Gauss-Newton iterations of the trim solver.
+    pub trim_iterations: usize,
+    /// `max |F_i|` at the nominal.
+    pub trim_residual: f64,
+    /// Directions in which the equations leave the solved-for entries undetermined (the
+    /// solver took the solution nearest the guess); `0` for a unique nominal.
+    pub free_directions: usize,
+    /// When the motion stops satisfying the equations before `t_end` (states that enter
+    /// the equations move along their rates), the equations violated at `t_end`.
+    pub not_steady: Option<String>,
 }
 
 /// DPC's limit law on the linearisation, held by the scenario's zero-order hold
@@ -246,7 +279,7 @@ impl Runner<'_> {
                     "`w.{name}` has {found} root(s), but model `{}` is compiled with deg W = {expected} for `{name}` (the degree decides the symbolic derivatives); only the roots can change at run time, more or fewer Hirschorn steps need a change of the model's `tracking` section",
                     self.scenario.model
                 )),
-                other => self.invalid(format!("`w.{name}` = {roots:?}: {other}")),
+                other => self.invalid(format!("`w.{name}` = {}: {other}", crate::text::excerpt(roots))),
             })?;
         }
         Ok(())
@@ -377,22 +410,20 @@ where
     };
     let reference = Arc::new(runner.reference(model.reference.clone(), outputs)?);
 
-    let mut design_report = None;
-    let mut k_n = None;
-    if let Some(design) = &s.design {
-        // The controller's model: the plant type with the controller's parameters, and
-        // the W in use.
-        let controller_model = P::from_params(copy_params(
-            &tracking,
-            tracking.params(),
-            &model.plant,
-            model.plant.params().clone(),
-        ));
-        let w = runner.w_roots(&tracking, outputs)?;
-        let (report, k) = runner.design(&controller_model, &design.nominal, w)?;
-        design_report = Some(report);
-        k_n = k;
-    }
+    // The design runs on the controller's model: the plant type with the controller's
+    // parameters, and the W in use.
+    let design = match &s.design {
+        Some(table) => {
+            let controller_model = P::from_params(copy_params(
+                &tracking,
+                tracking.params(),
+                &model.plant,
+                model.plant.params().clone(),
+            ));
+            Some(runner.design(&controller_model, &tracking, table)?)
+        }
+        None => None,
+    };
     let mut dpc = Dpc::new(
         tracking,
         reference.clone(),
@@ -409,27 +440,21 @@ where
     )
     .map_err(ScenarioError::Controller)?;
     if s.prefeedback {
-        let design = s.design.as_ref().ok_or_else(|| {
+        let (table, (_, designed)) = s.design.as_ref().zip(design.as_ref()).ok_or_else(|| {
             runner.invalid("`prefeedback = true` needs a `[design]` table".into())
         })?;
-        let k_n = k_n.ok_or(ScenarioError::NoFeedbackGain)?;
-        let nominal = &design.nominal;
-        let motion = SteadyMotion {
-            state: nominal.state.clone(),
-            rate: nominal
-                .rate
-                .clone()
-                .unwrap_or_else(|| vec![0.0; structure.n_states()]),
-            input: nominal
-                .input
-                .clone()
-                .unwrap_or_else(|| vec![0.0; structure.n_inputs()]),
-        };
+        let law = match table.about {
+            About::Nominal => designed.prefeedback(),
+            About::Reference => designed.prefeedback_about(runner.reference_nominal(
+                &model.plant,
+                table,
+                designed.motion.clone(),
+                reference,
+            )?),
+        }
+        .map_err(ScenarioError::Design)?;
         dpc = dpc
-            .with_prefeedback(Prefeedback {
-                k_n,
-                nominal: runner.feedback_nominal(&model.plant, motion, reference)?,
-            })
+            .with_prefeedback(law)
             .map_err(ScenarioError::Prefeedback)?;
     }
     let options = ClosedLoopOptions {
@@ -443,8 +468,13 @@ where
         max_consecutive_failures: s.plant.max_consecutive_failures,
     };
     let start = Instant::now();
-    let closed_loop =
+    let mut closed_loop =
         simulate(&plant, &mut dpc, &s.x0, &options).map_err(ScenarioError::Simulation)?;
+    if closed_loop.samples.is_empty() {
+        closed_loop
+            .samples
+            .push(initial_sample(&plant, &dpc, &s.x0));
+    }
     let wall_time = start.elapsed().as_secs_f64();
 
     Ok(RunResult {
@@ -456,36 +486,188 @@ where
             outputs: structure.outputs.to_vec(),
         },
         model: in_use,
-        design: design_report,
+        design: design.map(|(report, _)| report),
         closed_loop,
         wall_time,
     })
 }
 
-// ---------------------------------------------------------------------------------------
-// The design of the preliminary feedback: linearise the controller's model about the
-// scenario's steady motion, analyse, build K_n and its nominal.
-// ---------------------------------------------------------------------------------------
-
-/// `x0(t) = state + t * rate`, `u0 = input`.
-struct SteadyMotion {
-    state: Vec<f64>,
-    rate: Vec<f64>,
-    input: Vec<f64>,
+/// The sample at `t = 0` of a run that stopped before its first control (a state already
+/// outside its bound): the outputs with no input applied yet (and the algebraic unknowns at
+/// zero, as the closed loop starts them), the reference and the errors, so that the summary
+/// reports the errors the run stopped with.
+fn initial_sample<P, T, R, L>(plant: &P, dpc: &Dpc<T, R, L>, x0: &[f64]) -> Sample
+where
+    P: DaeModel,
+    T: TrackingDae,
+    R: Reference,
+    L: LinearSolver,
+{
+    let structure = plant.structure();
+    let u = vec![0.0; structure.n_inputs()];
+    let mut y = vec![0.0; structure.n_outputs()];
+    plant.outputs(0.0, x0, &vec![0.0; structure.n_algebraic()], &u, &mut y);
+    let mut reference = vec![0.0; y.len()];
+    let error = match dpc.reference().derivatives(0.0, 0, &mut reference) {
+        Ok(()) => y.iter().zip(&reference).map(|(a, b)| a - b).collect(),
+        Err(_) => vec![f64::NAN; y.len()],
+    };
+    Sample {
+        t: 0.0,
+        x: x0.to_vec(),
+        u,
+        y,
+        reference,
+        error,
+    }
 }
 
-impl Nominal for SteadyMotion {
-    fn state(&self, t: f64, x0: &mut [f64]) {
-        for ((x, s), r) in x0.iter_mut().zip(&self.state).zip(&self.rate) {
-            *x = s + t * r;
-        }
-    }
-    fn input(&self, _t: f64, u0: &mut [f64]) {
-        u0.copy_from_slice(&self.input);
-    }
-}
+// ---------------------------------------------------------------------------------------
+// The design of the preliminary feedback: the scenario's `[design]` table as the inputs of
+// dpc::core::design's chain, and its results as a report.
+// ---------------------------------------------------------------------------------------
 
 impl Runner<'_> {
+    /// Trim the scenario's nominal, linearise the controller's model about it, check the
+    /// tracking DAE's relative degrees there, analyse, and predict the sampled loop.
+    fn design<P: DaeModel, T: TrackingDae>(
+        &self,
+        model: &P,
+        tracking: &T,
+        table: &DesignTable,
+    ) -> Result<(DesignReport, Design), ScenarioError> {
+        let structure = model.structure();
+        let problem = self.trim_problem(structure, &table.nominal)?;
+        let trim_options = TrimOptions::default();
+        let trimmed = trim(model, &problem, &trim_options)
+            .map_err(|e| ScenarioError::Design(DesignError::Trim(e)))?;
+        let t_end = self.scenario.t_end;
+        let not_steady = match check_steady(model, &trimmed.motion, 0.0, t_end, &trim_options) {
+            Ok(()) => None,
+            Err(TrimError::NotSteady { t, equations, .. }) => {
+                Some(format!("at t = {t} along the rates: {equations}"))
+            }
+            Err(e) => return Err(ScenarioError::Design(DesignError::Trim(e))),
+        };
+        let poles = table
+            .poles
+            .as_ref()
+            .map(|p| p.iter().map(|p| p.complex()).collect());
+        let designed = design(
+            model,
+            &trimmed.motion,
+            &DesignOptions {
+                analysis: AnalysisOptions {
+                    w: Some(self.w_roots(tracking, &structure.outputs)?),
+                    poles,
+                    ..AnalysisOptions::default()
+                },
+                horizon: t_end,
+                relative_degrees: tracking.relative_degrees().to_vec(),
+            },
+        )
+        .map_err(ScenarioError::Design)?;
+        let nominal = NominalReport::new(structure, &problem, &trimmed, not_steady);
+        let analysis = &designed.analysis;
+        let report = DesignReport {
+            nominal,
+            abar4_eigenvalues: analysis
+                .abar4_eigenvalues
+                .iter()
+                .map(|c| [c.re, c.im])
+                .collect(),
+            dpc_stable_without_prefeedback: analysis.dpc_stable,
+            dpc_stable_with_prefeedback: analysis.dpc_stable_prefeedback,
+            k_n: analysis
+                .k_n
+                .as_ref()
+                .map(|k| k.row_iter().map(|r| r.iter().copied().collect()).collect()),
+            sampled: self.sampled_prediction(&designed)?,
+            linearisation_drift: designed.linearisation_drift,
+        };
+        Ok((report, designed))
+    }
+
+    /// The trim problem of the scenario's nominal: arrays fix every entry, tables the named
+    /// ones; see [`NominalMotion`] for the defaults and the guesses.
+    fn trim_problem(
+        &self,
+        structure: &Structure,
+        nominal: &NominalMotion,
+    ) -> Result<TrimProblem, ScenarioError> {
+        let s = self.scenario;
+        let mut problem = TrimProblem::equilibrium(structure);
+        // Free states start from the run's initial state, when it fits the model.
+        if s.x0.len() == structure.n_states() {
+            problem.state = s.x0.iter().map(|x| TrimValue::Free(*x)).collect();
+        }
+        let blocks: [(&str, &Option<Values>, &model::Names, &mut Vec<TrimValue>); 4] = [
+            (
+                "state",
+                &nominal.state,
+                &structure.states,
+                &mut problem.state,
+            ),
+            ("rate", &nominal.rate, &structure.states, &mut problem.rate),
+            (
+                "algebraic",
+                &nominal.algebraic,
+                &structure.algebraic,
+                &mut problem.algebraic,
+            ),
+            (
+                "input",
+                &nominal.input,
+                &structure.inputs,
+                &mut problem.input,
+            ),
+        ];
+        for (what, given, names, slots) in blocks {
+            let key = format!("design.nominal.{what}");
+            match given {
+                None => {}
+                Some(Values::All(values)) => {
+                    self.check_length(&key, values, names)?;
+                    for (slot, v) in slots.iter_mut().zip(values) {
+                        *slot = TrimValue::Fixed(*v);
+                    }
+                }
+                Some(Values::Named(values)) => {
+                    // Entries not named are solved for, starting from their defaults.
+                    for slot in slots.iter_mut() {
+                        *slot = TrimValue::Free(slot.value());
+                    }
+                    for (name, v) in values {
+                        let i = names.position(name).ok_or_else(|| {
+                            self.invalid(format!(
+                                "`{key}.{name}`: model `{}` has no {} `{name}`; {}",
+                                self.scenario.model,
+                                kind_name(what),
+                                listed(what, names)
+                            ))
+                        })?;
+                        slots[i] = TrimValue::Fixed(*v);
+                    }
+                }
+            }
+        }
+        for (name, v) in &nominal.guess {
+            let current = match problem.value(structure, name) {
+                Ok(current) => current,
+                Err(e) => return Err(self.invalid(format!("`design.nominal.guess.{name}`: {e}"))),
+            };
+            if !current.is_free() {
+                return Err(self.invalid(format!(
+                    "`design.nominal.guess.{name}`: `{name}` is fixed by the nominal, a guess is for an entry the trim solver computes"
+                )));
+            }
+            problem
+                .set(structure, name, TrimValue::Free(*v))
+                .map_err(|e| self.invalid(format!("`design.nominal.guess.{name}`: {e}")))?;
+        }
+        Ok(problem)
+    }
+
     /// The per-output roots of the `W` in use, for the analysis: the scenario's where given,
     /// else those of the controller's coefficients.
     fn w_roots<T: TrackingDae>(
@@ -509,116 +691,14 @@ impl Runner<'_> {
         Ok(roots)
     }
 
-    fn design<P: DaeModel>(
-        &self,
-        model: &P,
-        nominal: &NominalMotion,
-        w: Vec<Vec<f64>>,
-    ) -> Result<(DesignReport, Option<DMatrix<f64>>), ScenarioError> {
-        let structure = model.structure();
-        let nx = structure.n_states();
-        self.check_length("design.nominal.state", &nominal.state, &structure.states)?;
-        let rate = nominal.rate.clone().unwrap_or_else(|| vec![0.0; nx]);
-        self.check_length("design.nominal.rate", &rate, &structure.states)?;
-        let input = nominal
-            .input
-            .clone()
-            .unwrap_or_else(|| vec![0.0; structure.n_inputs()]);
-        self.check_length("design.nominal.input", &input, &structure.inputs)?;
-        if structure.n_algebraic() > 0 {
-            return Err(self.invalid(format!(
-                "a preliminary-feedback design for model `{}` needs its algebraic unknowns at the nominal point, which scenarios cannot give yet",
-                self.scenario.model
-            )));
-        }
-        let sys = linearize(
-            model,
-            OperatingPoint {
-                t: 0.0,
-                x: &nominal.state,
-                xdot: &rate,
-                z: &[],
-                u: &input,
-            },
-        )
-        .map_err(|e| ScenarioError::Setup(format!("linearisation about the nominal: {e}")))?;
-        // K_n is designed at t = 0; how much the linearisation changes along the motion up
-        // to t_end tells whether one constant K_n fits the whole run.
-        let t_end = self.scenario.t_end;
-        let x_end: Vec<f64> = nominal
-            .state
-            .iter()
-            .zip(&rate)
-            .map(|(x, r)| x + t_end * r)
-            .collect();
-        let sys_end = linearize(
-            model,
-            OperatingPoint {
-                t: t_end,
-                x: &x_end,
-                xdot: &rate,
-                z: &[],
-                u: &input,
-            },
-        )
-        .map_err(|e| {
-            ScenarioError::Setup(format!(
-                "linearisation along the nominal at t = {t_end}: {e}"
-            ))
-        })?;
-        let scale = sys.a.amax().max(sys.b.amax()).max(f64::MIN_POSITIVE);
-        let linearisation_drift = (&sys_end.a - &sys.a)
-            .amax()
-            .max((&sys_end.b - &sys.b).amax())
-            / scale;
-        let poles = self
-            .scenario
-            .design
-            .as_ref()
-            .and_then(|d| d.poles.as_ref())
-            .map(|p| p.iter().map(|p| p.complex()).collect());
-        let analysis = analyze(
-            &sys,
-            &AnalysisOptions {
-                w: Some(w),
-                poles,
-                ..AnalysisOptions::default()
-            },
-        )
-        .map_err(|e| ScenarioError::Setup(format!("linear analysis: {e}")))?;
-        let k_n = analysis.k_n.clone();
-        let report = DesignReport {
-            abar4_eigenvalues: analysis
-                .abar4_eigenvalues
-                .iter()
-                .map(|c| [c.re, c.im])
-                .collect(),
-            dpc_stable_without_prefeedback: analysis.dpc_stable,
-            dpc_stable_with_prefeedback: analysis.dpc_stable_prefeedback,
-            k_n: k_n
-                .as_ref()
-                .map(|k| k.row_iter().map(|r| r.iter().copied().collect()).collect()),
-            sampled: self.sampled_prediction(&sys, &analysis)?,
-            linearisation_drift,
-        };
-        Ok((report, k_n))
-    }
-
     /// The sampled-data prediction of the linearised loop for this scenario: with the
     /// preliminary feedback only when the scenario applies it.
-    fn sampled_prediction(
-        &self,
-        sys: &LinearSystem,
-        analysis: &Analysis,
-    ) -> Result<SampledPrediction, ScenarioError> {
+    fn sampled_prediction(&self, designed: &Design) -> Result<SampledPrediction, ScenarioError> {
         let s = self.scenario;
-        let failed = |e: LinearError| ScenarioError::Setup(format!("sampled-data prediction: {e}"));
-        let sampled = if s.prefeedback {
-            SampledLoop::from_analysis(sys, analysis, s.hold)
-        } else {
-            SampledLoop::new(&sys.a, &sys.b, None, &analysis.k_j, s.hold)
-        }
-        .map_err(failed)?;
+        let failed = ScenarioError::SampledPrediction;
+        let sampled = designed
+            .sampled_loop(s.hold, s.prefeedback)
+            .map_err(failed)?;
         Ok(SampledPrediction {
             spectral_radius: sampled.spectral_radius(s.h).map_err(failed)?,
             critical_period: sampled
@@ -627,23 +707,18 @@ impl Runner<'_> {
         })
     }
 
-    /// The nominal of the preliminary feedback: the designed motion, or, about the
-    /// reference, that motion with the mapped states following the reference.
-    fn feedback_nominal<P: DaeModel>(
+    /// The designed motion with the states of `design.reference_state` following the
+    /// reference (`about = "reference"`).
+    fn reference_nominal<P: DaeModel>(
         &self,
         plant: &P,
+        table: &DesignTable,
         motion: SteadyMotion,
         reference: Arc<ScenarioReference>,
-    ) -> Result<Box<dyn Nominal + Send + Sync>, ScenarioError> {
-        let Some(design) = &self.scenario.design else {
-            return Ok(Box::new(motion));
-        };
-        if design.about == About::Nominal {
-            return Ok(Box::new(motion));
-        }
+    ) -> Result<ReferenceNominal<SteadyMotion, Arc<ScenarioReference>>, ScenarioError> {
         let structure = plant.structure();
         let (states, outputs) = (&structure.states, &structure.outputs);
-        let map = match &design.reference_state {
+        let map = match &table.reference_state {
             Some(entries) => entries
                 .iter()
                 .map(|(state, target)| {
@@ -682,9 +757,77 @@ impl Runner<'_> {
                 self.scenario.model
             )));
         }
-        let nominal = ReferenceNominal::new(motion, reference, structure.n_states(), map)
-            .map_err(|e| self.invalid(format!("`design.reference_state`: {e}")))?;
-        Ok(Box::new(nominal))
+        ReferenceNominal::new(motion, reference, structure.n_states(), map)
+            .map_err(|e| self.invalid(format!("`design.reference_state`: {e}")))
+    }
+}
+
+/// What a vector's entries are called, for messages.
+fn kind_name(what: &str) -> &'static str {
+    match what {
+        "algebraic" => "algebraic unknown",
+        "input" => "input",
+        _ => "state",
+    }
+}
+
+/// `its states are a, b` (or `it has none`), for messages.
+fn listed(what: &str, names: &model::Names) -> String {
+    let plural = match what {
+        "algebraic" => "algebraic unknowns",
+        "input" => "inputs",
+        _ => "states",
+    };
+    if names.is_empty() {
+        format!("it has no {plural}")
+    } else {
+        format!("its {plural} are {}", names.join(", "))
+    }
+}
+
+impl NominalReport {
+    fn new(
+        structure: &Structure,
+        problem: &TrimProblem,
+        trimmed: &Trim,
+        not_steady: Option<String>,
+    ) -> Self {
+        let by_name = |names: &model::Names, values: &[f64]| -> BTreeMap<String, f64> {
+            names
+                .iter()
+                .zip(values)
+                .map(|(n, v)| (n.to_string(), *v))
+                .collect()
+        };
+        let m = &trimmed.motion;
+        let mut solved_for = Vec::new();
+        for (names, entries, rate) in [
+            (&structure.states, &problem.state, false),
+            (&structure.states, &problem.rate, true),
+            (&structure.algebraic, &problem.algebraic, false),
+            (&structure.inputs, &problem.input, false),
+        ] {
+            for (name, entry) in names.iter().zip(entries) {
+                if entry.is_free() {
+                    solved_for.push(if rate {
+                        format!("der({name})")
+                    } else {
+                        name.to_string()
+                    });
+                }
+            }
+        }
+        Self {
+            state: by_name(&structure.states, &m.state),
+            rate: by_name(&structure.states, &m.rate),
+            algebraic: by_name(&structure.algebraic, &m.algebraic),
+            input: by_name(&structure.inputs, &m.input),
+            solved_for,
+            trim_iterations: trimmed.iterations,
+            trim_residual: trimmed.residual,
+            free_directions: trimmed.free_directions(),
+            not_steady,
+        }
     }
 }
 
@@ -703,53 +846,4 @@ fn copy_params<A: DaeModel, B: DaeModel>(
         }
     }
     into
-}
-
-/// The `a_k` of a monic `prod (s + a_k)` given lowest power first, if all roots are real.
-fn negated_real_roots(coefficients: &[f64]) -> Option<Vec<f64>> {
-    let n = coefficients.len().checked_sub(1)?;
-    if n == 0 {
-        return Some(Vec::new());
-    }
-    let lead = coefficients[n];
-    // Companion matrix of the monic polynomial; its eigenvalues (Schur) are the roots.
-    let companion = DMatrix::from_fn(n, n, |i, j| {
-        if j == n - 1 {
-            -coefficients[i] / lead
-        } else if i == j + 1 {
-            1.0
-        } else {
-            0.0
-        }
-    });
-    let scale = coefficients.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
-    let mut roots = Vec::with_capacity(n);
-    for z in companion.complex_eigenvalues().iter() {
-        if z.im.abs() > 1e-9 * (1.0 + scale) {
-            return None;
-        }
-        roots.push(-z.re);
-    }
-    roots.sort_by(f64::total_cmp);
-    Some(roots)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use dpc::core::tracking::monic_from_negated_roots;
-
-    #[test]
-    fn roots_round_trip_through_coefficients() {
-        let c = monic_from_negated_roots(&[2.0, 3.0]);
-        assert_eq!(c, vec![6.0, 5.0, 1.0]);
-        let r = negated_real_roots(&c).unwrap();
-        assert!(
-            (r[0] - 2.0).abs() < 1e-12 && (r[1] - 3.0).abs() < 1e-12,
-            "{r:?}"
-        );
-        assert_eq!(negated_real_roots(&[5.0, 1.0]).unwrap(), vec![5.0]);
-        // s^2 + 1 has imaginary roots.
-        assert!(negated_real_roots(&[1.0, 0.0, 1.0]).is_none());
-    }
 }

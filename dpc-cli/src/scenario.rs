@@ -18,6 +18,7 @@
 //! [design]                        # how K_n is built (needed when prefeedback = true)
 //! poles = [-5.0, -5.0, -5.0]      # of Abar_4 + Bbar_2 K_2; a real or [re, im] each
 //! nominal = { state = [1.5707963267948966, 0.0, 0.0, 0.0, -6.0], rate = [0.0, -6.0, 0.0, 0.0, 0.0], input = [0.0, 0.0] }
+//!                                 # or in part, the rest trimmed: see NominalMotion
 //! about = "reference"             # or "nominal" (default): where x - x0(t) is taken
 //! reference_state = { theta = "theta", psi = "psi", dtheta = "theta'", dpsi = "psi'" }
 //!
@@ -30,6 +31,11 @@
 //! growth = 4.0                    # default 4
 //! max_delta = 0.05                # default: h
 //! retries = 5                     # default: as many as reach max_delta
+//!
+//! [limits]                        # the work of one run, checked before it starts
+//! samples = 100000                # t_end / h + 1 (default 100000)
+//! nu = 20                         # largest nu (default 20)
+//! retries = 100                   # retry-ladder steps per sample (default 100)
 //! ```
 //!
 //! Every key is documented on [`Scenario`]; unknown keys are errors. The reference defaults to
@@ -37,7 +43,7 @@
 //! terms per output. `[plant]` sets the simulated plant's tolerances and parameters (a plant
 //! that differs from the controller's model, for mismatch studies), `[controller]` the
 //! controller model's parameters and its retry ladder, `[divergence]` the bounds that stop a
-//! run.
+//! run, `[limits]` the sizes a run may reach ([`Limits`]).
 //!
 //! [`Overrides`] change any key from the command line (`--set h=0.1`,
 //! `--set plant.params.m=1.2`): the same mechanism runs sweeps and the comparison runs that
@@ -51,7 +57,9 @@ use dpc::core::reference::{AtanIntegral, Constant, Polynomial, ScalarReference, 
 use dpc::core::simulate::Hold;
 use dpc::nalgebra::Complex;
 use serde::{Deserialize, Serialize};
+use thiserror::Error;
 
+use crate::text::{excerpt, short, Num};
 use crate::ScenarioError;
 
 /// One closed-loop run.
@@ -110,10 +118,230 @@ pub struct Scenario {
     /// beside the main run in the plots, e.g. `["prefeedback=false"]`.
     #[serde(default)]
     pub compare: Vec<String>,
+    /// Bounds on the work of one run, checked before it starts.
+    #[serde(default)]
+    pub limits: Limits,
     /// The file the scenario was read from (not a key): a plant file's path is relative to
     /// it.
     #[serde(skip)]
     pub source: Option<std::path::PathBuf>,
+}
+
+/// Bounds on the work and memory of one run, checked before the run starts so that a typo
+/// such as `t_end = 1e12` is an error naming the key instead of a run that never ends. Each
+/// can be raised deliberately (`--set limits.samples=10000000`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Limits {
+    /// The most samples of a run, `t_end / h + 1` (default 100000): the run keeps every
+    /// sample and writes it to `trajectory.csv`, so memory, time and output grow with it.
+    #[serde(default = "default_max_samples")]
+    pub samples: u64,
+    /// The largest `nu` (default 20): every sample integrates `nu + 2` inner steps, and the
+    /// round-off of the extracted control grows like `eps * delta^-nu`.
+    #[serde(default = "default_max_nu")]
+    pub nu: usize,
+    /// The most retries of the retry ladder per sample (default 100).
+    #[serde(default = "default_max_retries")]
+    pub retries: usize,
+}
+
+fn default_max_samples() -> u64 {
+    100_000
+}
+fn default_max_nu() -> usize {
+    20
+}
+fn default_max_retries() -> usize {
+    100
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            samples: default_max_samples(),
+            nu: default_max_nu(),
+            retries: default_max_retries(),
+        }
+    }
+}
+
+/// The largest magnitude accepted for a pole or a root of `W`: `sqrt(f64::MAX)`, beyond
+/// which the product of two such numbers (a gain, a coefficient of `W`) overflows.
+pub fn largest_magnitude() -> f64 {
+    f64::MAX.sqrt()
+}
+
+/// A value of a scenario (or of a system file) that is out of range, by the key the user
+/// wrote.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ValueError {
+    /// A time, step or tolerance is not a positive finite number.
+    #[error("`{key}` must be a positive finite number, found {}", Num(*value))]
+    NotPositive {
+        /// The key.
+        key: String,
+        /// Its value.
+        value: f64,
+    },
+    /// A bound is NaN or not positive (infinity is allowed: no check).
+    #[error("`{key}` must be a positive number (or inf), found {}", Num(*value))]
+    NotPositiveBound {
+        /// The key.
+        key: String,
+        /// Its value.
+        value: f64,
+    },
+    /// The plant's relative tolerance cannot be met (below the machine epsilon) or asks for
+    /// no accuracy (1 or more).
+    #[error("`plant.rtol` must lie between the machine epsilon {:.1e} and 1, found {}", f64::EPSILON, Num(*value))]
+    Tolerance {
+        /// The tolerance given.
+        value: f64,
+    },
+    /// The retry ladder's growth is not above 1.
+    #[error("`controller.retry.growth` must be a number above 1, found {}", Num(*value))]
+    Growth {
+        /// The growth given.
+        value: f64,
+    },
+    /// One value must not exceed (or reach) another.
+    #[error("`{key}` ({}) must be {relation} `{other}` ({})", Num(*value), Num(*other_value))]
+    Order {
+        /// The key.
+        key: &'static str,
+        /// Its value.
+        value: f64,
+        /// `"at least"`, `"smaller than"`, `"at most"`.
+        relation: &'static str,
+        /// The other key.
+        other: &'static str,
+        /// Its value.
+        other_value: f64,
+    },
+    /// An entry of a list is NaN or infinite.
+    #[error("`{key}` has a non-finite entry {} at index {index}: {}", Num(*value), excerpt(values))]
+    NonFinite {
+        /// The key.
+        key: String,
+        /// The entry's index.
+        index: usize,
+        /// The entry.
+        value: f64,
+        /// The list (quoted as a short excerpt).
+        values: Vec<f64>,
+    },
+    /// A single value is NaN or infinite.
+    #[error("`{key}` is non-finite ({})", Num(*value))]
+    NotFinite {
+        /// The key, with the index of the entry (`design.poles[0]`).
+        key: String,
+        /// The value.
+        value: f64,
+    },
+    /// A pole or a root of `W` (or a coefficient made from them) is too large to compute with.
+    #[error("`{key}` = {} is beyond {limit:.1e} in magnitude, where products with it overflow; scale the problem or choose a smaller value", Num(*value))]
+    TooLarge {
+        /// The key, with the index of the entry (`w.theta[0]`).
+        key: String,
+        /// The value.
+        value: f64,
+        /// The largest magnitude accepted ([`largest_magnitude`]).
+        limit: f64,
+    },
+    /// A non-zero entry of a system matrix is too small to compute with.
+    #[error("`{key}` = {} is below {limit:.1e} in magnitude (and not zero), where products with it underflow to zero; scale the system", Num(*value))]
+    TooSmall {
+        /// The key, with the indices of the entry (`b[2][0]`).
+        key: String,
+        /// The value.
+        value: f64,
+        /// The smallest non-zero magnitude accepted, `sqrt(f64::MIN_POSITIVE)`.
+        limit: f64,
+    },
+    /// A size that sets the work of the run exceeds its limit.
+    #[error("{what} exceeds the limit `limits.{limit_key}` = {limit}; raise it deliberately (`--set limits.{limit_key}=N`) if the run is meant to be this large")]
+    Limit {
+        /// What is too large, with its value (`` `t_end` / `h` gives 5e13 samples ``).
+        what: String,
+        /// The key of the limit under `[limits]`.
+        limit_key: &'static str,
+        /// The limit in force.
+        limit: u64,
+    },
+    /// A reference term has a non-finite coefficient.
+    #[error("`reference.{output}` has a non-finite coefficient")]
+    Reference {
+        /// The output.
+        output: String,
+    },
+    /// The preliminary feedback is on but nothing says how to design it.
+    #[error("`prefeedback = true` needs a `[design]` table with the nominal motion")]
+    NoDesign,
+    /// An entry of `compare` is malformed.
+    #[error("`compare`: {0}")]
+    Compare(Box<ScenarioError>),
+}
+
+/// Every entry of `values` finite.
+fn check_finite(key: &str, values: &[f64]) -> Result<(), ValueError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(index) => Err(ValueError::NonFinite {
+            key: key.to_string(),
+            index,
+            value: values[index],
+            values: values.to_vec(),
+        }),
+    }
+}
+
+/// A count computed in floating point: whole below `1e9`, else three digits.
+fn count(n: f64) -> String {
+    if n < 1e9 {
+        format!("{n:.0}")
+    } else {
+        format!("{n:.2e}")
+    }
+}
+
+/// One value finite.
+fn finite_scalar(key: &str, value: f64) -> Result<(), ValueError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(ValueError::NotFinite {
+            key: key.to_string(),
+            value,
+        })
+    }
+}
+
+/// One value finite and at most [`largest_magnitude`] in magnitude.
+pub(crate) fn check_scalar(key: &str, value: f64) -> Result<(), ValueError> {
+    finite_scalar(key, value)?;
+    if value.abs() > largest_magnitude() {
+        Err(ValueError::TooLarge {
+            key: key.to_string(),
+            value,
+            limit: largest_magnitude(),
+        })
+    } else {
+        Ok(())
+    }
+}
+
+/// The roots `a_k` of `W(s) = prod (s + a_k)`, and the coefficients of `W` they make, finite
+/// and at most [`largest_magnitude`] in magnitude.
+pub(crate) fn check_w_roots(key: &str, roots: &[f64]) -> Result<(), ValueError> {
+    for (i, root) in roots.iter().enumerate() {
+        check_scalar(&format!("{key}[{i}]"), *root)?;
+    }
+    let coefficients = dpc::core::tracking::monic_from_negated_roots(roots);
+    for (power, c) in coefficients.iter().enumerate() {
+        check_scalar(&format!("{key}` as the coefficient of s^{power} of `W"), *c)?;
+    }
+    Ok(())
 }
 
 fn default_delta() -> f64 {
@@ -185,7 +413,7 @@ pub fn scalar_reference(terms: &[Term]) -> Box<dyn ScalarReference + Send + Sync
 
 /// A real pole or an `[re, im]` pair.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a real number or an [re, im] pair")]
 pub enum Pole {
     /// A real pole.
     Real(f64),
@@ -211,7 +439,9 @@ pub struct Design {
     /// Poles of `Abar_4 + Bbar_2 K_2`; absent: the analysis' default.
     #[serde(default)]
     pub poles: Option<Vec<Pole>>,
-    /// The nominal motion `x0(t) = state + t * rate`, `u0 = input`.
+    /// The nominal motion `x0(t) = state + t * rate`, `z0`, `u0`, in full or in part (the
+    /// rest trimmed); absent: the equilibrium nearest `x0`.
+    #[serde(default)]
     pub nominal: NominalMotion,
     /// Where the deviation coordinates `x - x0(t)` of the feedback are taken.
     #[serde(default)]
@@ -234,18 +464,50 @@ pub enum About {
     Reference,
 }
 
-/// A steady nominal motion `x0(t) = state + t * rate` with constant input `u0`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// A steady nominal motion `x0(t) = state + t * rate` with constant algebraic unknowns `z0`
+/// and input `u0`, given in full or in part: what is not given is solved for by the trim
+/// solver ([`dpc::core::design::trim`]) so that the model's equations hold at `t = 0`.
+///
+/// Each of `state`, `rate`, `algebraic` and `input` is either an array (every entry fixed)
+/// or a table by name (the named entries fixed, the others solved for). Absent `state`,
+/// `algebraic` or `input`: solved for; absent `rate`: all zero (an equilibrium). `guess`
+/// gives starting values for entries that are solved for, by name (`der(psi)` for a rate);
+/// states without a guess start from `x0`, everything else from zero.
+///
+/// ```toml
+/// [design.nominal]                  # the wheel upright, heading rate -6, no torque
+/// state = { theta = 1.5707963267948966, psi = 0.0, dtheta = 0.0, dpsi = -6.0 }
+/// rate = { theta = 0.0, dtheta = 0.0, dphi = 0.0, dpsi = 0.0 }
+/// input = [0.0, 0.0]
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NominalMotion {
     /// `x0(0)`.
-    pub state: Vec<f64>,
-    /// `x0'`, constant (zeros: an operating point).
     #[serde(default)]
-    pub rate: Option<Vec<f64>>,
-    /// `u0`; absent: zeros.
+    pub state: Option<Values>,
+    /// `x0'`, constant.
     #[serde(default)]
-    pub input: Option<Vec<f64>>,
+    pub rate: Option<Values>,
+    /// `z0`, constant.
+    #[serde(default)]
+    pub algebraic: Option<Values>,
+    /// `u0`, constant.
+    #[serde(default)]
+    pub input: Option<Values>,
+    /// Starting values of entries that are solved for, by name.
+    #[serde(default)]
+    pub guess: BTreeMap<String, f64>,
+}
+
+/// Values of a vector of the model: all of them in order, or some of them by name.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Values {
+    /// Every entry, in the model's order.
+    All(Vec<f64>),
+    /// Some entries, by name.
+    Named(BTreeMap<String, f64>),
 }
 
 /// The simulated plant.
@@ -396,18 +658,53 @@ impl Overrides {
     }
 }
 
+/// Why a `--set` assignment (or an entry of `compare`) is malformed; the assignment is quoted
+/// as a short excerpt.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum OverrideError {
+    /// No `=`.
+    #[error("`{}` is not of the form key=value", short(item))]
+    NotAssignment {
+        /// The assignment.
+        item: String,
+    },
+    /// An empty key or an empty part of a dotted key.
+    #[error(
+        "`{}` has an empty key; expected a dotted path such as plant.params.m",
+        short(item)
+    )]
+    EmptyKey {
+        /// The assignment.
+        item: String,
+    },
+    /// A swept key with an empty value among its values.
+    #[error("`{}` has an empty value; expected key=v1,v2,...", short(item))]
+    EmptyValue {
+        /// The assignment.
+        item: String,
+    },
+    /// A dotted key goes through a value that is not a table.
+    #[error("cannot set `{}`: `{part}` is not a table", short(key))]
+    NotATable {
+        /// The dotted key.
+        key: String,
+        /// Its part that names a value, not a table.
+        part: String,
+    },
+}
+
 /// `key=value` split at the first `=`, both parts trimmed.
 pub(crate) fn split_assignment(item: &str) -> Result<(&str, &str), ScenarioError> {
     let Some((key, value)) = item.split_once('=') else {
-        return Err(ScenarioError::Override(format!(
-            "`{item}` is not of the form key=value"
-        )));
+        return Err(ScenarioError::Override(OverrideError::NotAssignment {
+            item: item.to_string(),
+        }));
     };
     let key = key.trim();
     if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(ScenarioError::Override(format!(
-            "`{item}` has an empty key; expected a dotted path such as plant.params.m"
-        )));
+        return Err(ScenarioError::Override(OverrideError::EmptyKey {
+            item: item.to_string(),
+        }));
     }
     Ok((key, value.trim()))
 }
@@ -427,6 +724,22 @@ pub(crate) fn parse_value(text: &str) -> toml::Value {
 pub(crate) fn value_text(v: &toml::Value) -> String {
     match v {
         toml::Value::String(s) => s.clone(),
+        other => element_text(other),
+    }
+}
+
+/// A value inside a list: strings quoted, numbers readable ([`Num`]).
+fn element_text(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(f) => Num(*f).to_string(),
+        toml::Value::Array(items) => format!(
+            "[{}]",
+            items
+                .iter()
+                .map(element_text)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
         other => other.to_string(),
     }
 }
@@ -467,44 +780,55 @@ impl Scenario {
             toml::from_str(&modified).map_err(|e| {
                 let mut err = crate::toml_error(origin, &modified, &e);
                 if let ScenarioError::Invalid { message, .. } = &mut err {
-                    message.push_str(&format!(" (after --set {})", overrides.label()));
+                    message.push_str(&format!(" (after --set {})", short(&overrides.label())));
                 }
                 err
             })?
         };
-        scenario
-            .validate()
-            .map_err(|message| ScenarioError::Invalid {
-                origin: origin.to_string(),
-                message,
-            })?;
+        scenario.validate().map_err(|cause| ScenarioError::Value {
+            origin: origin.to_string(),
+            cause,
+        })?;
         Ok(scenario)
     }
 
-    /// Checks that need no model: finite positive times, finite vectors, a design when the
-    /// preliminary feedback is on.
-    fn validate(&self) -> Result<(), String> {
-        let positive = |name: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
+    /// Checks that need no model: finite positive times, finite vectors, poles and roots of
+    /// `W` that can be computed with, a design when the preliminary feedback is on, and the
+    /// work of the run within [`Limits`].
+    ///
+    /// # Errors
+    /// The first [`ValueError`] found.
+    pub fn validate(&self) -> Result<(), ValueError> {
+        let positive = |key: &str, value: f64| {
+            if value.is_finite() && value > 0.0 {
                 Ok(())
             } else {
-                Err(format!("`{name}` must be a positive number, found {v}"))
+                Err(ValueError::NotPositive {
+                    key: key.to_string(),
+                    value,
+                })
             }
         };
         // A bound may be infinite (no check), never NaN or non-positive.
-        let bound = |name: &str, v: f64| {
-            if v > 0.0 {
+        let bound = |key: &str, value: f64| {
+            if value > 0.0 {
                 Ok(())
             } else {
-                Err(format!(
-                    "`{name}` must be a positive number (or inf), found {v}"
-                ))
+                Err(ValueError::NotPositiveBound {
+                    key: key.to_string(),
+                    value,
+                })
             }
         };
         positive("h", self.h)?;
         positive("t_end", self.t_end)?;
         positive("delta", self.delta)?;
         positive("plant.rtol", self.plant.rtol)?;
+        if !(f64::EPSILON..1.0).contains(&self.plant.rtol) {
+            return Err(ValueError::Tolerance {
+                value: self.plant.rtol,
+            });
+        }
         positive("plant.atol", self.plant.atol)?;
         bound("divergence.tracking_error", self.divergence.tracking_error)?;
         for (name, value) in &self.divergence.output {
@@ -515,77 +839,143 @@ impl Scenario {
         }
         let retry = &self.controller.retry;
         if !(retry.growth.is_finite() && retry.growth > 1.0) {
-            return Err(format!(
-                "`controller.retry.growth` must be a number above 1, found {}",
-                retry.growth
-            ));
+            return Err(ValueError::Growth {
+                value: retry.growth,
+            });
         }
         if let Some(max_delta) = retry.max_delta {
             positive("controller.retry.max_delta", max_delta)?;
             if max_delta < self.delta {
-                return Err(format!(
-                    "`controller.retry.max_delta` ({max_delta}) must be at least `delta` ({})",
-                    self.delta
-                ));
+                return Err(ValueError::Order {
+                    key: "controller.retry.max_delta",
+                    value: max_delta,
+                    relation: "at least",
+                    other: "delta",
+                    other_value: self.delta,
+                });
             }
         }
         if self.delta >= self.h {
-            return Err(format!(
-                "`delta` ({}) must be smaller than the sampling period `h` ({})",
-                self.delta, self.h
-            ));
+            return Err(ValueError::Order {
+                key: "delta",
+                value: self.delta,
+                relation: "smaller than the sampling period",
+                other: "h",
+                other_value: self.h,
+            });
         }
         if self.h > self.t_end {
-            return Err(format!(
-                "the sampling period `h` ({}) exceeds `t_end` ({})",
-                self.h, self.t_end
-            ));
+            return Err(ValueError::Order {
+                key: "h",
+                value: self.h,
+                relation: "at most",
+                other: "t_end",
+                other_value: self.t_end,
+            });
         }
-        let finite = |name: &str, v: &[f64]| {
-            if v.iter().all(|x| x.is_finite()) {
-                Ok(())
-            } else {
-                Err(format!("`{name}` has a non-finite entry: {v:?}"))
-            }
-        };
-        finite("x0", &self.x0)?;
+        self.check_limits()?;
+        check_finite("x0", &self.x0)?;
         for (name, roots) in &self.w {
-            finite(&format!("w.{name}"), roots)?;
+            check_w_roots(&format!("w.{name}"), roots)?;
         }
-        for (name, value) in self.plant.params.iter().chain(&self.controller.params) {
-            finite(name, &[*value])?;
+        for (name, value) in &self.plant.params {
+            finite_scalar(&format!("plant.params.{name}"), *value)?;
+        }
+        for (name, value) in &self.controller.params {
+            finite_scalar(&format!("controller.params.{name}"), *value)?;
         }
         if let Some(reference) = &self.reference {
             for (name, terms) in reference {
                 if terms.iter().any(|t| !t.is_finite()) {
-                    return Err(format!("`reference.{name}` has a non-finite coefficient"));
+                    return Err(ValueError::Reference {
+                        output: name.clone(),
+                    });
                 }
             }
         }
         if self.prefeedback && self.design.is_none() {
-            return Err(
-                "`prefeedback = true` needs a `[design]` table with the nominal motion".into(),
-            );
+            return Err(ValueError::NoDesign);
         }
         if let Some(design) = &self.design {
-            finite("design.nominal.state", &design.nominal.state)?;
-            if let Some(rate) = &design.nominal.rate {
-                finite("design.nominal.rate", rate)?;
-            }
-            if let Some(input) = &design.nominal.input {
-                finite("design.nominal.input", input)?;
-            }
-            for p in design.poles.iter().flatten() {
-                let c = p.complex();
-                if !(c.re.is_finite() && c.im.is_finite()) {
-                    return Err(format!("`design.poles` has a non-finite pole {c}"));
+            let n = &design.nominal;
+            for (what, values) in [
+                ("state", &n.state),
+                ("rate", &n.rate),
+                ("algebraic", &n.algebraic),
+                ("input", &n.input),
+            ] {
+                match values {
+                    None => {}
+                    Some(Values::All(v)) => check_finite(&format!("design.nominal.{what}"), v)?,
+                    Some(Values::Named(m)) => {
+                        for (name, v) in m {
+                            finite_scalar(&format!("design.nominal.{what}.{name}"), *v)?;
+                        }
+                    }
                 }
+            }
+            for (name, value) in &n.guess {
+                finite_scalar(&format!("design.nominal.guess.{name}"), *value)?;
+            }
+            for (i, pole) in design.poles.iter().flatten().enumerate() {
+                let c = pole.complex();
+                check_scalar(&format!("design.poles[{i}]"), c.re)?;
+                check_scalar(&format!("design.poles[{i}]"), c.im)?;
             }
         }
         for set in &self.compare {
             for item in set.split(';') {
-                split_assignment(item).map_err(|e| e.to_string())?;
+                split_assignment(item).map_err(|e| ValueError::Compare(Box::new(e)))?;
             }
+        }
+        Ok(())
+    }
+
+    /// The number of samples, `nu` and the retry ladder within [`Limits`].
+    fn check_limits(&self) -> Result<(), ValueError> {
+        let limits = &self.limits;
+        // As the closed loop counts them: round(t_end / h) + 1.
+        let samples = (self.t_end / self.h).round() + 1.0;
+        if samples > limits.samples as f64 {
+            return Err(ValueError::Limit {
+                what: format!(
+                    "`t_end` / `h` = {} / {} gives {} samples, which",
+                    Num(self.t_end),
+                    Num(self.h),
+                    count(samples)
+                ),
+                limit_key: "samples",
+                limit: limits.samples,
+            });
+        }
+        if let Some(nu) = self.nu {
+            if nu > limits.nu {
+                return Err(ValueError::Limit {
+                    what: format!("`nu` = {nu}"),
+                    limit_key: "nu",
+                    limit: limits.nu as u64,
+                });
+            }
+        }
+        let retry = &self.controller.retry;
+        let max_delta = retry.max_delta.unwrap_or(self.h);
+        // The ladder delta * growth^k reaches max_delta after this many retries.
+        let to_reach = ((max_delta / self.delta).ln() / retry.growth.ln())
+            .ceil()
+            .max(0.0);
+        let retries = retry.retries.map_or(to_reach, |r| (r as f64).min(to_reach));
+        if retries > limits.retries as f64 {
+            return Err(ValueError::Limit {
+                what: format!(
+                    "the retry ladder from `delta` = {} with `controller.retry.growth` = {} to `max_delta` = {} takes {} retries, which",
+                    Num(self.delta),
+                    Num(retry.growth),
+                    Num(max_delta),
+                    count(retries)
+                ),
+                limit_key: "retries",
+                limit: limits.retries as u64,
+            });
         }
         Ok(())
     }
@@ -614,9 +1004,10 @@ fn set_path(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<()
         current = match entry {
             toml::Value::Table(t) => t,
             _ => {
-                return Err(ScenarioError::Override(format!(
-                    "cannot set `{key}`: `{part}` is not a table"
-                )))
+                return Err(ScenarioError::Override(OverrideError::NotATable {
+                    key: key.to_string(),
+                    part: part.to_string(),
+                }))
             }
         };
     }
@@ -679,7 +1070,10 @@ t_end = 1.0
         let e = Scenario::parse("s.toml", MINIMAL, &Overrides::parse(["h=-1"]).unwrap())
             .unwrap_err()
             .to_string();
-        assert!(e.contains("`h` must be a positive number"), "{e}");
+        assert!(
+            e.contains("`h` must be a positive finite number, found -1"),
+            "{e}"
+        );
 
         let e = Overrides::parse(["h"]).unwrap_err().to_string();
         assert!(e.contains("key=value"), "{e}");

@@ -2,15 +2,18 @@
 //! summary table and a plot of the late tracking error against the first numeric parameter.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
+use crate::output::{unique_names, Staging};
 use crate::plot::{sweep_figure, SweepSeries};
 use crate::registry::Registry;
-use crate::report::{write_run, Summary};
-use crate::scenario::{parse_value, split_assignment, value_text, Overrides, Scenario};
+use crate::report::{write_run, Digest};
+use crate::scenario::{
+    parse_value, split_assignment, value_text, OverrideError, Overrides, Scenario,
+};
 use crate::ScenarioError;
 
 /// One swept key and its values.
@@ -46,9 +49,9 @@ impl Axis {
         }
         out.push(&values[start..]);
         if out.iter().any(|v| v.trim().is_empty()) {
-            return Err(ScenarioError::Override(format!(
-                "`{text}` has an empty value; expected key=v1,v2,..."
-            )));
+            return Err(ScenarioError::Override(OverrideError::EmptyValue {
+                item: text.to_string(),
+            }));
         }
         Ok(Self {
             key: key.to_string(),
@@ -68,21 +71,32 @@ impl Axis {
     }
 }
 
-/// Every combination of the axes' values (the last axis varies fastest).
-pub fn combinations(axes: &[Axis]) -> Vec<Overrides> {
-    let mut out = vec![Overrides::default()];
-    for axis in axes {
-        let mut next = Vec::with_capacity(out.len() * axis.values.len());
-        for base in &out {
-            for v in &axis.values {
-                let mut o = base.clone();
-                o.0.push((axis.key.clone(), v.clone()));
-                next.push(o);
-            }
-        }
-        out = next;
+/// The number of combinations of the axes' values, `None` when it does not fit a `usize`.
+pub fn combination_count(axes: &[Axis]) -> Option<usize> {
+    axes.iter()
+        .try_fold(1_usize, |n, axis| n.checked_mul(axis.values.len()))
+}
+
+/// Combination number `index` of the axes' values (the last axis varies fastest), made
+/// when asked for: a sweep never holds its combinations in memory.
+pub fn combination(axes: &[Axis], mut index: usize) -> Overrides {
+    let mut picked = vec![0; axes.len()];
+    for (slot, axis) in picked.iter_mut().zip(axes).rev() {
+        let n = axis.values.len().max(1);
+        *slot = index % n;
+        index /= n;
     }
-    out
+    Overrides(
+        axes.iter()
+            .zip(picked)
+            .map(|(axis, i)| (axis.key.clone(), axis.values[i].clone()))
+            .collect(),
+    )
+}
+
+/// Every combination of the axes' values (the last axis varies fastest), one at a time.
+pub fn combinations(axes: &[Axis]) -> impl Iterator<Item = Overrides> + '_ {
+    (0..combination_count(axes).unwrap_or(usize::MAX)).map(move |i| combination(axes, i))
 }
 
 /// The outcome of one combination.
@@ -90,34 +104,50 @@ pub fn combinations(axes: &[Axis]) -> Vec<Overrides> {
 pub struct SweepRow {
     /// The overrides of this run.
     pub overrides: Overrides,
-    /// Its summary, or why it could not run.
-    pub outcome: Result<Summary, String>,
+    /// The directory of its results under `runs/`.
+    pub directory: String,
+    /// What the sweep keeps of its summary, or why it could not run.
+    pub outcome: Result<Digest, ScenarioError>,
 }
 
 /// Run every combination of `axes` on the scenario at `path`, writing per-run results under
-/// `out/runs/`, the table `out/summary.csv` and the plot `out/sweep.{svg,png}`.
+/// `out/runs/`, the table `out/summary.csv` and the plot `out/sweep.{svg,png}`. Everything
+/// is written beside `out` first and moved into place at the end ([`Staging`]), so earlier
+/// results in `out` are replaced as a whole or not at all.
 ///
 /// Combinations that are invalid (for example `delta >= h`) are recorded as errors in the
-/// table; a scenario file that cannot be read at all is an error of the sweep.
+/// table; a scenario file that cannot be read at all is an error of the sweep, and so is a
+/// sweep in which every run failed (the earlier results then stay).
 ///
 /// # Errors
-/// [`ScenarioError`] when the scenario file is malformed or outputs cannot be written.
+/// [`ScenarioError`] when the scenario file is malformed, the sweep has more than
+/// `max_runs` combinations, every run failed or outputs cannot be written.
 pub fn sweep(
     registry: &Registry,
     path: &Path,
     axes: &[Axis],
     out: &Path,
+    max_runs: usize,
     progress: bool,
 ) -> Result<Vec<SweepRow>, ScenarioError> {
     Scenario::load(path, &Overrides::default())?;
-    let combos = combinations(axes);
-    let runs_dir = out.join("runs");
-    std::fs::create_dir_all(&runs_dir).map_err(|e| ScenarioError::Write {
-        path: runs_dir.display().to_string(),
-        message: e.to_string(),
-    })?;
+    let count = combination_count(axes)
+        .filter(|n| *n <= max_runs)
+        .ok_or_else(|| ScenarioError::TooManyRuns {
+            sizes: axes.iter().map(|a| a.values.len()).collect(),
+            limit: max_runs,
+        })?;
+    let staging = Staging::new(out, "summary.csv")?;
+    let not_written = |cause: ScenarioError| ScenarioError::NotWritten {
+        target: staging.target().display().to_string(),
+        previous: staging.had_previous(),
+        cause: Box::new(cause),
+    };
+    let runs_dir = staging.path().join("runs");
+    std::fs::create_dir_all(&runs_dir).map_err(|e| not_written(write_error(&runs_dir, &e)))?;
+    let names = unique_names((0..count).map(|i| combination(axes, i).label()));
     let bar = if progress {
-        ProgressBar::new(combos.len() as u64)
+        ProgressBar::new(count as u64)
     } else {
         ProgressBar::hidden()
     };
@@ -125,39 +155,47 @@ pub fn sweep(
         ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} elapsed, eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let rows: Vec<SweepRow> = combos
+    let rows: Vec<SweepRow> = (0..count)
         .into_par_iter()
-        .map(|overrides| {
+        .map(|index| {
+            let overrides = combination(axes, index);
             let label = overrides.label();
+            let directory = names[index].clone();
             let outcome = Scenario::load(path, &overrides)
                 .and_then(|s| registry.run(&s, &label))
-                .and_then(|r| write_run(&runs_dir.join(dir_name(&label)), &r))
-                .map_err(|e| e.to_string());
+                .and_then(|r| write_run(&runs_dir.join(&directory), &r))
+                .map(|summary| summary.digest());
             bar.inc(1);
-            SweepRow { overrides, outcome }
+            SweepRow {
+                overrides,
+                directory,
+                outcome,
+            }
         })
         .collect();
     bar.finish_and_clear();
-    write_table(&out.join("summary.csv"), axes, &rows)?;
+    if let Some(first) = rows.iter().find_map(|r| r.outcome.as_ref().err()) {
+        if rows.iter().all(|r| r.outcome.is_err()) {
+            return Err(ScenarioError::SweepFailed {
+                runs: rows.len(),
+                target: staging.target().display().to_string(),
+                previous: staging.had_previous(),
+                first: Box::new(first.clone()),
+            });
+        }
+    }
+    write_table(&staging.path().join("summary.csv"), axes, &rows).map_err(not_written)?;
     let (parameter, series) = plot_series(axes, &rows);
-    sweep_figure(&out.join("sweep"), &parameter, &series)?;
+    sweep_figure(&staging.path().join("sweep"), &parameter, &series).map_err(not_written)?;
+    staging.commit()?;
     Ok(rows)
 }
 
-/// A directory name for a run label (no path separators or quotes).
-fn dir_name(label: &str) -> PathBuf {
-    let clean: String = label
-        .chars()
-        .map(|c| match c {
-            '/' | '\\' | '"' | '\'' | ' ' | ':' | '*' | '?' | '<' | '>' | '|' => '_',
-            c => c,
-        })
-        .collect();
-    PathBuf::from(if clean.is_empty() {
-        "main".into()
-    } else {
-        clean
-    })
+fn write_error(path: &Path, e: &std::io::Error) -> ScenarioError {
+    ScenarioError::Write {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
 }
 
 fn csv_field(text: &str) -> String {
@@ -205,18 +243,24 @@ fn write_table(path: &Path, axes: &[Axis], rows: &[SweepRow]) -> Result<(), Scen
         match &row.outcome {
             Ok(s) => {
                 fields.push(if s.diverged { "diverged" } else { "ok" }.into());
-                fields.push(s.t_diverged.map_or(String::new(), |t| format!("{t}")));
+                fields.push(
+                    s.t_diverged
+                        .map_or(String::new(), |t| crate::text::Num(t).to_string()),
+                );
+                // An output this run's model does not have (a swept `model`) stays empty.
                 for o in &outputs {
-                    fields.push(format!(
-                        "{:e}",
-                        s.max_abs_error.get(o).copied().unwrap_or(f64::NAN)
-                    ));
+                    fields.push(
+                        s.max_abs_error
+                            .get(o)
+                            .map_or(String::new(), |v| format!("{v:e}")),
+                    );
                 }
                 for o in &outputs {
-                    fields.push(format!(
-                        "{:e}",
-                        s.final_error.get(o).copied().unwrap_or(f64::NAN)
-                    ));
+                    fields.push(
+                        s.final_error
+                            .get(o)
+                            .map_or(String::new(), |v| format!("{v:e}")),
+                    );
                 }
                 fields.extend([
                     s.samples.to_string(),
@@ -227,13 +271,13 @@ fn write_table(path: &Path, axes: &[Axis], rows: &[SweepRow]) -> Result<(), Scen
                     csv_field(s.divergence_cause.as_deref().unwrap_or("")),
                 ]);
             }
-            Err(message) => {
+            Err(error) => {
                 fields.push("error".into());
                 fields.extend(std::iter::repeat_n(
                     String::new(),
                     1 + 2 * outputs.len() + 5,
                 ));
-                fields.push(csv_field(message));
+                fields.push(csv_field(&error.to_string()));
             }
         }
         writeln!(f, "{}", fields.join(",")).map_err(err)?;
@@ -317,16 +361,26 @@ mod tests {
             Axis::parse("h=0.01,0.05,0.1").unwrap(),
             Axis::parse("prefeedback=true,false").unwrap(),
         ];
-        let c = combinations(&axes);
+        let c: Vec<Overrides> = combinations(&axes).collect();
         assert_eq!(c.len(), 6);
         assert_eq!(c[0].label(), "h=0.01,prefeedback=true");
+        assert_eq!(c[1].label(), "h=0.01,prefeedback=false");
         assert_eq!(c[5].label(), "h=0.1,prefeedback=false");
-        assert_eq!(combinations(&[]).len(), 1);
+        assert_eq!(combinations(&[]).count(), 1);
     }
 
     #[test]
-    fn directory_names_have_no_separators() {
-        assert_eq!(dir_name("a/b=\"c d\""), PathBuf::from("a_b=_c_d_"));
-        assert_eq!(dir_name(""), PathBuf::from("main"));
+    fn a_huge_sweep_is_counted_without_being_built() {
+        // 22 two-valued keys: 4.2 million combinations, never held in memory.
+        let axes: Vec<Axis> = (0..22)
+            .map(|i| Axis::parse(&format!("k{i}=1,2")).unwrap())
+            .collect();
+        assert_eq!(combination_count(&axes), Some(1 << 22));
+        let last = combination(&axes, (1 << 22) - 1);
+        assert!(last.0.iter().all(|(_, v)| v.as_integer() == Some(2)));
+        let axes: Vec<Axis> = (0..70)
+            .map(|i| Axis::parse(&format!("k{i}=1,2")).unwrap())
+            .collect();
+        assert_eq!(combination_count(&axes), None);
     }
 }

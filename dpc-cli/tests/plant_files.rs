@@ -197,6 +197,16 @@ fn a_scenario_runs_on_a_plant_file_relative_to_it() {
             stderr.starts_with(&want),
             "{model}: `{stderr}` should start with `{want}`"
         );
+        if model == "bad.dpc" {
+            // The file's lines, then what became of the output directory.
+            let lines: Vec<&str> = stderr.lines().collect();
+            assert_eq!(lines.len(), 2, "{stderr}");
+            assert!(lines[1].starts_with("error: "), "{stderr}");
+            assert!(
+                lines[1].contains(&out_dir.display().to_string()),
+                "{stderr}"
+            );
+        }
     }
 }
 

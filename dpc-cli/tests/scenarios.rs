@@ -116,17 +116,102 @@ fn a_nominal_along_which_the_linearisation_changes_is_reported() {
         &[
             "t_end=1",
             "compare=[]",
-            "design.nominal.rate=[0.05, -6.0, 0.0, 0.0, 0.0]",
+            // Leaning over at 0.05 rad/s: consistent at t = 0 (the trim solver computes
+            // the accelerations), but theta enters the equations, so the motion is not
+            // steady and the linearisation changes along it.
+            "design.nominal.state=[1.5707963267948966, 0.0, 0.0, 0.05, -6.0]",
+            "design.nominal.rate={theta = 0.05, psi = -6.0}",
         ],
     );
-    let drift = summary(&out)["linear_design"]["linearisation_drift"]
-        .as_f64()
-        .unwrap();
+    let design = &summary(&out)["linear_design"];
+    let drift = design["linearisation_drift"].as_f64().unwrap();
     assert!(drift > 1e-4, "{drift}");
+    let nominal = &design["nominal"];
+    assert_eq!(
+        nominal["solved_for"],
+        serde_json::json!(["der(dphi)", "der(dtheta)", "der(dpsi)"])
+    );
+    let not_steady = nominal["not_steady"].as_str().unwrap();
+    assert!(not_steady.contains("at t = 1"), "{not_steady}");
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
         stdout.contains("the linearisation changes along the nominal"),
         "{stdout}"
+    );
+}
+
+/// The paper's nominal from a partial specification: upright, heading rate -6, no torque;
+/// the trim solver finds the spin rate and the heading's rate, and the design is the one
+/// the full specification gives.
+#[test]
+fn a_partial_nominal_is_trimmed_and_reported() {
+    let file = scenarios().join("wheel.toml");
+    let full = out_dir("nominal-full");
+    simulate(&file, &full, &["t_end=1", "compare=[]"]);
+    let partial = out_dir("nominal-partial");
+    simulate(
+        &file,
+        &partial,
+        &[
+            "t_end=1",
+            "compare=[]",
+            "design.nominal.state={theta = 1.5707963267948966, psi = 0.0, dtheta = 0.0, dpsi = -6.0}",
+            "design.nominal.rate={theta = 0.0, dtheta = 0.0, dphi = 0.0, dpsi = 0.0}",
+            "design.nominal.guess={dphi = 0.7}",
+        ],
+    );
+    let (a, b) = (
+        &summary(&full)["linear_design"],
+        &summary(&partial)["linear_design"],
+    );
+    let nominal = &b["nominal"];
+    assert_eq!(
+        nominal["solved_for"],
+        serde_json::json!(["dphi", "der(psi)"])
+    );
+    assert!(nominal["state"]["dphi"].as_f64().unwrap().abs() < 1e-12);
+    assert!((nominal["rate"]["psi"].as_f64().unwrap() + 6.0).abs() < 1e-12);
+    assert_eq!(nominal["free_directions"], 0);
+    assert!(nominal["not_steady"].is_null());
+    assert_eq!(a["nominal"]["solved_for"], serde_json::json!([]));
+    fn close(x: &serde_json::Value, y: &serde_json::Value) -> bool {
+        match (x, y) {
+            (serde_json::Value::Array(x), serde_json::Value::Array(y)) => {
+                x.len() == y.len() && x.iter().zip(y).all(|(x, y)| close(x, y))
+            }
+            (x, y) => (x.as_f64().unwrap() - y.as_f64().unwrap()).abs() < 1e-9,
+        }
+    }
+    for key in ["abar4_eigenvalues", "k_n"] {
+        assert!(close(&a[key], &b[key]), "{key}: {} vs {}", a[key], b[key]);
+    }
+}
+
+/// A tracking DAE whose compiled relative degree is not the plant's at the nominal is
+/// refused before the loop runs, naming the output: the wheel upright at rest (no heading
+/// rate, no spin) is an equilibrium, but there the steering torque no longer tilts it in the
+/// linearisation, so the lean's relative degree 3 (through the spin) does not hold.
+#[test]
+fn a_relative_degree_that_differs_at_the_nominal_is_an_error() {
+    let file = scenarios().join("wheel.toml");
+    let out = out_dir("relative-degree");
+    let o = dpc(&[
+        "simulate",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "design.nominal.state=[1.5707963267948966, 0.0, 0.0, 0.0, 0.0]",
+        "--set",
+        "design.nominal.rate=[0.0, 0.0, 0.0, 0.0, 0.0]",
+        "--set",
+        "design.nominal.input={}",
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("output `theta`: no input reaches it at the nominal, relative degree 3 assumed by the tracking DAE"),
+        "{err}"
     );
 }
 
@@ -269,15 +354,66 @@ fn bad_scenarios_give_one_error_line() {
             vec!["--set", "controller.retry.max_delta=1e-4"],
             "`controller.retry.max_delta` (0.0001) must be at least `delta` (0.001)",
         ),
+        (
+            "nominal-name.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.state={lean = 1.0}"],
+            "`design.nominal.state.lean`: model `wheel` has no state `lean`; its states are theta, psi, dphi, dtheta, dpsi",
+        ),
+        (
+            "nominal-input-name.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.input={theta = 1.0}"],
+            "`design.nominal.input.theta`: model `wheel` has no input `theta`; its inputs are u1, u2",
+        ),
+        (
+            "nominal-algebraic.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.algebraic={q = 1.0}"],
+            "`design.nominal.algebraic.q`: model `wheel` has no algebraic unknown `q`; it has no algebraic unknowns",
+        ),
+        (
+            "nominal-length.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.input=[0.0]"],
+            "`design.nominal.input` has 1 entries, but model `wheel` has 2 (u1, u2)",
+        ),
+        (
+            "nominal-guess-fixed.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.guess.theta=1.0"],
+            "`design.nominal.guess.theta`: `theta` is fixed by the nominal",
+        ),
+        (
+            "nominal-guess-unknown.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.guess.spin=1.0"],
+            "`design.nominal.guess.spin`: model `Wheel` has no variable `spin`",
+        ),
+        (
+            "nominal-guess-nan.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.guess.dphi=nan"],
+            "`design.nominal.guess.dphi` is non-finite",
+        ),
+        (
+            // A lean rate with the lean velocity fixed at zero: der(theta) = dtheta cannot
+            // hold, and the message names that equation.
+            "nominal-inconsistent.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.rate=[0.05, -6.0, 0.0, 0.0, 0.0]"],
+            "the fixed values leave these equations unsatisfiable: equation 0 (der(theta) = dtheta)",
+        ),
     ];
     for (name, text, extra, expected) in cases {
         let path = dir.join(name);
         std::fs::write(&path, text).unwrap();
+        let out = dir.join("out");
         let mut args = vec![
             "simulate",
             path.to_str().unwrap(),
             "--out",
-            dir.to_str().unwrap(),
+            out.to_str().unwrap(),
         ];
         args.extend(extra);
         let o = dpc(&args);

@@ -9,8 +9,8 @@
 //!   search on `|F|_2`; non-square problems are allowed (an over-determined one must be
 //!   consistent, an under-determined one converges to the solution nearest the guess and
 //!   reports its free directions).
-//! * [`design`] linearises about the [`SteadyMotion`], runs [`analyze`] with the given `W`
-//!   and poles, measures how much the linearisation changes along the motion (one constant
+//! * [`design`] linearises about the [`SteadyMotion`], checks the relative degrees the
+//!   tracking DAE assumes there (when given), runs [`analyze`] with the given `W` and poles, measures how much the linearisation changes along the motion (one constant
 //!   `K_n` fits a run only where it does not), and returns a [`Design`] from which the law
 //!   [`Prefeedback`] is built.
 //! * [`check_relative_degrees`] compares the relative degrees a tracking DAE was compiled
@@ -18,11 +18,13 @@
 //!   relative degree is not its true one is reported before a closed loop runs into a
 //!   singular iteration matrix.
 
+use crate::linear::sampled::SampledLoop;
 use crate::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
 use crate::linearize::{linearize, LinearizeError, OperatingPoint};
 use crate::model::{DaeModel, Names, Structure};
 use crate::numeric::max_or_nan;
 use crate::prefeedback::{Nominal, NominalError, Prefeedback, SteadyMotion};
+use crate::simulate::Hold;
 use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use thiserror::Error;
@@ -94,34 +96,68 @@ impl TrimProblem {
         name: &str,
         value: TrimValue,
     ) -> Result<(), TrimError> {
-        let name = name.trim();
-        let slot = if let Some(inner) = name
-            .strip_prefix("der(")
-            .and_then(|rest| rest.strip_suffix(')'))
-        {
-            structure
-                .states
-                .position(inner.trim())
-                .map(|i| &mut self.rate[i])
-        } else if let Some(i) = structure.states.position(name) {
-            Some(&mut self.state[i])
-        } else if let Some(i) = structure.algebraic.position(name) {
-            Some(&mut self.algebraic[i])
-        } else {
-            structure.inputs.position(name).map(|i| &mut self.input[i])
-        };
-        match slot {
-            Some(slot) => {
-                *slot = value;
-                Ok(())
-            }
-            None => Err(TrimError::UnknownName {
-                model: structure.name.to_string(),
-                name: name.to_string(),
-                known: known_variables(structure),
-            }),
+        let (block, i) = locate(structure, name)?;
+        self.block_mut(block)[i] = value;
+        Ok(())
+    }
+
+    /// The entry called `name`, as [`set`](Self::set) names it.
+    ///
+    /// # Errors
+    /// [`TrimError::UnknownName`] when the model has no such variable.
+    pub fn value(&self, structure: &Structure, name: &str) -> Result<TrimValue, TrimError> {
+        let (block, i) = locate(structure, name)?;
+        Ok(match block {
+            Block::Rate => self.rate[i],
+            Block::State => self.state[i],
+            Block::Algebraic => self.algebraic[i],
+            Block::Input => self.input[i],
+        })
+    }
+
+    fn block_mut(&mut self, block: Block) -> &mut [TrimValue] {
+        match block {
+            Block::Rate => &mut self.rate,
+            Block::State => &mut self.state,
+            Block::Algebraic => &mut self.algebraic,
+            Block::Input => &mut self.input,
         }
     }
+}
+
+/// Which vector of a [`TrimProblem`] an entry is in.
+#[derive(Clone, Copy)]
+enum Block {
+    Rate,
+    State,
+    Algebraic,
+    Input,
+}
+
+/// Where the variable called `name` (a state, `der(state)`, an algebraic unknown or an
+/// input) is.
+fn locate(structure: &Structure, name: &str) -> Result<(Block, usize), TrimError> {
+    let name = name.trim();
+    let found = if let Some(inner) = name
+        .strip_prefix("der(")
+        .and_then(|rest| rest.strip_suffix(')'))
+    {
+        structure
+            .states
+            .position(inner.trim())
+            .map(|i| (Block::Rate, i))
+    } else if let Some(i) = structure.states.position(name) {
+        Some((Block::State, i))
+    } else if let Some(i) = structure.algebraic.position(name) {
+        Some((Block::Algebraic, i))
+    } else {
+        structure.inputs.position(name).map(|i| (Block::Input, i))
+    };
+    found.ok_or_else(|| TrimError::UnknownName {
+        model: structure.name.to_string(),
+        name: name.to_string(),
+        known: known_variables(structure),
+    })
 }
 
 fn known_variables(s: &Structure) -> String {
@@ -284,17 +320,6 @@ struct Point {
     v: [Vec<f64>; 4],
 }
 
-impl Point {
-    fn at(&self, t: f64, shift: f64) -> (f64, Vec<f64>) {
-        let x = self.v[1]
-            .iter()
-            .zip(&self.v[0])
-            .map(|(x, r)| x + shift * r)
-            .collect();
-        (t + shift, x)
-    }
-}
-
 /// Residual and Jacobian of a model, evaluated by blocks.
 struct Evaluation {
     residual: DVector<f64>,
@@ -302,7 +327,8 @@ struct Evaluation {
     blocks: [DMatrix<f64>; 4],
 }
 
-fn evaluate<P: DaeModel>(model: &P, t: f64, x: &[f64], p: &Point) -> Evaluation {
+/// Residual and Jacobian blocks at `p` (its states are `p.v[1]`).
+fn evaluate<P: DaeModel>(model: &P, t: f64, p: &Point) -> Evaluation {
     let s = model.structure();
     let ne = s.n_equations();
     let mut r = vec![0.0; ne];
@@ -314,7 +340,7 @@ fn evaluate<P: DaeModel>(model: &P, t: f64, x: &[f64], p: &Point) -> Evaluation 
     ];
     let [f_xdot, f_x, f_z, f_u] = &mut blocks;
     model.evaluate(
-        t, x, &p.v[0], &p.v[2], &p.v[3], &mut r, f_xdot, f_x, f_z, f_u,
+        t, &p.v[1], &p.v[0], &p.v[2], &p.v[3], &mut r, f_xdot, f_x, f_z, f_u,
     );
     Evaluation {
         residual: DVector::from_vec(r),
@@ -412,28 +438,33 @@ pub fn trim<P: DaeModel>(
         }
         None
     };
-    let scale = |e: &Evaluation, p: &Point| -> f64 {
-        let j = e.blocks.iter().map(row_sum_max).fold(0.0, f64::max);
-        let v = p.v.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
-        1.0 + j * v
-    };
-    let (t, x) = point.at(problem.t, 0.0);
-    let mut e = evaluate(model, t, &x, &point);
+    let mut e = evaluate(model, problem.t, &point);
     let mut iterations = 0;
     let rank;
     loop {
         if let Some(what) = non_finite(&e) {
             return Err(TrimError::NonFinite { model: name, what });
         }
-        let tol = options.tolerance * scale(&e, &point);
+        let tol = options.tolerance * jacobian_scale(&e, &point);
         let jf = DMatrix::from_fn(ne, nf, |i, k| {
             let (b, c) = layout.free[k];
             e.blocks[b][(i, c)]
         });
+        let r_max = e.residual.amax();
+        if nf == 0 || ne == 0 {
+            // Nothing to solve for (or nothing to satisfy): the point is checked as given.
+            if r_max <= tol {
+                rank = 0;
+                break;
+            }
+            return Err(TrimError::Inconsistent {
+                model: name,
+                equations: largest_residuals(s, &e.residual, tol),
+            });
+        }
         let svd = jf.clone().svd(true, true);
         let smax = svd.singular_values.iter().fold(0.0_f64, |m, v| m.max(*v));
         let rank_tol = (ne.max(nf).max(1) as f64) * f64::EPSILON * 100.0 * smax;
-        let r_max = e.residual.amax();
         if r_max <= tol {
             rank = svd
                 .singular_values
@@ -441,12 +472,6 @@ pub fn trim<P: DaeModel>(
                 .filter(|v| **v > rank_tol)
                 .count();
             break;
-        }
-        if nf == 0 {
-            return Err(TrimError::Inconsistent {
-                model: name,
-                equations: largest_residuals(s, &e.residual, tol),
-            });
         }
         // Minimum-norm Gauss-Newton step.
         let step = svd
@@ -482,8 +507,7 @@ pub fn trim<P: DaeModel>(
             for (k, &(b, c)) in layout.free.iter().enumerate() {
                 trial.v[b][c] += lambda * step[k];
             }
-            let (t, x) = trial.at(problem.t, 0.0);
-            let et = evaluate(model, t, &x, &trial);
+            let et = evaluate(model, problem.t, &trial);
             let ft = et.residual.norm_squared();
             if ft.is_finite() && ft <= (1.0 - 1e-4 * lambda) * f0 {
                 accepted = Some((trial, et));
@@ -516,42 +540,86 @@ pub fn trim<P: DaeModel>(
         }
     }
     let residual = e.residual.amax();
-    if let Some(horizon) = problem.horizon {
-        if point.v[0].iter().any(|r| *r != 0.0) {
-            let (t, x) = point.at(problem.t, horizon);
-            let moved = Point {
-                v: [
-                    point.v[0].clone(),
-                    x.clone(),
-                    point.v[2].clone(),
-                    point.v[3].clone(),
-                ],
-            };
-            let later = evaluate(model, t, &x, &moved);
-            let tol = options.tolerance * scale(&later, &moved);
-            let worst = max_or_nan(later.residual.iter().map(|v| v.abs()));
-            if worst.is_nan() || worst > tol {
-                return Err(TrimError::NotSteady {
-                    model: name,
-                    t,
-                    equations: largest_residuals(s, &later.residual, tol),
-                });
-            }
-        }
-    }
     let [rate, state, algebraic, input] = point.v;
+    let motion = SteadyMotion {
+        state,
+        rate,
+        algebraic,
+        input,
+    };
+    if let Some(horizon) = problem.horizon {
+        check_steady(model, &motion, problem.t, horizon, options)?;
+    }
     Ok(Trim {
-        motion: SteadyMotion {
-            state,
-            rate,
-            algebraic,
-            input,
-        },
+        motion,
         iterations,
         residual,
         unknowns: nf,
         rank,
     })
+}
+
+/// Check that `motion`, whose values hold at time `t`, still satisfies the model's equations
+/// at `t + horizon` with its states moved `horizon * rate`, to the tolerance of [`trim`]. A
+/// motion without rates is an equilibrium and always passes.
+///
+/// # Errors
+/// [`TrimError::Dimension`] when the motion does not fit the model, [`TrimError::NotSteady`]
+/// naming the violated equations (a NaN residual counts as violated).
+pub fn check_steady<P: DaeModel>(
+    model: &P,
+    motion: &SteadyMotion,
+    t: f64,
+    horizon: f64,
+    options: &TrimOptions,
+) -> Result<(), TrimError> {
+    let s = model.structure();
+    for (what, v, n) in [
+        ("state", &motion.state, s.n_states()),
+        ("rate", &motion.rate, s.n_states()),
+        ("algebraic", &motion.algebraic, s.n_algebraic()),
+        ("input", &motion.input, s.n_inputs()),
+    ] {
+        if v.len() != n {
+            return Err(TrimError::Dimension {
+                model: s.name.to_string(),
+                what,
+                expected: n,
+                found: v.len(),
+            });
+        }
+    }
+    if motion.rate.iter().all(|r| *r == 0.0) {
+        return Ok(());
+    }
+    let moved = Point {
+        v: [
+            motion.rate.clone(),
+            motion.state_at(horizon),
+            motion.algebraic.clone(),
+            motion.input.clone(),
+        ],
+    };
+    let t = t + horizon;
+    let later = evaluate(model, t, &moved);
+    let tol = options.tolerance * jacobian_scale(&later, &moved);
+    let worst = max_or_nan(later.residual.iter().map(|v| v.abs()));
+    if worst.is_nan() || worst > tol {
+        return Err(TrimError::NotSteady {
+            model: s.name.to_string(),
+            t,
+            equations: largest_residuals(s, &later.residual, tol),
+        });
+    }
+    Ok(())
+}
+
+/// `1 + |J|_inf |v|_inf`: the size of the terms the equations balance at a point, the scale
+/// of [`TrimOptions::tolerance`].
+fn jacobian_scale(e: &Evaluation, p: &Point) -> f64 {
+    let j = e.blocks.iter().map(row_sum_max).fold(0.0, f64::max);
+    let v = p.v.iter().flatten().fold(0.0_f64, |m, x| m.max(x.abs()));
+    1.0 + j * v
 }
 
 /// Relative decrease of `|F|^2` predicted by a Gauss-Newton step below which the problem
@@ -572,6 +640,12 @@ pub struct DesignOptions {
     /// The linearisation is also taken at `t = horizon` along the motion (typically the
     /// run's `t_end`) to measure [`Design::linearisation_drift`].
     pub horizon: f64,
+    /// The relative degrees the controller's tracking DAE assumes, per output
+    /// ([`TrackingDae::relative_degrees`](crate::TrackingDae::relative_degrees)): when given
+    /// (non-empty), they are checked against the linearisation at the nominal with
+    /// [`check_relative_degrees`] before the analysis, so that a tracking DAE that is
+    /// singular at the nominal is reported as such. Empty: not checked.
+    pub relative_degrees: Vec<Option<usize>>,
 }
 
 /// Why a design could not be made.
@@ -627,6 +701,26 @@ impl Design {
     /// [`DesignError::NoPrefeedback`] when the analysis built no `K_n`.
     pub fn prefeedback(&self) -> Result<Prefeedback, DesignError> {
         self.prefeedback_about(self.motion.clone())
+    }
+
+    /// DPC's limit law on this linearisation held by `hold` (see
+    /// [`crate::linear::sampled`]): with the preliminary feedback `K_n` when `prefeedback` is
+    /// set (and the analysis built one), else plain DPC.
+    ///
+    /// # Errors
+    /// [`LinearError`] from building the sampled loop.
+    pub fn sampled_loop(&self, hold: Hold, prefeedback: bool) -> Result<SampledLoop, LinearError> {
+        if prefeedback {
+            SampledLoop::from_analysis(&self.system, &self.analysis, hold)
+        } else {
+            SampledLoop::new(
+                &self.system.a,
+                &self.system.b,
+                None,
+                &self.analysis.k_j,
+                hold,
+            )
+        }
     }
 
     /// The law with this design's `K_n` about another nominal (for example a
@@ -685,6 +779,9 @@ pub fn design<P: DaeModel>(
         .map_err(|source| DesignError::Linearize { t, source })
     };
     let system = at(0.0)?;
+    if !options.relative_degrees.is_empty() {
+        check_relative_degrees(&system, &s.outputs, &options.relative_degrees)?;
+    }
     let end = at(options.horizon)?;
     let scale = system.a.amax().max(system.b.amax()).max(f64::MIN_POSITIVE);
     let linearisation_drift = (&end.a - &system.a).amax().max((&end.b - &system.b).amax()) / scale;

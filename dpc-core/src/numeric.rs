@@ -16,9 +16,48 @@ pub fn max_or_nan(values: impl IntoIterator<Item = f64>) -> f64 {
     m
 }
 
+/// A number as a person would write it in a message: plain decimals between `1e-4` and
+/// `1e9`, scientific notation outside (never hundreds of zeros), `inf`, `-inf` and `NaN` by
+/// name.
+///
+/// ```
+/// use dpc_core::numeric::Readable;
+///
+/// assert_eq!(Readable(0.05).to_string(), "0.05");
+/// assert_eq!(Readable(1e-300).to_string(), "1e-300");
+/// assert_eq!(Readable(-2e300).to_string(), "-2e300");
+/// assert_eq!(Readable(f64::INFINITY).to_string(), "inf");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Readable(pub f64);
+
+impl std::fmt::Display for Readable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x.is_nan() {
+            f.write_str("NaN")
+        } else if x.is_infinite() {
+            f.write_str(if x > 0.0 { "inf" } else { "-inf" })
+        } else if x == 0.0 || (1e-4..1e9).contains(&x.abs()) {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::max_or_nan;
+    use super::{max_or_nan, Readable};
+
+    #[test]
+    fn readable_numbers_at_every_magnitude() {
+        assert_eq!(Readable(0.0).to_string(), "0");
+        assert_eq!(Readable(-2.5).to_string(), "-2.5");
+        assert_eq!(Readable(1e-5).to_string(), "1e-5");
+        assert_eq!(Readable(1e308).to_string(), "1e308");
+        assert_eq!(Readable(f64::NAN).to_string(), "NaN");
+    }
 
     #[test]
     fn a_nan_anywhere_wins() {

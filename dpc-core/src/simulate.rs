@@ -21,7 +21,7 @@ use crate::dae::ImplicitDae;
 use crate::dpc::{Dpc, DpcError};
 use crate::linalg::{FaerDenseLu, LinearSolver};
 use crate::model::DaeModel;
-use crate::numeric::max_or_nan;
+use crate::numeric::{max_or_nan, Readable};
 use crate::prefeedback::Prefeedback;
 use crate::reference::Reference;
 use crate::sink::MatrixSink;
@@ -89,7 +89,7 @@ pub enum SimulateError {
     #[error("invalid simulation option: {0}")]
     InvalidOption(String),
     /// A state or tracking-error bound is NaN or not positive.
-    #[error("the bound on {quantity} `{name}` is {value}; it must be positive")]
+    #[error("the bound on {quantity} `{name}` is {}; it must be positive", Readable(*value))]
     InvalidBound {
         /// `"state"` or `"tracking error"`.
         quantity: &'static str,
@@ -140,7 +140,7 @@ pub struct Divergence {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum DivergenceCause {
     /// A bounded state left its domain.
-    #[error("state {state} = {value} left the domain |{state}| <= {bound}")]
+    #[error("state {state} = {} left the domain |{state}| <= {}", Readable(*value), Readable(*bound))]
     StateBound {
         /// The state's name.
         state: String,
@@ -150,7 +150,7 @@ pub enum DivergenceCause {
         bound: f64,
     },
     /// A state became NaN or infinite.
-    #[error("state {state} is {value}")]
+    #[error("state {state} is {}", Readable(*value))]
     NonFiniteState {
         /// The state's name.
         state: String,
@@ -158,7 +158,7 @@ pub enum DivergenceCause {
         value: f64,
     },
     /// The tracking error of an output exceeded its bound (or is NaN).
-    #[error("tracking error of {output} = {error} exceeds the bound |{output} - ref| <= {bound}")]
+    #[error("tracking error of {output} = {} exceeds the bound |{output} - ref| <= {}", Readable(*error), Readable(*bound))]
     TrackingError {
         /// The output's name.
         output: String,

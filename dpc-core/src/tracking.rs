@@ -286,6 +286,37 @@ pub fn monic_from_negated_roots(roots: &[f64]) -> Vec<f64> {
     c
 }
 
+/// The `a_k` of a monic `prod_k (s + a_k)` given by its coefficients lowest power first (the
+/// inverse of [`monic_from_negated_roots`]), sorted ascending; `None` when a root is complex
+/// (the linear analysis takes real roots only) or there are no coefficients. The roots are
+/// the eigenvalues of the companion matrix, computed by a Schur decomposition.
+pub fn negated_real_roots(coefficients: &[f64]) -> Option<Vec<f64>> {
+    let n = coefficients.len().checked_sub(1)?;
+    if n == 0 {
+        return Some(Vec::new());
+    }
+    let lead = coefficients[n];
+    let companion = nalgebra::DMatrix::from_fn(n, n, |i, j| {
+        if j == n - 1 {
+            -coefficients[i] / lead
+        } else if i == j + 1 {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let scale = coefficients.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
+    let mut roots = Vec::with_capacity(n);
+    for z in companion.complex_eigenvalues().iter() {
+        if !(z.re.is_finite() && z.im.is_finite()) || z.im.abs() > 1e-9 * (1.0 + scale) {
+            return None;
+        }
+        roots.push(-z.re);
+    }
+    roots.sort_by(f64::total_cmp);
+    Some(roots)
+}
+
 /// Check coefficients for output `output` of `T` before they are stored: the output exists,
 /// the length is the compiled `deg W_i + 1`, all are finite, the leading one is exactly 1,
 /// and the polynomial is stable in the sense of the Hirschorn step: after dividing out the
@@ -377,6 +408,21 @@ fn is_hurwitz(c: &[f64]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn roots_round_trip_through_coefficients() {
+        let c = monic_from_negated_roots(&[2.0, 3.0]);
+        assert_eq!(c, vec![6.0, 5.0, 1.0]);
+        let r = negated_real_roots(&c).unwrap();
+        assert!(
+            (r[0] - 2.0).abs() < 1e-12 && (r[1] - 3.0).abs() < 1e-12,
+            "{r:?}"
+        );
+        assert_eq!(negated_real_roots(&[5.0, 1.0]).unwrap(), vec![5.0]);
+        // s^2 + 1 has imaginary roots.
+        assert!(negated_real_roots(&[1.0, 0.0, 1.0]).is_none());
+        assert!(negated_real_roots(&[]).is_none());
+    }
 
     #[test]
     fn coefficients_from_negated_roots() {

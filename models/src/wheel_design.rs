@@ -47,6 +47,7 @@ pub fn options() -> DesignOptions {
             ..AnalysisOptions::default()
         },
         horizon: 0.0,
+        relative_degrees: Vec::new(),
     }
 }
 

@@ -5,13 +5,29 @@
 //! `Abar_4 + Bbar_2 K_2` (each a real number or an `[re, im]` pair), optional `prefeedback`
 //! (`"auto"`, `"always"`, `"never"`), optional `points` (where to print `H(s)`, each a real or
 //! `[re, im]`). Unknown keys are errors.
+//!
+//! Every number is checked before the analysis: finite, and (non-zero entries) between
+//! `sqrt(f64::MIN_POSITIVE)` and `sqrt(f64::MAX)` in magnitude, where products of two stay
+//! representable. A point of `points` at a pole of `H` (an eigenvalue of `a` to working
+//! precision) is reported as a pole: `pole` in the text, `"pole": true` (and no `re`, `im`)
+//! in the JSON. Infinite numbers are written as `"inf"` in the JSON; a quantity of the
+//! analysis that comes out NaN is an error naming it, never a value beside a verdict.
 
 use std::path::PathBuf;
 
 use clap::Args;
-use dpc::core::linear::{analyze, Analysis, AnalysisOptions, LinearSystem, Prefeedback};
+use dpc::core::linear::transfer::transfer_matrix;
+use dpc::core::linear::{
+    analyze, Analysis, AnalysisOptions, LinearError, LinearSystem, Prefeedback,
+};
 use dpc::nalgebra::{Complex, DMatrix};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::json::JsonError;
+use crate::scenario::{check_scalar, check_w_roots, ValueError};
+use crate::text::short;
+use crate::ScenarioError;
 
 /// Arguments of `dpc analyze`.
 #[derive(Args)]
@@ -23,8 +39,95 @@ pub struct AnalyzeArgs {
     pub json: bool,
 }
 
+/// Why `dpc analyze` gave no report; each names the file.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum AnalyzeError {
+    /// The file could not be read.
+    #[error("cannot read {path}: {message}")]
+    Read {
+        /// The file.
+        path: String,
+        /// The system's reason.
+        message: String,
+    },
+    /// The TOML is malformed, has an unknown key or a value of the wrong type.
+    #[error("{origin}: {message}")]
+    Syntax {
+        /// `FILE:LINE:COLUMN` where TOML gives a position.
+        origin: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A matrix is not a rectangular array of rows.
+    #[error("{path}: matrix `{name}` {problem}")]
+    Matrix {
+        /// The file.
+        path: String,
+        /// The matrix's key.
+        name: &'static str,
+        /// What is wrong with its shape.
+        problem: MatrixProblem,
+    },
+    /// A number is out of range.
+    #[error("{path}: {cause}")]
+    Value {
+        /// The file.
+        path: String,
+        /// The number, by its key.
+        cause: ValueError,
+    },
+    /// `prefeedback` is not one of the three choices.
+    #[error(
+        "{path}: prefeedback must be \"auto\", \"always\" or \"never\", found \"{}\"",
+        short(found)
+    )]
+    Prefeedback {
+        /// The file.
+        path: String,
+        /// The value given.
+        found: String,
+    },
+    /// The system or the analysis is not well posed.
+    #[error("{path}: {cause}")]
+    Linear {
+        /// The file.
+        path: String,
+        /// What the analysis found.
+        cause: LinearError,
+    },
+    /// A quantity of the analysis could not be computed in double precision.
+    #[error("{path}: the analysis {cause}, so its verdicts cannot be trusted; are the entries of the matrices of very different scales?")]
+    NotComputed {
+        /// The file.
+        path: String,
+        /// The quantity.
+        cause: JsonError,
+    },
+}
+
+/// What is wrong with the shape of a matrix.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum MatrixProblem {
+    /// `[]`.
+    #[error("has no rows")]
+    NoRows,
+    /// `[[]]`.
+    #[error("has an empty first row")]
+    EmptyRow,
+    /// Rows of different lengths.
+    #[error("is ragged: row {row} has {found} entries, row 0 has {expected}")]
+    Ragged {
+        /// The row.
+        row: usize,
+        /// Its length.
+        found: usize,
+        /// The length of row 0.
+        expected: usize,
+    },
+}
+
 #[derive(Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a real number or an [re, im] pair")]
 enum Number {
     Real(f64),
     Pair([f64; 2]),
@@ -52,34 +155,99 @@ struct Input {
     points: Option<Vec<Number>>,
 }
 
-fn matrix(name: &str, rows: &[Vec<f64>]) -> Result<DMatrix<f64>, String> {
+/// Why the input could not be turned into a system (the file is added by the caller).
+enum ParseError {
+    Syntax(ScenarioError),
+    Matrix(&'static str, MatrixProblem),
+    Value(ValueError),
+    Prefeedback(String),
+    Linear(LinearError),
+}
+
+impl ParseError {
+    fn with_path(self, path: &str) -> AnalyzeError {
+        let path = path.to_string();
+        match self {
+            ParseError::Syntax(ScenarioError::Invalid { origin, message }) => {
+                AnalyzeError::Syntax { origin, message }
+            }
+            ParseError::Syntax(other) => AnalyzeError::Syntax {
+                origin: path,
+                message: other.to_string(),
+            },
+            ParseError::Matrix(name, problem) => AnalyzeError::Matrix {
+                path,
+                name,
+                problem,
+            },
+            ParseError::Value(cause) => AnalyzeError::Value { path, cause },
+            ParseError::Prefeedback(found) => AnalyzeError::Prefeedback { path, found },
+            ParseError::Linear(cause) => AnalyzeError::Linear { path, cause },
+        }
+    }
+}
+
+/// A matrix from rows; every entry finite and, unless zero, between
+/// `sqrt(f64::MIN_POSITIVE)` and `sqrt(f64::MAX)` in magnitude.
+fn matrix(name: &'static str, rows: &[Vec<f64>]) -> Result<DMatrix<f64>, ParseError> {
     let Some(first) = rows.first() else {
-        return Err(format!("matrix `{name}` has no rows"));
+        return Err(ParseError::Matrix(name, MatrixProblem::NoRows));
     };
     let cols = first.len();
     if cols == 0 {
-        return Err(format!("matrix `{name}` has an empty first row"));
+        return Err(ParseError::Matrix(name, MatrixProblem::EmptyRow));
     }
     for (i, r) in rows.iter().enumerate() {
         if r.len() != cols {
-            return Err(format!(
-                "matrix `{name}` is ragged: row {i} has {} entries, row 0 has {cols}",
-                r.len()
+            return Err(ParseError::Matrix(
+                name,
+                MatrixProblem::Ragged {
+                    row: i,
+                    found: r.len(),
+                    expected: cols,
+                },
             ));
+        }
+    }
+    let smallest = f64::MIN_POSITIVE.sqrt();
+    for (i, r) in rows.iter().enumerate() {
+        for (j, &v) in r.iter().enumerate() {
+            let key = format!("{name}[{i}][{j}]");
+            check_scalar(&key, v).map_err(ParseError::Value)?;
+            if v != 0.0 && v.abs() < smallest {
+                return Err(ParseError::Value(ValueError::TooSmall {
+                    key,
+                    value: v,
+                    limit: smallest,
+                }));
+            }
         }
     }
     Ok(DMatrix::from_fn(rows.len(), cols, |i, j| rows[i][j]))
 }
 
-/// Parse the TOML text into a system and options.
-fn parse(text: &str) -> Result<(LinearSystem, AnalysisOptions), String> {
-    let input: Input = toml::from_str(text).map_err(|e| {
-        // toml's message spans several lines; keep the promise of one error line.
-        e.to_string()
-            .split_whitespace()
-            .collect::<Vec<_>>()
-            .join(" ")
-    })?;
+/// Finite numbers within range, by key (`poles[1]`), as complex numbers.
+fn complex_list(key: &str, numbers: &[Number]) -> Result<Vec<Complex<f64>>, ParseError> {
+    numbers
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let z = n.complex();
+            let key = format!("{key}[{i}]");
+            check_scalar(&key, z.re).map_err(ParseError::Value)?;
+            check_scalar(&key, z.im).map_err(ParseError::Value)?;
+            Ok(z)
+        })
+        .collect()
+}
+
+/// Parse the TOML text into a system, options and the points where `H(s)` is asked for.
+fn parse(
+    origin: &str,
+    text: &str,
+) -> Result<(LinearSystem, AnalysisOptions, Vec<Complex<f64>>), ParseError> {
+    let input: Input = toml::from_str(text)
+        .map_err(|e| ParseError::Syntax(crate::toml_error(origin, text, &e)))?;
     let a = matrix("a", &input.a)?;
     let b = matrix("b", &input.b)?;
     let c = matrix("c", &input.c)?;
@@ -87,50 +255,122 @@ fn parse(text: &str) -> Result<(LinearSystem, AnalysisOptions), String> {
         Some(d) => matrix("d", d)?,
         None => DMatrix::zeros(c.nrows(), b.ncols()),
     };
-    let sys = LinearSystem::new(a, b, c, d).map_err(|e| e.to_string())?;
+    let sys = LinearSystem::new(a, b, c, d).map_err(ParseError::Linear)?;
     let prefeedback = match input.prefeedback.as_deref() {
         None | Some("auto") => Prefeedback::Auto,
         Some("always") => Prefeedback::Always,
         Some("never") => Prefeedback::Never,
-        Some(other) => {
-            return Err(format!(
-                "prefeedback must be \"auto\", \"always\" or \"never\", found {other:?}"
-            ))
-        }
+        Some(other) => return Err(ParseError::Prefeedback(other.to_string())),
+    };
+    for (i, roots) in input.w.iter().flatten().enumerate() {
+        check_w_roots(&format!("w[{i}]"), roots).map_err(ParseError::Value)?;
+    }
+    let poles = match &input.poles {
+        Some(p) => Some(complex_list("poles", p)?),
+        None => None,
+    };
+    let points = match &input.points {
+        Some(p) => complex_list("points", p)?,
+        None => Vec::new(),
     };
     let opts = AnalysisOptions {
         w: input.w,
-        poles: input.poles.map(|p| p.iter().map(Number::complex).collect()),
+        poles,
         prefeedback,
-        transfer_points: input
-            .points
-            .map(|p| p.iter().map(Number::complex).collect())
-            .unwrap_or_default(),
         ..Default::default()
     };
-    Ok((sys, opts))
+    Ok((sys, opts, points))
+}
+
+/// `H(s)` of the system at a requested point, or the pole it sits on.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+enum TransferPoint {
+    /// `H(s)`.
+    Value {
+        /// The point `[re, im]`.
+        s: [f64; 2],
+        /// Real parts of `H(s)`, rows.
+        re: Vec<Vec<f64>>,
+        /// Imaginary parts of `H(s)`, rows.
+        im: Vec<Vec<f64>>,
+    },
+    /// `s` is an eigenvalue of `a` to working precision: `H` has a pole there.
+    Pole {
+        /// The point `[re, im]`.
+        s: [f64; 2],
+        /// Always `true`.
+        pole: bool,
+    },
+}
+
+fn transfer_at(sys: &LinearSystem, s: Complex<f64>) -> TransferPoint {
+    let rows = |m: DMatrix<f64>| -> Vec<Vec<f64>> {
+        m.row_iter().map(|r| r.iter().copied().collect()).collect()
+    };
+    match transfer_matrix(sys, s) {
+        Some(h) if h.iter().all(|z| z.re.is_finite() && z.im.is_finite()) => TransferPoint::Value {
+            s: [s.re, s.im],
+            re: rows(h.map(|z| z.re)),
+            im: rows(h.map(|z| z.im)),
+        },
+        _ => TransferPoint::Pole {
+            s: [s.re, s.im],
+            pole: true,
+        },
+    }
 }
 
 /// Run the subcommand.
-pub fn run(args: &AnalyzeArgs) -> Result<(), String> {
-    let text = std::fs::read_to_string(&args.system)
-        .map_err(|e| format!("cannot read {}: {e}", args.system.display()))?;
-    let (sys, opts) = parse(&text).map_err(|e| format!("{}: {e}", args.system.display()))?;
-    let report = analyze(&sys, &opts).map_err(|e| format!("{}: {e}", args.system.display()))?;
+///
+/// # Errors
+/// [`AnalyzeError`] naming the file and, for a value, its key.
+pub fn run(args: &AnalyzeArgs) -> Result<(), AnalyzeError> {
+    let path = args.system.display().to_string();
+    let text = std::fs::read_to_string(&args.system).map_err(|e| AnalyzeError::Read {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    let (sys, opts, points) = parse(&path, &text).map_err(|e| e.with_path(&path))?;
+    let report = analyze(&sys, &opts).map_err(|cause| AnalyzeError::Linear {
+        path: path.clone(),
+        cause,
+    })?;
+    let transfer: Vec<TransferPoint> = points.iter().map(|&s| transfer_at(&sys, s)).collect();
+    let not_computed = |cause| AnalyzeError::NotComputed {
+        path: path.clone(),
+        cause,
+    };
+    // Checked before anything is printed: no verdict beside a NaN.
+    let json = crate::json::to_string_pretty(&report).map_err(not_computed)?;
+    let transfer_json = crate::json::to_string_pretty(&transfer).map_err(not_computed)?;
     if args.json {
-        let s = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+        // Both texts are JSON with infinities as "inf"; join them as values.
+        let mut value: serde_json::Value = serde_json::from_str(&json)
+            .map_err(|e| not_computed(JsonError::Other(e.to_string())))?;
+        value["transfer"] = serde_json::from_str(&transfer_json)
+            .map_err(|e| not_computed(JsonError::Other(e.to_string())))?;
+        let s = serde_json::to_string_pretty(&value)
+            .map_err(|e| not_computed(JsonError::Other(e.to_string())))?;
         println!("{s}");
     } else {
-        print!(
-            "{}",
-            text_report(&args.system.display().to_string(), &report)
-        );
+        print!("{}", text_report(&path, &report, &transfer));
     }
     Ok(())
 }
 
 fn num(x: f64) -> String {
     let x = if x.abs() < 1e-10 { 0.0 } else { x };
+    if !x.is_finite() {
+        return crate::text::Num(x).to_string();
+    }
+    if x.abs() >= 1e9 {
+        // Four decimals of the mantissa, never hundreds of digits.
+        let s = format!("{x:.4e}");
+        let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        return format!("{mantissa}e{exponent}");
+    }
     let s = format!("{x:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
     if s == "-0" {
@@ -188,7 +428,7 @@ fn verdict(stable: bool) -> &'static str {
     }
 }
 
-fn text_report(name: &str, r: &Analysis) -> String {
+fn text_report(name: &str, r: &Analysis, transfer: &[TransferPoint]) -> String {
     let law = &r.law;
     let mut o = String::new();
     o.push_str(&format!("Linear DPC analysis of {name}\n"));
@@ -259,16 +499,22 @@ fn text_report(name: &str, r: &Analysis) -> String {
     if let Some(e) = &r.prefeedback_error {
         o.push_str(&format!("No preliminary feedback could be built: {e}\n"));
     }
-    for t in &r.transfer {
-        o.push_str(&format!(
-            "H(s) at s = {}: real part\n",
-            cnum(&Complex::new(t.s[0], t.s[1]))
-        ));
-        let re = DMatrix::from_fn(r.m, r.m, |i, j| t.re[i][j]);
-        let im = DMatrix::from_fn(r.m, r.m, |i, j| t.im[i][j]);
-        o.push_str(&mat("    ", &re));
-        o.push_str("  imaginary part\n");
-        o.push_str(&mat("    ", &im));
+    for t in transfer {
+        match t {
+            TransferPoint::Value { s, re, im } => {
+                o.push_str(&format!(
+                    "H(s) at s = {}: real part\n",
+                    cnum(&Complex::new(s[0], s[1]))
+                ));
+                o.push_str(&mat("    ", &DMatrix::from_fn(r.m, r.m, |i, j| re[i][j])));
+                o.push_str("  imaginary part\n");
+                o.push_str(&mat("    ", &DMatrix::from_fn(r.m, r.m, |i, j| im[i][j])));
+            }
+            TransferPoint::Pole { s, .. } => o.push_str(&format!(
+                "H(s) at s = {}: pole (s is an eigenvalue of A to working precision)\n",
+                cnum(&Complex::new(s[0], s[1]))
+            )),
+        }
     }
     let tol = &law.tolerances;
     o.push_str("Checks\n");
@@ -299,15 +545,14 @@ mod tests {
 
     #[test]
     fn poles_accept_reals_and_pairs() {
-        let (_, opts) = parse(
+        let Ok((_, opts, points)) = parse(
+            "s.toml",
             "a = [[0.0]]\nb = [[1.0]]\nc = [[1.0]]\npoles = [-2.0]\npoints = [[0.0, 1.0], 2.0]\n",
-        )
-        .unwrap();
+        ) else {
+            panic!("parses")
+        };
         assert_eq!(opts.poles.unwrap(), vec![Complex::new(-2.0, 0.0)]);
-        assert_eq!(
-            opts.transfer_points,
-            vec![Complex::new(0.0, 1.0), Complex::new(2.0, 0.0)]
-        );
+        assert_eq!(points, vec![Complex::new(0.0, 1.0), Complex::new(2.0, 0.0)]);
     }
 
     #[test]
@@ -315,5 +560,8 @@ mod tests {
         assert_eq!(num(-1e-14), "0");
         assert_eq!(num(2.5), "2.5");
         assert_eq!(cnum(&Complex::new(2.5, -5.21634)), "2.5 - 5.2163i");
+        assert_eq!(num(8.46e299), "8.46e299");
+        assert_eq!(num(-1e300), "-1e300");
+        assert_eq!(num(f64::INFINITY), "inf");
     }
 }

@@ -1,14 +1,16 @@
 //! `dpc simulate SCENARIO.toml --out DIR` and `dpc sweep SCENARIO.toml --set k=v1,v2 --out DIR`.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
+use crate::output::{unique_names, Staging};
 use crate::plot::closed_loop_figure;
 use crate::registry::Registry;
-use crate::report::{write_run, Summary};
+use crate::report::{write_run, Digest};
 use crate::run::RunResult;
 use crate::scenario::{Overrides, Scenario};
 use crate::sweep::{self, Axis};
+use crate::text::{short, Num};
 use crate::ScenarioError;
 use clap::Args;
 use dpc::core::linear::sampled::CriticalPeriod;
@@ -18,7 +20,8 @@ use dpc::core::linear::sampled::CriticalPeriod;
 pub struct SimulateArgs {
     /// The scenario file (see scenarios/ for examples).
     pub scenario: PathBuf,
-    /// Output directory (created if needed).
+    /// Output directory (created if needed; earlier results in it are replaced as a whole
+    /// once the new ones are written, and kept if the run fails).
     #[arg(long)]
     pub out: PathBuf,
     /// Override a scenario key, e.g. --set h=0.1 --set plant.params.m=1.2 (repeatable).
@@ -34,14 +37,18 @@ pub struct SweepArgs {
     /// A swept key and its values, e.g. --set h=0.01,0.05,0.1 (repeatable: all combinations).
     #[arg(long = "set", value_name = "KEY=V1,V2,...", required = true)]
     pub set: Vec<String>,
-    /// Output directory (created if needed).
+    /// Output directory (created if needed; earlier sweep results in it are replaced as a
+    /// whole when the sweep is written).
     #[arg(long)]
     pub out: PathBuf,
+    /// The most combinations the sweep may have; a larger sweep is an error before any run.
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    pub max_runs: usize,
 }
 
-fn describe(summary: &Summary) -> String {
+fn describe(summary: &Digest) -> String {
     let verdict = match (summary.t_diverged, &summary.divergence_cause) {
-        (Some(t), Some(cause)) => format!("DIVERGED at t = {t:.4}: {cause}"),
+        (Some(t), Some(cause)) => format!("DIVERGED at t = {}: {cause}", Num(t)),
         _ => "no divergence".to_string(),
     };
     let errors: Vec<String> = summary
@@ -49,9 +56,17 @@ fn describe(summary: &Summary) -> String {
         .iter()
         .map(|(k, v)| format!("{k} {v:.3e}"))
         .collect();
+    let roundoff = if summary.roundoff_level >= 1.0 {
+        format!(
+            "; round-off level eps * delta^-nu = {:.1e}: the controls carry no correct digit (raise `delta` or lower `nu`)",
+            summary.roundoff_level
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "{}: {verdict}; max |error| over the last quarter: {}; {} samples, {} Newton iterations, {} retries, {:.2} s",
-        summary.label,
+        "{}: {verdict}; max |error| over the last quarter: {}; {} samples, {} Newton iterations, {} retries, {:.2} s{roundoff}",
+        short(&summary.label),
         errors.join(", "),
         summary.samples,
         summary.newton_iterations,
@@ -60,20 +75,93 @@ fn describe(summary: &Summary) -> String {
     )
 }
 
-/// Run `dpc simulate`.
+/// Run `dpc simulate`: the scenario and its comparison runs, written into a staging
+/// directory that replaces `--out` only when everything is written.
 pub fn simulate(registry: &Registry, args: &SimulateArgs) -> Result<(), ScenarioError> {
     let overrides = Overrides::parse(args.set.iter().map(String::as_str))?;
     let scenario = Scenario::load(&args.scenario, &overrides)?;
-    let comparisons = scenario.comparisons()?;
+    // Every comparison scenario is read before any run, so a bad entry costs no run.
+    let mut compared = Vec::new();
+    for extra in scenario.comparisons()? {
+        let mut all = overrides.clone();
+        all.0.extend(extra.0.iter().cloned());
+        compared.push((Scenario::load(&args.scenario, &all)?, extra.label()));
+    }
+    let staging = Staging::new(&args.out, "summary.json")?;
+    let written = write_all(registry, &scenario, &overrides, &compared, staging.path());
+    match written {
+        Ok(()) => {
+            staging.commit()?;
+            let out = &args.out;
+            println!(
+                "wrote {}, {}, {} and {}",
+                out.join("summary.json").display(),
+                out.join("trajectory.csv").display(),
+                out.join("closed-loop.svg").display(),
+                out.join("closed-loop.png").display()
+            );
+            Ok(())
+        }
+        Err(cause) => Err(ScenarioError::NotWritten {
+            target: args.out.display().to_string(),
+            previous: staging.had_previous(),
+            cause: Box::new(cause),
+        }),
+    }
+}
+
+/// Run the scenario and its comparisons and write everything into `dir`.
+fn write_all(
+    registry: &Registry,
+    scenario: &Scenario,
+    overrides: &Overrides,
+    compared: &[(Scenario, String)],
+    dir: &Path,
+) -> Result<(), ScenarioError> {
     let mut runs: Vec<RunResult> = Vec::new();
     let main_label = if overrides.0.is_empty() {
         "scenario".to_string()
     } else {
         overrides.label()
     };
-    runs.push(registry.run(&scenario, &main_label)?);
-    let summary = write_run(&args.out, &runs[0])?;
+    runs.push(registry.run(scenario, &main_label)?);
+    let summary = write_run(dir, &runs[0])?;
     if let Some(d) = &summary.linear_design {
+        let n = &d.nominal;
+        if !n.solved_for.is_empty() {
+            let value = |name: &str| -> Option<f64> {
+                match name.strip_prefix("der(").and_then(|r| r.strip_suffix(')')) {
+                    Some(state) => n.rate.get(state).copied(),
+                    None => [&n.state, &n.algebraic, &n.input]
+                        .iter()
+                        .find_map(|m| m.get(name).copied()),
+                }
+            };
+            println!(
+                "nominal completed by the trim solver ({} iterations, residual {:.1e}): {}",
+                n.trim_iterations,
+                n.trim_residual,
+                n.solved_for
+                    .iter()
+                    .map(|name| match value(name) {
+                        Some(v) => format!("{name} = {v:.6}"),
+                        None => name.clone(),
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        if n.free_directions > 0 {
+            println!(
+                "note: the nominal is not unique ({} free direction(s)); the trim solver took the solution nearest the guesses (x0 for states)",
+                n.free_directions
+            );
+        }
+        if let Some(where_) = &n.not_steady {
+            println!(
+                "note: the nominal is not a steady motion up to t_end: {where_}; K_n is designed at t = 0"
+            );
+        }
         println!(
             "linear analysis of the controller's model: DPC alone predicted {}; eig(Abar_4) = [{}]",
             if d.dpc_stable_without_prefeedback {
@@ -87,48 +175,34 @@ pub fn simulate(registry: &Registry, args: &SimulateArgs) -> Result<(), Scenario
                 .collect::<Vec<_>>()
                 .join(", ")
         );
-    }
-    if let Some(d) = &summary.linear_design {
         let critical = match d.sampled.critical_period {
-            CriticalPeriod::At(h) => format!("loses stability at h = {h:.4}"),
-            CriticalPeriod::StableUpTo(h) => format!("stable for every h up to {h}"),
+            CriticalPeriod::At(h) => format!("loses stability at h = {}", Num(h)),
+            CriticalPeriod::StableUpTo(h) => format!("stable for every h up to {}", Num(h)),
             CriticalPeriod::UnstableAtAnyPeriod => "unstable at every period".to_string(),
         };
         println!(
             "linear sampled-data prediction ({:?} hold): spectral radius {:.4} at h = {}, {critical}",
-            summary.scenario.hold, d.sampled.spectral_radius, summary.scenario.h
+            summary.scenario.hold,
+            d.sampled.spectral_radius,
+            Num(summary.scenario.h)
         );
+        if d.linearisation_drift > 1e-6 {
+            println!(
+                "note: the linearisation changes along the nominal motion by {:.2e} (relative) up to t_end; K_n is designed at t = 0",
+                d.linearisation_drift
+            );
+        }
     }
-    if let Some(d) = summary
-        .linear_design
-        .as_ref()
-        .filter(|d| d.linearisation_drift > 1e-6)
-    {
-        println!(
-            "note: the linearisation changes along the nominal motion by {:.2e} (relative) up to t_end; K_n is designed at t = 0",
-            d.linearisation_drift
-        );
-    }
-    println!("{}", describe(&summary));
-    for extra in comparisons {
-        let mut all = overrides.clone();
-        all.0.extend(extra.0.iter().cloned());
-        let s = Scenario::load(&args.scenario, &all)?;
-        let r = registry.run(&s, &extra.label())?;
-        let dir = args.out.join("compare").join(extra.label());
-        let summary = write_run(&dir, &r)?;
-        println!("{}", describe(&summary));
+    println!("{}", describe(&summary.digest()));
+    let names = unique_names(compared.iter().map(|(_, label)| label.clone()));
+    for ((s, label), name) in compared.iter().zip(names) {
+        let r = registry.run(s, label)?;
+        let summary = write_run(&dir.join("compare").join(name), &r)?;
+        println!("{}", describe(&summary.digest()));
         runs.push(r);
     }
     let refs: Vec<&RunResult> = runs.iter().collect();
-    let [svg, png] = closed_loop_figure(&args.out.join("closed-loop"), &refs)?;
-    println!(
-        "wrote {}, {}, {} and {}",
-        args.out.join("summary.json").display(),
-        args.out.join("trajectory.csv").display(),
-        svg.display(),
-        png.display()
-    );
+    closed_loop_figure(&dir.join("closed-loop"), &refs)?;
     Ok(())
 }
 
@@ -144,12 +218,13 @@ pub fn sweep(registry: &Registry, args: &SweepArgs) -> Result<(), ScenarioError>
         &args.scenario,
         &axes,
         &args.out,
+        args.max_runs,
         std::io::stderr().is_terminal(),
     )?;
     for row in &rows {
         match &row.outcome {
             Ok(s) => println!("{}", describe(s)),
-            Err(e) => println!("{}: error: {e}", row.overrides.label()),
+            Err(e) => println!("{}: error: {e}", short(&row.overrides.label())),
         }
     }
     println!(

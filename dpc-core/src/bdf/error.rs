@@ -21,7 +21,11 @@ pub enum BdfError {
     #[error("invalid option: {0}")]
     InvalidOption(String),
     /// The iteration matrix is singular and reducing the step did not help.
-    #[error("singular iteration matrix at t = {t}: unknown {unknown:?}, equation {equation:?}")]
+    #[error(
+        "singular iteration matrix at t = {t}: unknown {}, equation {}",
+        unknown.as_deref().unwrap_or("(not identified)"),
+        equation.as_deref().unwrap_or("(no zero row)")
+    )]
     SingularMatrix {
         /// Time of the failure.
         t: f64,
