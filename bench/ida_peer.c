@@ -1,7 +1,7 @@
 /*
  * Peer comparison driver: SUNDIALS IDA (dense direct solver, analytic Jacobian) on the same
  * problems, tolerances and error-control choices as dpc-core's BDF work-precision table
- * (dpc-core/tests/bdf_standard.rs, `work_precision`). Written for this project; run through
+ * (dpc-core/examples/work_precision.rs). Written for this project; run through
  * bench/ida_peer.sh.
  *
  * Robertson (index 1) to t = 1e11, rtol = 1e-k, atol = [1e-8, 1e-14, 1e-6] * rtol / 1e-4,

@@ -20,5 +20,5 @@ echo "## SUNDIALS IDA $(dpkg-query -W -f='${Version}' libsundials-dev 2>/dev/nul
 echo
 echo "## dpc-core BDF"
 cd "$here/.."
-cargo test --release -p dpc-core --test bdf_standard -- --ignored --nocapture work_precision 2>/dev/null \
+cargo run --release -p dpc-core --example work_precision 2>/dev/null \
     | grep '^|'

@@ -11,24 +11,6 @@ use dpc_core::ImplicitDae;
 use problems::*;
 use std::time::Instant;
 
-/// Robertson to `t = 1e11`: returns (significant digits, steps, seconds).
-fn robertson(rtol: f64) -> (f64, usize, f64) {
-    let start = Instant::now();
-    let opts = Options {
-        rtol: Tolerance::Scalar(rtol),
-        atol: Tolerance::Vector(robertson_atol(rtol)),
-        ..Options::default()
-    };
-    let y0 = [1.0, 0.0, 0.0];
-    let yp0 = [-0.04, 0.04, 0.0];
-    let mut bdf = Bdf::new(Robertson, NalgebraLu::<3>::new(), opts, 0.0, &y0, &yp0).unwrap();
-    bdf.set_stop_time(ROBERTSON_T_END).unwrap();
-    let mut y = [0.0; 3];
-    bdf.solve_to(ROBERTSON_T_END, &mut y, None).unwrap();
-    let scd = significant_digits(&y, &ROBERTSON_REF, &[0, 1, 2]);
-    (scd, bdf.stats().steps, start.elapsed().as_secs_f64())
-}
-
 #[test]
 fn robertson_to_1e11_matches_reference() {
     // (rtol, minimum significant digits required)
@@ -38,32 +20,6 @@ fn robertson_to_1e11_matches_reference() {
         assert!(scd >= floor, "rtol {rtol}: {scd} digits");
         assert!(steps < 8000, "rtol {rtol}: {steps} steps");
     }
-}
-
-const THETA0: f64 = 1.0;
-const PENDULUM_T: f64 = 3.0;
-
-/// Pendulum to `t = 3`: returns (digits in positions, digits in all components, steps, s).
-fn pendulum(rtol: f64, reference: &[f64; 5]) -> (f64, f64, usize, f64) {
-    let p = Pendulum::default();
-    let start = Instant::now();
-    let opts = Options {
-        index: PENDULUM_INDEX.to_vec(),
-        ..Options::with_tolerances(rtol, rtol)
-    };
-    let (y0, yp0) = p.initial(THETA0);
-    let mut bdf = Bdf::new(p, NalgebraLu::<5>::new(), opts, 0.0, &y0, &yp0).unwrap();
-    let mut y = [0.0; 5];
-    bdf.set_stop_time(PENDULUM_T).unwrap();
-    bdf.solve_to(PENDULUM_T, &mut y, None).unwrap();
-
-    let elapsed = start.elapsed().as_secs_f64();
-    (
-        significant_digits(&y, reference, &[0, 1]),
-        significant_digits(&y, reference, &[0, 1, 2, 3, 4]),
-        bdf.stats().steps,
-        elapsed,
-    )
 }
 
 /// Work counters pinned as a snapshot (as diffsol does): a change of the step or order
@@ -164,44 +120,6 @@ fn consistent_initialisation_of_robertson() {
         (yp[0] + 0.04).abs() < 1e-10 && (yp[1] - 0.04).abs() < 1e-10,
         "{yp:?}"
     );
-}
-
-/// Work-precision table for the README (`cargo test --release -p dpc-core --test bdf_standard
-/// -- --ignored --nocapture work_precision`).
-#[test]
-#[ignore = "timing run for the README table"]
-fn work_precision() {
-    println!("| problem | rtol | steps | significant digits | time [ms] |");
-    println!("|---|---|---|---|---|");
-    for k in 4..=10 {
-        let rtol = 10f64.powi(-k);
-        let (scd, steps, s) = robertson(rtol);
-        let reps = 20;
-        let t0 = Instant::now();
-        for _ in 0..reps {
-            robertson(rtol);
-        }
-        let s = s.min(t0.elapsed().as_secs_f64() / f64::from(reps));
-        println!(
-            "| Robertson (t=1e11) | 1e-{k} | {steps} | {scd:.2} | {:.3} |",
-            s * 1e3
-        );
-    }
-    let reference = Pendulum::default().reference(THETA0, PENDULUM_T);
-    for k in 4..=10 {
-        let rtol = 10f64.powi(-k);
-        let (pos, all, steps, s) = pendulum(rtol, &reference);
-        let reps = 20;
-        let t0 = Instant::now();
-        for _ in 0..reps {
-            pendulum(rtol, &reference);
-        }
-        let _ = s;
-        println!(
-            "| pendulum (t=3) | 1e-{k} | {steps} | {pos:.2} (x,y) / {all:.2} (all) | {:.3} |",
-            t0.elapsed().as_secs_f64() / f64::from(reps) * 1e3
-        );
-    }
 }
 
 /// The pendulum with the velocity constraint `0 = x u + y v` instead of the position one:

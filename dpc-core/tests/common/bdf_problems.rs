@@ -1,7 +1,10 @@
 //! Standard DAE test problems shared by the BDF tests, benchmarks and the peer script.
 #![allow(dead_code)]
 
+use dpc_core::bdf::{Bdf, Options, Tolerance};
+use dpc_core::linalg::NalgebraLu;
 use dpc_core::{ImplicitDae, MatrixSink};
+use std::time::Instant;
 
 /// Robertson's chemical kinetics as an index-1 DAE (Hairer & Wanner 1996, Section IV.10):
 /// `y1' = -0.04 y1 + 1e4 y2 y3`, `y2' = 0.04 y1 - 1e4 y2 y3 - 3e7 y2^2`,
@@ -268,4 +271,50 @@ impl ImplicitDae for Heat {
         }
         Some(p)
     }
+}
+
+/// Robertson to `t = 1e11`: returns (significant digits, steps, seconds).
+pub fn robertson(rtol: f64) -> (f64, usize, f64) {
+    let start = Instant::now();
+    let opts = Options {
+        rtol: Tolerance::Scalar(rtol),
+        atol: Tolerance::Vector(robertson_atol(rtol)),
+        ..Options::default()
+    };
+    let y0 = [1.0, 0.0, 0.0];
+    let yp0 = [-0.04, 0.04, 0.0];
+    let mut bdf = Bdf::new(Robertson, NalgebraLu::<3>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    bdf.set_stop_time(ROBERTSON_T_END).unwrap();
+    let mut y = [0.0; 3];
+    bdf.solve_to(ROBERTSON_T_END, &mut y, None).unwrap();
+    let scd = significant_digits(&y, &ROBERTSON_REF, &[0, 1, 2]);
+    (scd, bdf.stats().steps, start.elapsed().as_secs_f64())
+}
+
+/// Initial angle of the pendulum runs, in rad from the downward vertical.
+pub const THETA0: f64 = 1.0;
+/// End time of the pendulum runs.
+pub const PENDULUM_T: f64 = 3.0;
+
+/// Pendulum to `t = 3`: returns (digits in positions, digits in all components, steps, s).
+pub fn pendulum(rtol: f64, reference: &[f64; 5]) -> (f64, f64, usize, f64) {
+    let p = Pendulum::default();
+    let start = Instant::now();
+    let opts = Options {
+        index: PENDULUM_INDEX.to_vec(),
+        ..Options::with_tolerances(rtol, rtol)
+    };
+    let (y0, yp0) = p.initial(THETA0);
+    let mut bdf = Bdf::new(p, NalgebraLu::<5>::new(), opts, 0.0, &y0, &yp0).unwrap();
+    let mut y = [0.0; 5];
+    bdf.set_stop_time(PENDULUM_T).unwrap();
+    bdf.solve_to(PENDULUM_T, &mut y, None).unwrap();
+
+    let elapsed = start.elapsed().as_secs_f64();
+    (
+        significant_digits(&y, reference, &[0, 1]),
+        significant_digits(&y, reference, &[0, 1, 2, 3, 4]),
+        bdf.stats().steps,
+        elapsed,
+    )
 }
