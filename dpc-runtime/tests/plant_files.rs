@@ -276,3 +276,47 @@ fn a_short_residual_buffer_panics() {
     let mut r = [0.0; 1];
     plant.residual(0.0, &[1.0, 0.25], &[0.3, 1.5], &[], &[0.5], &mut r);
 }
+
+mod mutations {
+    use super::CART;
+    use proptest::prelude::*;
+
+    /// Characters that matter to the grammar, to splice into a good file.
+    const PIECES: &[&str] = &[
+        "{", "}", "(", ")", "[", "]", ";", ",", "=", "==", "der(", "x", "v", "f", "k", "t", "-",
+        "*", "/", ".powi(", "1e999", "0.0", "2", "tracking", "outputs", "let", "sin", "\"", "'",
+        "//", "/*", "#", "é", "\u{0}",
+    ];
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+
+        /// Any edit of a good file compiles or gives positioned diagnostics; nothing panics.
+        #[test]
+        fn edited_files_never_panic(
+            edits in prop::collection::vec((0usize..400, 0usize..6, 0usize..PIECES.len()), 1..6)
+        ) {
+            let mut text = CART.to_string();
+            for (at, cut, piece) in edits {
+                let mut at = at.min(text.len());
+                while !text.is_char_boundary(at) {
+                    at -= 1;
+                }
+                let mut end = (at + cut).min(text.len());
+                while !text.is_char_boundary(end) {
+                    end += 1;
+                }
+                text.replace_range(at..end, PIECES[piece]);
+            }
+            let result = std::panic::catch_unwind(|| dpc_runtime::parse("edited.dpc", &text));
+            prop_assert!(result.is_ok(), "panicked on:\n{text}");
+            if let Ok(Err(err)) = result {
+                let shown = err.to_string();
+                prop_assert!(!shown.is_empty());
+                for line in shown.lines() {
+                    prop_assert!(line.starts_with("edited.dpc:"), "{line}");
+                }
+            }
+        }
+    }
+}
