@@ -309,6 +309,40 @@ impl Registry {
     /// Run `scenario` on the model it names: a registered model, or a plant file (a `model`
     /// ending in `.dpc`, see [`crate::plant_file`]).
     ///
+    /// The whole loop as library calls: a scenario from text (with a nominal given in part,
+    /// completed by the trim solver), the run, and what it found.
+    ///
+    /// ```
+    /// use dpc_cli::registry::{Entry, Registry};
+    /// use dpc_cli::scenario::{Overrides, Scenario};
+    /// use dpc_models::{Wheel, WheelReference, WheelTracking};
+    ///
+    /// let registry = Registry::new().model(
+    ///     Entry::new("wheel", "the paper's wheel", Wheel::default(), WheelTracking::default())
+    ///         .reference(WheelReference::default()),
+    /// );
+    /// let text = r#"
+    ///     model = "wheel"
+    ///     x0 = [1.5707963267948966, 0.0, 0.0, 0.0, -6.0]
+    ///     h = 0.05
+    ///     t_end = 2.0
+    ///     prefeedback = true
+    ///     [design]
+    ///     poles = [-5.0, -5.0, -5.0]
+    ///     [design.nominal]   # upright, heading rate -6, no torque
+    ///     state = { theta = 1.5707963267948966, psi = 0.0, dtheta = 0.0, dpsi = -6.0 }
+    ///     rate = { theta = 0.0, dtheta = 0.0, dphi = 0.0, dpsi = 0.0 }
+    ///     input = [0.0, 0.0]
+    /// "#;
+    /// let scenario = Scenario::parse("wheel.toml", text, &Overrides::default())?;
+    /// let run = registry.run(&scenario, "main")?;
+    /// let design = run.design.as_ref().expect("the scenario has a [design]");
+    /// assert_eq!(design.nominal.solved_for, ["dphi", "der(psi)"]);
+    /// assert!(!design.dpc_stable_without_prefeedback);
+    /// assert!(run.closed_loop.divergence.is_none());
+    /// # Ok::<(), dpc_cli::ScenarioError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`ScenarioError::UnknownModel`], the errors of [`crate::plant_file::load`] and those
     /// of [`ScenarioModel::run`].

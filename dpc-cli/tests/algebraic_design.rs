@@ -158,6 +158,16 @@ fn the_nominal_of_a_plant_with_algebraic_unknowns_is_trimmed_from_its_inputs() {
 }
 
 #[test]
+fn poles_where_there_is_nothing_to_place_are_an_error() {
+    // W = s + 0.5 matches both relative degrees: no infinite part, no K_n to design.
+    let err = run(&["design.poles=[-1.0]"]).unwrap_err().to_string();
+    assert!(
+        err.contains("bad poles: 1 pole(s) given, but with this W the pencil has no infinite part"),
+        "{err}"
+    );
+}
+
+#[test]
 fn an_unreachable_nominal_names_the_equations() {
     // Levels fixed apart from what the pumps can hold: the trim solver says which
     // equations cannot be satisfied.

@@ -494,6 +494,17 @@ pub fn analyze(sys: &LinearSystem, opts: &AnalysisOptions) -> Result<Analysis, L
         law,
     };
     if !build {
+        if ni == 0 && opts.poles.as_ref().is_some_and(|p| !p.is_empty()) {
+            // Poles asked for where there is nothing to place: silently ignoring them would
+            // let the caller believe a K_n was designed.
+            return Err(LinearError::BadPoles {
+                reason: format!(
+                    "{} pole(s) given, but with this W the pencil has no infinite part, so there is no preliminary feedback to place them with (Abar_4 has dimension {}); give no poles",
+                    opts.poles.as_ref().map_or(0, Vec::len),
+                    out.law.abar4.nrows()
+                ),
+            });
+        }
         return Ok(out);
     }
 
