@@ -441,6 +441,7 @@ where
         state_bounds: runner.state_bounds(&structure.states)?,
         tracking_bounds: runner.tracking_bounds(outputs)?,
         max_consecutive_failures: s.plant.max_consecutive_failures,
+        ..ClosedLoopOptions::default()
     };
     let start = Instant::now();
     let closed_loop =

@@ -5,7 +5,10 @@
 //! * [`Pendulum`]: the planar pendulum in Cartesian coordinates with a Lagrange multiplier
 //!   (index 3);
 //! * [`FlexibleJoint`]: a flexible-joint robot arm of relative degree 4, with two
-//!   stabilised Hirschorn steps in [`FlexibleJointTracking`].
+//!   stabilised Hirschorn steps in [`FlexibleJointTracking`];
+//! * [`CartPendulum`]: an inverted pendulum on a cart in Cartesian coordinates with a rod
+//!   constraint and its multiplier (index 3), and [`CartPendulumJoint`], the same plant in
+//!   joint coordinates (an ODE).
 //!
 //! [`wheel_design`] holds the paper's nominal motion, linear analysis and preliminary feedback
 //! for the wheel.
@@ -15,11 +18,16 @@
 //! The source files are also read by the snapshot tests of `dpc-codegen`, which store the
 //! code the macro generates for each of them.
 
+mod cart_pendulum;
 mod flexible_joint;
 mod pendulum;
 mod wheel;
 pub mod wheel_design;
 
+pub use cart_pendulum::{
+    CartPendulum, CartPendulumJoint, CartPendulumJointParams, CartPendulumJointReference,
+    CartPendulumJointTracking, CartPendulumParams, CartPendulumReference, CartPendulumTracking,
+};
 pub use flexible_joint::{
     FlexibleJoint, FlexibleJointParams, FlexibleJointReference, FlexibleJointTracking,
 };
