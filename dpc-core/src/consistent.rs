@@ -201,6 +201,9 @@ pub struct ConstraintStructure {
     /// The states the kinematic rows of the position states involve, other than the position
     /// states themselves (the velocities of the constrained positions), ascending.
     pub velocity_states: Vec<usize>,
+    /// Rows without `x'` and algebraic unknowns that depend on the input: prescribed motions
+    /// (or, in a tracking DAE, the output rows), not counted as constraints.
+    pub prescribed: Vec<usize>,
     /// Number of states.
     pub n_states: usize,
     /// Number of algebraic unknowns.
@@ -209,11 +212,7 @@ pub struct ConstraintStructure {
 
 impl ConstraintStructure {
     /// Classify the rows of `model`.
-    ///
-    /// # Errors
-    /// [`ConsistentError::Unsupported`] for a constraint row that depends on the input (a
-    /// prescribed motion).
-    pub fn of<M: DaeModel>(model: &M) -> Result<Self, ConsistentError> {
+    pub fn of<M: DaeModel>(model: &M) -> Self {
         let s = model.structure();
         let (ne, nx) = (s.n_equations(), s.n_states());
         let row_cols = |p: &[(usize, usize)], i: usize| -> Vec<usize> {
@@ -221,6 +220,7 @@ impl ConstraintStructure {
         };
         let mut kinematic: Vec<Option<usize>> = vec![None; nx]; // state -> row
         let mut constraints = Vec::new();
+        let mut prescribed = Vec::new();
         for i in 0..ne {
             let xd = row_cols(&s.pattern_f_xdot, i);
             let zc = row_cols(&s.pattern_f_z, i);
@@ -228,13 +228,11 @@ impl ConstraintStructure {
                 kinematic[xd[0]] = Some(i);
             }
             if xd.is_empty() && zc.is_empty() {
-                if !row_cols(&s.pattern_f_u, i).is_empty() {
-                    return Err(ConsistentError::Unsupported {
-                        equation: s.equation_name(i),
-                        reason: "a constraint that depends on the input prescribes a motion; consistent values depend on the input's derivatives",
-                    });
+                if row_cols(&s.pattern_f_u, i).is_empty() {
+                    constraints.push(i);
+                } else {
+                    prescribed.push(i);
                 }
-                constraints.push(i);
             }
         }
         let states_of = |i: usize| row_cols(&s.pattern_f_x, i);
@@ -252,15 +250,31 @@ impl ConstraintStructure {
             .collect();
         vel_states.sort_unstable();
         vel_states.dedup();
-        Ok(Self {
+        Self {
             kinematic,
             position_constraints: position,
             velocity_constraints: velocity,
             position_states: pos_states,
             velocity_states: vel_states,
+            prescribed,
             n_states: nx,
             n_algebraic: s.n_algebraic(),
-        })
+        }
+    }
+
+    /// Refuse a plant with a prescribed motion, whose consistent values depend on the input's
+    /// derivatives.
+    ///
+    /// # Errors
+    /// [`ConsistentError::Unsupported`] naming the first such row.
+    pub fn check_supported<M: DaeModel>(&self, model: &M) -> Result<(), ConsistentError> {
+        match self.prescribed.first() {
+            Some(&i) => Err(ConsistentError::Unsupported {
+                equation: model.structure().equation_name(i),
+                reason: "a constraint that depends on the input prescribes a motion; consistent values depend on the input's derivatives",
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Whether the plant has constraint rows (and so is of index 2 or 3, not an ODE or an
@@ -342,13 +356,15 @@ pub fn consistent_state<M: DaeModel>(
             });
         }
     }
+    let structure = ConstraintStructure::of(model);
+    structure.check_supported(model)?;
     let ConstraintStructure {
         kinematic,
         position_constraints: position,
         velocity_constraints: velocity,
         position_states: pos_states,
         ..
-    } = ConstraintStructure::of(model)?;
+    } = structure;
     let constraints: Vec<usize> = {
         let mut c: Vec<usize> = position.iter().chain(&velocity).copied().collect();
         c.sort_unstable();

@@ -890,10 +890,13 @@ impl Constrained {
         x0: &[f64],
         opts: &ClosedLoopOptions,
     ) -> Result<Option<Self>, SimulateError> {
-        let structure = ConstraintStructure::of(plant).map_err(SimulateError::Consistent)?;
-        if !structure.is_constrained() {
+        let structure = ConstraintStructure::of(plant);
+        if !structure.is_constrained() && structure.prescribed.is_empty() {
             return Ok(None);
         }
+        structure
+            .check_supported(plant)
+            .map_err(SimulateError::Consistent)?;
         let s = plant.structure();
         let (nz, nu) = (s.n_algebraic(), s.n_inputs());
         let zeros_x = vec![0.0; x0.len()];

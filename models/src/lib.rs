@@ -8,7 +8,9 @@
 //!   stabilised Hirschorn steps in [`FlexibleJointTracking`];
 //! * [`CartPendulum`]: an inverted pendulum on a cart in Cartesian coordinates with a rod
 //!   constraint and its multiplier (index 3), and [`CartPendulumJoint`], the same plant in
-//!   joint coordinates (an ODE).
+//!   joint coordinates (an ODE);
+//! * [`SliderCrank`]: a slider-crank with the slider position, the rod constraint and its
+//!   multiplier (index 3), and [`SliderCrankJoint`], the same mechanism in the crank angle.
 //!
 //! [`wheel_design`] holds the paper's nominal motion, linear analysis and preliminary feedback
 //! for the wheel.
@@ -21,6 +23,7 @@
 mod cart_pendulum;
 mod flexible_joint;
 mod pendulum;
+mod slider_crank;
 mod wheel;
 pub mod wheel_design;
 
@@ -32,6 +35,10 @@ pub use flexible_joint::{
     FlexibleJoint, FlexibleJointParams, FlexibleJointReference, FlexibleJointTracking,
 };
 pub use pendulum::{Pendulum, PendulumParams};
+pub use slider_crank::{
+    SliderCrank, SliderCrankJoint, SliderCrankJointParams, SliderCrankJointReference,
+    SliderCrankJointTracking, SliderCrankParams, SliderCrankReference, SliderCrankTracking,
+};
 pub use wheel::{
     Wheel, WheelLinear, WheelLinearParams, WheelLinearTracking, WheelParams, WheelReference,
     WheelTracking,
