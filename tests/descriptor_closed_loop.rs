@@ -670,3 +670,64 @@ mod slider_crank {
         );
     }
 }
+
+dpc::model! {
+    /// Index 4: a triple integrator whose position is constrained to zero, tracked on `x2`.
+    pub IndexFourTracked {
+        states { x1, x2, x3 }
+        algebraic { z }
+        inputs { u }
+        equations {
+            der(x1) = x2;
+            der(x2) = x3;
+            der(x3) = z + u;
+            0.0 == x1;
+        }
+        outputs { y = x2 }
+        references { y = 0.0 }
+        tracking IndexFourTracking { y: [] }
+    }
+}
+
+#[test]
+fn a_plant_of_index_above_three_is_refused_before_the_run() {
+    let tracking = IndexFourTracking::default();
+    let n = tracking.structure().n_equations();
+    let mut dpc = Dpc::new(
+        tracking,
+        IndexFourTrackedReference::default(),
+        FaerDenseLu::new(n),
+        DpcOptions {
+            nu: Some(1),
+            ..DpcOptions::default()
+        },
+    )
+    .expect("controller");
+    let err = simulate(
+        &IndexFourTracked::default(),
+        &mut dpc,
+        &[0.0; 3],
+        &options(1.0, Hold::Input),
+    )
+    .unwrap_err();
+    assert_eq!(
+        err,
+        SimulateError::Descriptor(DescriptorError::IndexTooHigh { index: 4, max: 3 })
+    );
+    assert!(err.to_string().contains("index 4"), "{err}");
+}
+
+#[test]
+fn constraint_structure_of_the_crane() {
+    use dpc::core::consistent::ConstraintStructure;
+    let c = ConstraintStructure::of(&CartPendulum::default());
+    assert_eq!(c.position_constraints, vec![6]);
+    assert!(c.velocity_constraints.is_empty() && c.prescribed.is_empty());
+    assert_eq!(c.position_states, vec![0, 1, 2]);
+    assert_eq!(c.velocity_states, vec![3, 4, 5]);
+    // States index 1; the multiplier and the stabilising multiplier index 2.
+    assert_eq!(c.stabilised_index(), vec![1, 1, 1, 1, 1, 1, 2, 2]);
+    let joint = ConstraintStructure::of(&CartPendulumJoint::default());
+    assert!(!joint.is_constrained());
+    assert_eq!(joint.stabilised_index(), vec![1; 4]);
+}
