@@ -14,7 +14,7 @@
 //! `O(delta)` (checked by halving `delta`), so the closed loops agree up to that and the
 //! plant tolerance, not bit for bit.
 
-use dpc::core::design::{design, Design, DesignOptions};
+use dpc::core::design::{check_relative_degrees, design, Design, DesignOptions};
 use dpc::core::dpc::{Dpc, DpcOptions};
 use dpc::core::linalg::FaerDenseLu;
 use dpc::core::linear::descriptor::DescriptorError;
@@ -152,11 +152,22 @@ fn design_of_the_descriptor_plant_matches_minimal_coordinates() {
     );
     // The Cartesian K_x is zero on the constrained direction (yb at the nominal).
     assert!(kc[(0, 2)].abs() <= 1e-10 * kc.amax() && kc[(0, 5)].abs() <= 1e-10 * kc.amax());
-    // Relative degrees from the realisation, and nu: the joint form's compiled values.
-    assert_eq!(dc.relative_degrees(), vec![Some(2)]);
+    // Relative degrees: compiled structurally through the differentiated rope constraint,
+    // confirmed by the realisation at the nominal and equal to the joint form's.
     let tracking = CartPendulumTracking::default();
-    assert_eq!(tracking.relative_degrees(), &[None]);
+    assert_eq!(
+        tracking.relative_degrees(),
+        dc.relative_degrees().as_slice()
+    );
+    assert_eq!(tracking.relative_degrees(), &[Some(2)]);
+    check_relative_degrees(
+        &dc.system,
+        &tracking.structure().outputs,
+        tracking.relative_degrees(),
+    )
+    .expect("compiled relative degrees hold at the nominal");
     let nu = dc.remaining_relative_degree(&tracking).expect("nu");
+    assert_eq!(Some(nu), tracking.remaining_relative_degree());
     assert_eq!(
         Some(nu),
         CartPendulumJointTracking::default().remaining_relative_degree()
@@ -177,16 +188,14 @@ fn options(t_end: f64, hold: Hold) -> ClosedLoopOptions {
 fn cartesian_controller(
     delta: f64,
 ) -> Dpc<CartPendulumTracking, CartPendulumReference, FaerDenseLu> {
-    let (dc, _) = designs();
+    // nu from the compiled relative degrees, as for any plant.
     let tracking = CartPendulumTracking::default();
-    let nu = dc.remaining_relative_degree(&tracking).expect("nu");
     let n = tracking.structure().n_equations();
     Dpc::new(
         tracking,
         CartPendulumReference::default(),
         FaerDenseLu::new(n),
         DpcOptions {
-            nu: Some(nu),
             delta,
             ..DpcOptions::default()
         },
@@ -500,16 +509,13 @@ mod slider_crank {
     }
 
     fn run_descriptor(pf: Option<Prefeedback>, t_end: f64, delta: f64) -> ClosedLoop {
-        let (dc, _) = designs();
         let tracking = SliderCrankTracking::default();
-        let nu = dc.remaining_relative_degree(&tracking).expect("nu");
         let n = tracking.structure().n_equations();
         let mut dpc = Dpc::new(
             tracking,
             SliderCrankReference::default(),
             FaerDenseLu::new(n),
             DpcOptions {
-                nu: Some(nu),
                 delta,
                 ..DpcOptions::default()
             },
@@ -597,11 +603,17 @@ mod slider_crank {
             assert!(a.minimum_phase && !a.dpc_stable);
             assert_eq!(a.dpc_stable_prefeedback, Some(true));
         }
+        let tracking = SliderCrankTracking::default();
         assert_eq!(
-            Some(
-                dc.remaining_relative_degree(&SliderCrankTracking::default())
-                    .expect("nu")
-            ),
+            tracking.relative_degrees(),
+            dc.relative_degrees().as_slice()
+        );
+        assert_eq!(
+            Some(dc.remaining_relative_degree(&tracking).expect("nu")),
+            SliderCrankJointTracking::default().remaining_relative_degree()
+        );
+        assert_eq!(
+            tracking.remaining_relative_degree(),
             SliderCrankJointTracking::default().remaining_relative_degree()
         );
     }

@@ -58,7 +58,7 @@ fn registry() -> Registry {
         .model(
             Entry::new(
                 "crane",
-                "a load on a rigid rope under a cart, in Cartesian coordinates with the rope multiplier (index 3); output cart; W = s + 2; scenarios set nu = 1",
+                "a load on a rigid rope under a cart, in Cartesian coordinates with the rope multiplier (index 3); output cart; W = s + 2",
                 CartPendulum::default(),
                 CartPendulumTracking::default(),
             )
@@ -80,7 +80,7 @@ fn registry() -> Registry {
         .model(
             Entry::new(
                 "slider-crank",
-                "a slider-crank with the slider position and the rod multiplier (index 3); output angle; W = s + 4; scenarios set nu = 1",
+                "a slider-crank with the slider position and the rod multiplier (index 3); output angle; W = s + 4",
                 SliderCrank::default(),
                 SliderCrankTracking::default(),
             )
