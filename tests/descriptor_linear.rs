@@ -891,3 +891,63 @@ fn cart_pendulum_badly_scaled_matches_minimal_coordinates() {
         assert_same_transfer(&what, &real.system, &min);
     }
 }
+
+/// `design` takes the descriptor path for a plant that is not of index 1 at the nominal, and
+/// reports the pencil's failures as typed errors at the nominal's time.
+#[test]
+fn design_of_descriptor_plants_reports_pencil_errors() {
+    use dpc::core::design::{design, DesignError, DesignOptions};
+    use dpc::core::prefeedback::SteadyMotion;
+    let opts = DesignOptions {
+        horizon: 1.0,
+        ..DesignOptions::default()
+    };
+    let rest = |nx: usize, nz: usize| SteadyMotion {
+        state: vec![0.0; nx],
+        rate: vec![0.0; nx],
+        algebraic: vec![0.0; nz],
+        input: vec![0.0],
+    };
+    let err = design(&IndexFour::default(), &rest(3, 1), &opts).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DesignError::Descriptor {
+                source: DescriptorError::IndexTooHigh { index: 4, max: 3 },
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    let err = design(&Undetermined::default(), &rest(1, 2), &opts).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DesignError::Descriptor {
+                source: DescriptorError::SingularPencil { .. },
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    // A nominal off the rod: the descriptor linearisation names the constraint.
+    let p = CartPendulumCartesianParams::default();
+    let off = SteadyMotion {
+        state: vec![0.0, 0.0, -1.1 * p.l, 0.0, 0.0, 0.0],
+        rate: vec![0.0; 6],
+        algebraic: vec![p.m * p.g / (1.1 * p.l)],
+        input: vec![0.0],
+    };
+    let err = design(&CartPendulumCartesian::default(), &off, &opts).unwrap_err();
+    assert!(
+        matches!(
+            &err,
+            DesignError::Descriptor {
+                source: DescriptorError::Inconsistent { .. },
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("l.powi(2)"), "{err}");
+}

@@ -7,7 +7,10 @@ use std::process::ExitCode;
 use dpc::core::linalg::NalgebraLu;
 use dpc_cli::registry::{Entry, Registry};
 use dpc_models::{
-    FlexibleJoint, FlexibleJointReference, FlexibleJointTracking, Wheel, WheelLinear,
+    CartPendulum, CartPendulumJoint, CartPendulumJointReference, CartPendulumJointTracking,
+    CartPendulumReference, CartPendulumTracking, FlexibleJoint, FlexibleJointReference,
+    FlexibleJointTracking, SliderCrank, SliderCrankJoint, SliderCrankJointReference,
+    SliderCrankJointTracking, SliderCrankReference, SliderCrankTracking, Wheel, WheelLinear,
     WheelLinearParams, WheelLinearTracking, WheelReference, WheelTracking,
 };
 
@@ -51,6 +54,50 @@ fn registry() -> Registry {
             .reference(FlexibleJointReference::default())
             .listing(FlexibleJointTracking::LISTING)
             .solver(NalgebraLu::<{ FlexibleJointTracking::N_EQUATIONS }>::new),
+        )
+        .model(
+            Entry::new(
+                "crane",
+                "a load on a rigid rope under a cart, in Cartesian coordinates with the rope multiplier (index 3); output cart; W = s + 2",
+                CartPendulum::default(),
+                CartPendulumTracking::default(),
+            )
+            .reference(CartPendulumReference::default())
+            .listing(CartPendulumTracking::LISTING)
+            .solver(NalgebraLu::<{ CartPendulumTracking::N_EQUATIONS }>::new),
+        )
+        .model(
+            Entry::new(
+                "crane-joint",
+                "the crane in the cart position and the rope angle (an ODE); output cart; W = s + 2",
+                CartPendulumJoint::default(),
+                CartPendulumJointTracking::default(),
+            )
+            .reference(CartPendulumJointReference::default())
+            .listing(CartPendulumJointTracking::LISTING)
+            .solver(NalgebraLu::<{ CartPendulumJointTracking::N_EQUATIONS }>::new),
+        )
+        .model(
+            Entry::new(
+                "slider-crank",
+                "a slider-crank with the slider position and the rod multiplier (index 3); output angle; W = s + 4",
+                SliderCrank::default(),
+                SliderCrankTracking::default(),
+            )
+            .reference(SliderCrankReference::default())
+            .listing(SliderCrankTracking::LISTING)
+            .solver(NalgebraLu::<{ SliderCrankTracking::N_EQUATIONS }>::new),
+        )
+        .model(
+            Entry::new(
+                "slider-crank-joint",
+                "the slider-crank in the crank angle alone (an ODE); output angle; W = s + 4",
+                SliderCrankJoint::default(),
+                SliderCrankJointTracking::default(),
+            )
+            .reference(SliderCrankJointReference::default())
+            .listing(SliderCrankJointTracking::LISTING)
+            .solver(NalgebraLu::<{ SliderCrankJointTracking::N_EQUATIONS }>::new),
         )
 }
 

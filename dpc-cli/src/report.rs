@@ -6,7 +6,7 @@ use std::io::Write;
 use std::path::Path;
 
 use dpc::core::numeric::max_or_nan;
-use dpc::core::simulate::ControllerEvent;
+use dpc::core::simulate::{ConstraintReport, ControllerEvent};
 use serde::Serialize;
 
 use crate::run::{DesignReport, ModelInUse, RunResult};
@@ -59,6 +59,11 @@ pub struct Summary {
     pub in_use: ModelInUse,
     /// The linear analysis of the controller's model, when the scenario has a `[design]`.
     pub linear_design: Option<DesignReport>,
+    /// For a constrained plant (index 2 or 3): its index, degrees of freedom, constraint
+    /// equations, how far the initial state was moved onto the constraints and the largest
+    /// drift and residual met during the run; absent for ODE and index-1 plants.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub constraints: Option<ConstraintReport>,
     /// The scenario as run.
     pub scenario: Scenario,
 }
@@ -98,6 +103,7 @@ impl Summary {
             wall_time_s: run.wall_time,
             in_use: run.model.clone(),
             linear_design: run.design.clone(),
+            constraints: cl.constraints.clone(),
             scenario: run.scenario.clone(),
         }
     }

@@ -82,7 +82,7 @@ pub struct DesignReport {
     pub dpc_stable_without_prefeedback: bool,
     /// Whether DPC after the preliminary feedback is predicted stable.
     pub dpc_stable_with_prefeedback: Option<bool>,
-    /// `K_n`, row by row (inputs x states), when built.
+    /// `K_n`, row by row (inputs x states, in the plant's own coordinates), when built.
     pub k_n: Option<Vec<Vec<f64>>>,
     /// The linear sampled-data prediction for the scenario's `h`, hold and feedback.
     pub sampled: SampledPrediction,
@@ -466,6 +466,7 @@ where
         state_bounds: runner.state_bounds(&structure.states)?,
         tracking_bounds: runner.tracking_bounds(outputs)?,
         max_consecutive_failures: s.plant.max_consecutive_failures,
+        ..ClosedLoopOptions::default()
     };
     let start = Instant::now();
     let mut closed_loop =
@@ -578,9 +579,11 @@ impl Runner<'_> {
                 .collect(),
             dpc_stable_without_prefeedback: analysis.dpc_stable,
             dpc_stable_with_prefeedback: analysis.dpc_stable_prefeedback,
-            k_n: analysis
-                .k_n
-                .as_ref()
+            // In the plant's own coordinates (for a constrained plant, the realisation's gain
+            // mapped back), as the law applies it.
+            k_n: designed
+                .plant_gain()
+                .ok()
                 .map(|k| k.row_iter().map(|r| r.iter().copied().collect()).collect()),
             sampled: self.sampled_prediction(&designed)?,
             linearisation_drift: designed.linearisation_drift,

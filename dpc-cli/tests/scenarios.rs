@@ -215,6 +215,34 @@ fn a_relative_degree_that_differs_at_the_nominal_is_an_error() {
     );
 }
 
+/// A constrained plant (index 3) designed from a scenario: the nominal gives positions and
+/// rates only, the trim solver computes the rope's multiplier and the cart force, the design
+/// runs on the constraint manifold, and `K_n` is reported in the plant's six coordinates;
+/// with it the loop tracks, without it (the comparison run) it diverges as predicted.
+#[test]
+fn a_descriptor_plant_is_designed_from_its_scenario() {
+    let out = out_dir("crane");
+    simulate(&scenarios().join("crane.toml"), &out, &["t_end=5"]);
+    let s = summary(&out);
+    let design = &s["linear_design"];
+    assert_eq!(
+        design["nominal"]["solved_for"],
+        serde_json::json!(["lambda", "f"])
+    );
+    let lambda = design["nominal"]["algebraic"]["lambda"].as_f64().unwrap();
+    assert!((lambda - 9.81).abs() < 1e-9, "{lambda}");
+    assert_eq!(design["dpc_stable_without_prefeedback"], false);
+    assert_eq!(design["dpc_stable_with_prefeedback"], true);
+    let k_n = design["k_n"].as_array().unwrap();
+    assert_eq!((k_n.len(), k_n[0].as_array().unwrap().len()), (1, 6));
+    assert_eq!(s["constraints"]["index"], 3);
+    assert_eq!(s["constraints"]["dof"], 4);
+    assert_eq!(s["diverged"], false);
+    let plain = summary(&out.join("compare").join("prefeedback=false"));
+    assert_eq!(plain["diverged"], true);
+    assert!(plain["t_diverged"].as_f64().unwrap() < 4.0);
+}
+
 #[test]
 fn every_scenario_in_the_repository_runs() {
     let mut files: Vec<PathBuf> = std::fs::read_dir(scenarios())

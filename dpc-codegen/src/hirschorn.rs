@@ -12,7 +12,11 @@
 //! reached, structurally: the derivatives of implicitly defined states and the algebraic
 //! unknowns are matched to the implicit equations (a maximum bipartite matching, as in
 //! Pantelides' algorithm), and each depends on everything its block of equations contains.
-//! The structural value is the generic one; it is exact unless coefficients cancel.
+//! Constraints without an implicit unknown (position or velocity constraints with their
+//! multipliers, index 3 or 2) are first differentiated until they contain one, as Pantelides'
+//! algorithm would, so a constrained mechanism's outputs get the relative degrees of the
+//! mechanism in minimal coordinates. The structural value is the generic one; it is exact unless
+//! coefficients cancel.
 //!
 //! The degree of each `W_i` is fixed here, at compile time: it decides which derivatives are
 //! generated. Its non-leading coefficients enter the emitted rows as variables
@@ -86,10 +90,58 @@ fn explicit_rhs(model: &Model) -> HashMap<usize, ExprId> {
     model.equations.iter().filter_map(|e| e.explicit).collect()
 }
 
+/// The constraints of a higher-index plant differentiated until they involve an implicitly
+/// determined unknown: per implicit equation that contains none (a position constraint
+/// `g(x) = 0`, a velocity constraint), its first or second total derivative along the explicit
+/// equations (for `der(q) = v`, `g_q v` and then `g_q v' + ...`, which contains the implicit
+/// `v'`). Keyed by the equation's index; equations that need no derivative, or whose derivative
+/// reaches an input (a prescribed motion), are not listed. With them in place of the
+/// constraints, the implicit equations of a mechanism with multipliers are structurally regular
+/// (the index reduction of Pantelides' algorithm for constraints of index 2 and 3), so the
+/// relative degrees of its outputs are defined.
+fn differentiated_constraints(model: &mut Model) -> HashMap<usize, ExprId> {
+    let explicit = explicit_rhs(model);
+    let mut out = HashMap::new();
+    for k in 0..model.equations.len() {
+        if model.equations[k].explicit.is_some() {
+            continue;
+        }
+        let residual = model.equations[k].residual;
+        let mut e = residual;
+        for _ in 0..2 {
+            let has_unknown =
+                model
+                    .graph
+                    .vars(e)
+                    .into_iter()
+                    .any(|v| match model.symbols.symbol(v) {
+                        Symbol::StateDot(j) => !explicit.contains_key(&j),
+                        Symbol::Algebraic(_) => true,
+                        _ => false,
+                    });
+            if has_unknown {
+                break;
+            }
+            match total_derivative(model, e) {
+                Ok(d) => e = d,
+                Err(_) => break,
+            }
+        }
+        if e != residual {
+            out.insert(k, e);
+        }
+    }
+    out
+}
+
 /// Symbols (states, inputs, time) each implicitly determined unknown depends on, or `None`
 /// if the implicit equations are structurally singular in the implicit unknowns (a plant of
-/// higher index, such as a mechanism with position constraints).
-fn implicit_dependencies(model: &Model) -> Option<HashMap<Symbol, BTreeSet<Symbol>>> {
+/// higher index whose constraints, differentiated by [`differentiated_constraints`], still
+/// leave them singular). `reduced` replaces the residuals of differentiated constraints.
+fn implicit_dependencies(
+    model: &Model,
+    reduced: &HashMap<usize, ExprId>,
+) -> Option<HashMap<Symbol, BTreeSet<Symbol>>> {
     let explicit = explicit_rhs(model);
     let is_unknown = |s: &Symbol| match s {
         Symbol::StateDot(j) => !explicit.contains_key(j),
@@ -130,8 +182,9 @@ fn implicit_dependencies(model: &Model) -> Option<HashMap<Symbol, BTreeSet<Symbo
     let equations: Vec<(BTreeSet<Symbol>, BTreeSet<Symbol>)> = model
         .equations
         .iter()
-        .filter(|e| e.explicit.is_none())
-        .map(|e| split(model.graph.vars(e.residual)))
+        .enumerate()
+        .filter(|(_, e)| e.explicit.is_none())
+        .map(|(k, e)| split(model.graph.vars(*reduced.get(&k).unwrap_or(&e.residual))))
         .collect();
     if equations.len() != unknowns.len() {
         return None;
@@ -213,8 +266,8 @@ pub enum RelativeDegree {
     /// No input reaches the output: no path in the dependency graph leads from it to an input
     /// (or, symbolically, its derivatives stay free of inputs), so it cannot be tracked.
     Unreached,
-    /// Not defined: the output's derivatives reach unknowns of structurally singular implicit
-    /// equations (a plant of higher index, such as a mechanism with position constraints).
+    /// Not defined: the output's derivatives reach unknowns of implicit equations that are
+    /// structurally singular even with the constraints differentiated (an index above 3).
     Undetermined,
 }
 
@@ -253,9 +306,9 @@ struct Structure {
 }
 
 impl Structure {
-    fn new(model: &Model) -> Self {
+    fn new(model: &Model, reduced: &HashMap<usize, ExprId>) -> Self {
         let mut st = Structure {
-            implicit: implicit_dependencies(model),
+            implicit: implicit_dependencies(model, reduced),
             explicit: explicit_rhs(model),
             successors: Vec::new(),
         };
@@ -378,7 +431,8 @@ pub fn relative_degrees(model: &mut Model) -> Vec<Option<usize>> {
 /// [`SWELL_FACTOR`]; beyond it the structural value is reported. The derivatives are
 /// memoised in the graph, so the Hirschorn steps of [`tracking_rows`] reuse them.
 pub fn relative_degree_analysis(model: &mut Model) -> Vec<RelativeDegree> {
-    let st = Structure::new(model);
+    let reduced = differentiated_constraints(model);
+    let st = Structure::new(model, &reduced);
     let roots: Vec<ExprId> = model
         .equations
         .iter()
@@ -734,6 +788,33 @@ mod tests {
             }
         });
         assert_eq!(relative_degrees(&mut m), vec![Some(2)]);
+    }
+
+    #[test]
+    fn constraints_are_differentiated_through() {
+        // A pendulum on a cart in Cartesian coordinates (index 3): the rod constraint contains
+        // no implicit unknown; its second derivative does, and then the multiplier is
+        // determined. The cart position has relative degree 2, the bob's horizontal position
+        // too (the force reaches it through the multiplier).
+        let mut m = model(quote! {
+            CartPendulum {
+                params { mc = 1.0, m = 0.5, l = 0.5, g = 9.81 }
+                states { s, xb, yb, vs, vx, vy }
+                algebraic { lambda }
+                inputs { f }
+                equations {
+                    der(s) = vs;
+                    der(xb) = vx;
+                    der(yb) = vy;
+                    mc * der(vs) == f + lambda * (xb - s);
+                    m * der(vx) == -lambda * (xb - s);
+                    m * der(vy) == -lambda * yb - m * g;
+                    0.0 == 0.5 * ((xb - s).powi(2) + yb.powi(2) - l.powi(2));
+                }
+                outputs { cart = s, bob = xb }
+            }
+        });
+        assert_eq!(relative_degrees(&mut m), vec![Some(2), Some(2)]);
     }
 
     #[test]

@@ -184,6 +184,133 @@ fn evaluate<M: DaeModel>(
     Ok(j)
 }
 
+/// The constraint structure of a plant, read from its structural patterns (see the module
+/// documentation): which rows are kinematic, which are constraints of position type (index 3
+/// with their multipliers) or of velocity type (index 2), and the differentiation index of each
+/// unknown that follows from it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConstraintStructure {
+    /// Per state, its kinematic row `c x'_j = f_j(t, x, u)`, if it has one.
+    pub kinematic: Vec<Option<usize>>,
+    /// Constraint rows all of whose states have kinematic rows (position type).
+    pub position_constraints: Vec<usize>,
+    /// The other constraint rows (velocity type).
+    pub velocity_constraints: Vec<usize>,
+    /// The states the position constraints involve, ascending.
+    pub position_states: Vec<usize>,
+    /// The states the kinematic rows of the position states involve, other than the position
+    /// states themselves (the velocities of the constrained positions), ascending.
+    pub velocity_states: Vec<usize>,
+    /// Rows without `x'` and algebraic unknowns that depend on the input: prescribed motions
+    /// (or, in a tracking DAE, the output rows), not counted as constraints.
+    pub prescribed: Vec<usize>,
+    /// Number of states.
+    pub n_states: usize,
+    /// Number of algebraic unknowns.
+    pub n_algebraic: usize,
+}
+
+impl ConstraintStructure {
+    /// Classify the rows of `model`.
+    pub fn of<M: DaeModel>(model: &M) -> Self {
+        let s = model.structure();
+        let (ne, nx) = (s.n_equations(), s.n_states());
+        let row_cols = |p: &[(usize, usize)], i: usize| -> Vec<usize> {
+            p.iter().filter(|(r, _)| *r == i).map(|(_, c)| *c).collect()
+        };
+        let mut kinematic: Vec<Option<usize>> = vec![None; nx]; // state -> row
+        let mut constraints = Vec::new();
+        let mut prescribed = Vec::new();
+        for i in 0..ne {
+            let xd = row_cols(&s.pattern_f_xdot, i);
+            let zc = row_cols(&s.pattern_f_z, i);
+            if zc.is_empty() && xd.len() == 1 && kinematic[xd[0]].is_none() {
+                kinematic[xd[0]] = Some(i);
+            }
+            if xd.is_empty() && zc.is_empty() {
+                if row_cols(&s.pattern_f_u, i).is_empty() {
+                    constraints.push(i);
+                } else {
+                    prescribed.push(i);
+                }
+            }
+        }
+        let states_of = |i: usize| row_cols(&s.pattern_f_x, i);
+        let (position, velocity): (Vec<usize>, Vec<usize>) = constraints
+            .iter()
+            .partition(|&&i| states_of(i).iter().all(|&j| kinematic[j].is_some()));
+        let mut pos_states: Vec<usize> = position.iter().flat_map(|&i| states_of(i)).collect();
+        pos_states.sort_unstable();
+        pos_states.dedup();
+        let mut vel_states: Vec<usize> = pos_states
+            .iter()
+            .filter_map(|&j| kinematic[j])
+            .flat_map(states_of)
+            .filter(|j| !pos_states.contains(j))
+            .collect();
+        vel_states.sort_unstable();
+        vel_states.dedup();
+        Self {
+            kinematic,
+            position_constraints: position,
+            velocity_constraints: velocity,
+            position_states: pos_states,
+            velocity_states: vel_states,
+            prescribed,
+            n_states: nx,
+            n_algebraic: s.n_algebraic(),
+        }
+    }
+
+    /// Refuse a plant with a prescribed motion, whose consistent values depend on the input's
+    /// derivatives.
+    ///
+    /// # Errors
+    /// [`ConsistentError::Unsupported`] naming the first such row.
+    pub fn check_supported<M: DaeModel>(&self, model: &M) -> Result<(), ConsistentError> {
+        match self.prescribed.first() {
+            Some(&i) => Err(ConsistentError::Unsupported {
+                equation: model.structure().equation_name(i),
+                reason: "a constraint that depends on the input prescribes a motion; consistent values depend on the input's derivatives",
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether the plant has constraint rows (and so is of index 2 or 3, not an ODE or an
+    /// index-1 DAE).
+    pub fn is_constrained(&self) -> bool {
+        !(self.position_constraints.is_empty() && self.velocity_constraints.is_empty())
+    }
+
+    /// The constraint rows, ascending.
+    pub fn constraint_rows(&self) -> Vec<usize> {
+        let mut c: Vec<usize> = self
+            .position_constraints
+            .iter()
+            .chain(&self.velocity_constraints)
+            .copied()
+            .collect();
+        c.sort_unstable();
+        c
+    }
+
+    /// Per unknown of the plant stabilised by the hidden velocity constraints (the unknowns
+    /// `(x, z)` followed by one multiplier `mu` per position constraint, as the closed loop
+    /// integrates it; see [`crate::simulate`]), its differentiation index as the integrator's
+    /// error control needs it ([`crate::radau::Options::index`]): 1 for the states, 2 for the
+    /// algebraic unknowns and the `mu` of a constrained plant.
+    pub fn stabilised_index(&self) -> Vec<u8> {
+        let z = if self.is_constrained() { 2 } else { 1 };
+        let mut index = vec![1u8; self.n_states];
+        index.extend(std::iter::repeat_n(
+            z,
+            self.n_algebraic + self.position_constraints.len(),
+        ));
+        index
+    }
+}
+
 /// Minimum-norm solution of the underdetermined `g dx = rhs` (`g` with full row rank) by a
 /// QR factorisation of `g^T`; `None` when `g` is rank deficient.
 fn min_norm(g: &DMatrix<f64>, rhs: &DVector<f64>) -> Option<DVector<f64>> {
@@ -229,35 +356,20 @@ pub fn consistent_state<M: DaeModel>(
             });
         }
     }
-    // Structural classification.
-    let row_cols = |p: &[(usize, usize)], i: usize| -> Vec<usize> {
-        p.iter().filter(|(r, _)| *r == i).map(|(_, c)| *c).collect()
+    let structure = ConstraintStructure::of(model);
+    structure.check_supported(model)?;
+    let ConstraintStructure {
+        kinematic,
+        position_constraints: position,
+        velocity_constraints: velocity,
+        position_states: pos_states,
+        ..
+    } = structure;
+    let constraints: Vec<usize> = {
+        let mut c: Vec<usize> = position.iter().chain(&velocity).copied().collect();
+        c.sort_unstable();
+        c
     };
-    let mut kinematic: Vec<Option<usize>> = vec![None; nx]; // state -> row
-    let mut constraints = Vec::new();
-    for i in 0..ne {
-        let xd = row_cols(&s.pattern_f_xdot, i);
-        let zc = row_cols(&s.pattern_f_z, i);
-        if zc.is_empty() && xd.len() == 1 && kinematic[xd[0]].is_none() {
-            kinematic[xd[0]] = Some(i);
-        }
-        if xd.is_empty() && zc.is_empty() {
-            if !row_cols(&s.pattern_f_u, i).is_empty() {
-                return Err(ConsistentError::Unsupported {
-                    equation: s.equation_name(i),
-                    reason: "a constraint that depends on the input prescribes a motion; consistent values depend on the input's derivatives",
-                });
-            }
-            constraints.push(i);
-        }
-    }
-    let states_of = |i: usize| row_cols(&s.pattern_f_x, i);
-    let (position, velocity): (Vec<usize>, Vec<usize>) = constraints
-        .iter()
-        .partition(|&&i| states_of(i).iter().all(|&j| kinematic[j].is_some()));
-    let mut pos_states: Vec<usize> = position.iter().flat_map(|&i| states_of(i)).collect();
-    pos_states.sort_unstable();
-    pos_states.dedup();
 
     let mut x = x_given.to_vec();
     let mut xdot = vec![0.0; nx];
@@ -406,20 +518,55 @@ pub fn consistent_state<M: DaeModel>(
                 .copy_from(&g);
             res[ne + position.len() + b] = (g * xd)[0];
         }
-        let all: Vec<usize> = (0..ne).collect();
+        // Residuals relative to the size of the terms that cancel in them (values included:
+        // near a fast motion the terms, and their rounding errors, are large).
         let (worst, wi) = {
-            let (w, i) = rel(&j, &all, &x);
-            let w = (ne..rows).fold(w, |m, r| {
-                let scale = 1.0 + jac.row(r).iter().map(|v| v.abs()).sum::<f64>();
-                m.max(res[r].abs() / scale)
-            });
-            (w, i)
+            let mut worst = (0.0_f64, 0usize);
+            for r in 0..rows {
+                let terms: f64 = (0..n)
+                    .map(|k| {
+                        let v = if k < nx { xdot[k] } else { z[k - nx] };
+                        (jac[(r, k)] * v).abs()
+                    })
+                    .sum();
+                let known = if r < ne {
+                    (0..nx).map(|k| (j.f_x[(r, k)] * x[k]).abs()).sum::<f64>()
+                } else if r < ne + position.len() {
+                    kappa[r - ne].abs()
+                } else {
+                    0.0
+                };
+                let v = res[r].abs() / (1.0 + terms + known);
+                if v > worst.0 || v.is_nan() {
+                    worst = (v, r);
+                }
+            }
+            worst
         };
         if worst <= opts.tol && it > 0 {
             break;
         }
         if it == opts.max_iterations {
-            return Err(cannot("derivatives and multipliers", &j, wi, it));
+            let equation = if wi < ne {
+                s.equation_name(wi)
+            } else if wi < ne + position.len() {
+                format!(
+                    "the second time derivative of {}",
+                    s.equation_name(position[wi - ne])
+                )
+            } else {
+                format!(
+                    "the time derivative of {}",
+                    s.equation_name(velocity[wi - ne - position.len()])
+                )
+            };
+            return Err(ConsistentError::CannotMeet {
+                stage: "derivatives and multipliers",
+                equation,
+                residual: res[wi],
+                tolerance: opts.tol,
+                iterations: it,
+            });
         }
         let qr = jac.clone().col_piv_qr();
         let rd = qr.r().diagonal();

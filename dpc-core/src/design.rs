@@ -12,12 +12,24 @@
 //! * [`design`] linearises about the [`SteadyMotion`], checks the relative degrees the
 //!   tracking DAE assumes there (when given), runs [`analyze`] with the given `W` and poles, measures how much the linearisation changes along the motion (one constant
 //!   `K_n` fits a run only where it does not), and returns a [`Design`] from which the law
-//!   [`Prefeedback`] is built.
+//!   [`Prefeedback`] is built. One entry point serves every plant: an ODE or index-1 plant is
+//!   linearised by [`linearize`]; a constrained plant of index 2 or 3 (where `[F_x' F_z]` is
+//!   singular) by [`linearize_descriptor`], whose realisation on the constraint manifold is
+//!   analysed, and whose `K_n` on the reduced state is mapped back to the plant's coordinates
+//!   (`K_x = K_r U^T`, zero on the constrained directions; see
+//!   [`ManifoldRealisation::gain_to_plant`]).
+//! * [`Design::remaining_relative_degree`] gives the controller's `nu` from the relative
+//!   degrees of the linearisation at the nominal, for plants whose tracking DAE has no compiled
+//!   relative degrees (the macro leaves them undefined where the structure is of higher index).
 //! * [`check_relative_degrees`] compares the relative degrees a tracking DAE was compiled
 //!   for with those of the linearisation at the nominal, so that a plant whose structural
 //!   relative degree is not its true one is reported before a closed loop runs into a
 //!   singular iteration matrix.
 
+use crate::linear::descriptor::{
+    descriptor_system, linearize_descriptor, DescriptorError, DescriptorOptions,
+    ManifoldRealisation,
+};
 use crate::linear::sampled::SampledLoop;
 use crate::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
 use crate::linearize::{linearize, LinearizeError, OperatingPoint};
@@ -25,6 +37,7 @@ use crate::model::{DaeModel, Names, Structure};
 use crate::numeric::max_or_nan;
 use crate::prefeedback::{Nominal, NominalError, Prefeedback, SteadyMotion};
 use crate::simulate::Hold;
+use crate::tracking::TrackingDae;
 use nalgebra::{DMatrix, DVector};
 use std::fmt;
 use thiserror::Error;
@@ -633,7 +646,7 @@ fn row_sum_max(m: &DMatrix<f64>) -> f64 {
 }
 
 /// Options of [`design`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct DesignOptions {
     /// The analysis: `W` (the roots in use by the controller), poles, policy, tolerances.
     pub analysis: AnalysisOptions,
@@ -665,9 +678,25 @@ pub enum DesignError {
         /// Why.
         source: LinearizeError,
     },
+    /// The descriptor linearisation of a constrained plant failed (an inconsistent nominal, a
+    /// singular pencil, an index above 3, an improper input).
+    #[error("descriptor linearisation about the nominal at t = {t}: {source}")]
+    Descriptor {
+        /// Where along the motion.
+        t: f64,
+        /// Why.
+        source: DescriptorError,
+    },
     /// The linear analysis failed.
     #[error("linear analysis: {0}")]
     Analysis(#[from] LinearError),
+    /// No input reaches an output in the linearisation at the nominal, so the controller's
+    /// `nu` is not defined.
+    #[error("output `{output}`: no input reaches it in the linearisation at the nominal, so its relative degree (and the controller's nu) is undefined")]
+    Unreached {
+        /// The output's name.
+        output: String,
+    },
     /// The analysis built no `K_n`.
     #[error("the linear analysis built no preliminary feedback{}", reason.as_ref().map(|r| format!(": {r}")).unwrap_or_default())]
     NoPrefeedback {
@@ -684,14 +713,22 @@ pub enum DesignError {
 pub struct Design {
     /// The motion designed about.
     pub motion: SteadyMotion,
-    /// The linearisation at `t = 0`.
+    /// The linearisation at `t = 0`: in the plant's states for an ODE or index-1 plant; for a
+    /// constrained plant, the realisation on the constraint manifold, whose state is the
+    /// reduced `xi = U^T dx` of [`realisation`](Self::realisation).
     pub system: LinearSystem,
-    /// The Section 3 analysis of [`system`](Self::system).
+    /// The Section 3 analysis of [`system`](Self::system). Its `k_n` acts on the state of
+    /// `system`; [`plant_gain`](Self::plant_gain) is the gain on the plant's states.
     pub analysis: Analysis,
-    /// `max |[A B](horizon) - [A B](0)| / max |[A B](0)|` along the motion: zero when one
-    /// linearisation (and so one constant `K_n`) serves the whole run, as for a steady motion
-    /// in a cyclic coordinate.
+    /// `max |[A B](horizon) - [A B](0)| / max |[A B](0)|` along the motion (for a constrained
+    /// plant, of the descriptor matrices `[E A B]`, which do not depend on a choice of basis):
+    /// zero when one linearisation (and so one constant `K_n`) serves the whole run, as for a
+    /// steady motion in a cyclic coordinate.
     pub linearisation_drift: f64,
+    /// For a constrained plant (not of index 1 at the nominal): the realisation on the
+    /// constraint manifold, with the tangent basis `U`, the constrained states and the index;
+    /// `None` for an ODE or index-1 plant.
+    pub realisation: Option<ManifoldRealisation>,
 }
 
 impl Design {
@@ -732,17 +769,75 @@ impl Design {
         &self,
         nominal: N,
     ) -> Result<Prefeedback, DesignError> {
+        Ok(Prefeedback {
+            k_n: self.plant_gain()?,
+            nominal: Box::new(nominal),
+        })
+    }
+
+    /// `K_n` on the plant's states (`inputs x states`): the analysis's `K_n` itself for an ODE
+    /// or index-1 plant; for a constrained plant the reduced gain mapped back,
+    /// `K_x = K_r U^T` ([`ManifoldRealisation::gain_to_plant`]), which acts on every consistent
+    /// variation as `K_r` acts on the reduced state and is zero on the constrained directions.
+    ///
+    /// # Errors
+    /// [`DesignError::NoPrefeedback`] when the analysis built no `K_n`.
+    pub fn plant_gain(&self) -> Result<DMatrix<f64>, DesignError> {
         let k_n = self
             .analysis
             .k_n
-            .clone()
+            .as_ref()
             .ok_or_else(|| DesignError::NoPrefeedback {
                 reason: self.analysis.prefeedback_error.clone(),
             })?;
-        Ok(Prefeedback {
-            k_n,
-            nominal: Box::new(nominal),
-        })
+        match &self.realisation {
+            None => Ok(k_n.clone()),
+            Some(r) => r
+                .gain_to_plant(k_n)
+                .map_err(|source| DesignError::Descriptor { t: 0.0, source }),
+        }
+    }
+
+    /// Per output, the relative degree of the linearisation at the nominal (for a constrained
+    /// plant, of its realisation on the constraint manifold: the constraints are differentiated
+    /// through, as the plant in minimal coordinates would be); `None` where no input reaches
+    /// the output. See [`linear_relative_degrees`].
+    pub fn relative_degrees(&self) -> Vec<Option<usize>> {
+        linear_relative_degrees(&self.system)
+    }
+
+    /// The controller's `nu` for `tracking` at this nominal: `max_i (r_i - deg W_i)` with the
+    /// relative degrees `r_i` of [`relative_degrees`](Self::relative_degrees) and the compiled
+    /// degrees of the `W_i`. This is the `nu` of a constrained plant, whose tracking DAE has no
+    /// compiled relative degrees: the closed loop gives the controller a state on the constraint
+    /// manifold (positions and velocities consistent), so the constraint chain starts consistent
+    /// and adds no unusable inner steps; only the output chains do, as for the plant in minimal
+    /// coordinates. Pass it as [`DpcOptions::nu`](crate::dpc::DpcOptions::nu).
+    ///
+    /// # Errors
+    /// [`DesignError::Unreached`] for an output no input reaches at the nominal.
+    pub fn remaining_relative_degree<T: TrackingDae>(
+        &self,
+        tracking: &T,
+    ) -> Result<usize, DesignError> {
+        let mut nu = 0;
+        for (i, (r, w)) in self
+            .relative_degrees()
+            .into_iter()
+            .zip(tracking.reference_orders())
+            .enumerate()
+        {
+            let r = r.ok_or_else(|| DesignError::Unreached {
+                output: tracking
+                    .structure()
+                    .outputs
+                    .get(i)
+                    .unwrap_or_default()
+                    .to_string(),
+            })?;
+            nu = nu.max(r.saturating_sub(w));
+        }
+        Ok(nu)
     }
 }
 
@@ -764,34 +859,66 @@ pub fn design<P: DaeModel>(
         motion.algebraic.clone(),
         motion.input.clone(),
     )?;
-    let at = |t: f64| {
+    let point = |t: f64| {
         let x = motion.state_at(t);
-        linearize(
-            model,
-            OperatingPoint {
-                t,
-                x: &x,
-                xdot: &motion.rate,
-                z: &motion.algebraic,
-                u: &motion.input,
-            },
-        )
-        .map_err(|source| DesignError::Linearize { t, source })
+        (t, x)
     };
-    let system = at(0.0)?;
+    fn at<'a>(motion: &'a SteadyMotion, t: f64, x: &'a [f64]) -> OperatingPoint<'a> {
+        OperatingPoint {
+            t,
+            x,
+            xdot: &motion.rate,
+            z: &motion.algebraic,
+            u: &motion.input,
+        }
+    }
+    let (t0, x0) = point(0.0);
+    let (t1, x1) = point(options.horizon);
+    let (system, realisation, linearisation_drift) = match linearize(model, at(&motion, t0, &x0)) {
+        Ok(system) => {
+            let end = linearize(model, at(&motion, t1, &x1))
+                .map_err(|source| DesignError::Linearize { t: t1, source })?;
+            let drift = relative_change(&[&system.a, &system.b], &[&end.a, &end.b]);
+            (system, None, drift)
+        }
+        // Not of index 1 at the nominal: a constrained plant, realised on its constraint
+        // manifold.
+        Err(LinearizeError::Singular { .. }) => {
+            let opts = DescriptorOptions::default();
+            let (desc, real) = linearize_descriptor(model, at(&motion, t0, &x0), &opts)
+                .map_err(|source| DesignError::Descriptor { t: t0, source })?;
+            let end = descriptor_system(model, at(&motion, t1, &x1), &opts)
+                .map_err(|source| DesignError::Descriptor { t: t1, source })?;
+            let drift = relative_change(&[&desc.e, &desc.a, &desc.b], &[&end.e, &end.a, &end.b]);
+            (real.system.clone(), Some(real), drift)
+        }
+        Err(source) => return Err(DesignError::Linearize { t: t0, source }),
+    };
     if !options.relative_degrees.is_empty() {
         check_relative_degrees(&system, &s.outputs, &options.relative_degrees)?;
     }
-    let end = at(options.horizon)?;
-    let scale = system.a.amax().max(system.b.amax()).max(f64::MIN_POSITIVE);
-    let linearisation_drift = (&end.a - &system.a).amax().max((&end.b - &system.b).amax()) / scale;
     let analysis = analyze(&system, &options.analysis)?;
     Ok(Design {
         motion,
         system,
         analysis,
         linearisation_drift,
+        realisation,
     })
+}
+
+/// `max_k |after_k - before_k| / max_k |before_k|` over matrices of equal shapes.
+fn relative_change(before: &[&DMatrix<f64>], after: &[&DMatrix<f64>]) -> f64 {
+    let scale = before
+        .iter()
+        .map(|m| m.amax())
+        .fold(f64::MIN_POSITIVE, f64::max);
+    let change = before
+        .iter()
+        .zip(after)
+        .map(|(b, a)| (*a - *b).amax())
+        .fold(0.0, f64::max);
+    change / scale
 }
 
 /// One output whose relative degree at the nominal is not the one assumed.

@@ -27,6 +27,7 @@
 //! All buffers are allocated at construction: with the fixed-size
 //! [`NalgebraLu`](crate::linalg::NalgebraLu) back end an update allocates nothing.
 
+use crate::consistent::ConstraintStructure;
 use crate::linalg::{FactorError, LinearSolver};
 use crate::numeric::max_or_nan;
 use crate::prefeedback::Prefeedback;
@@ -202,6 +203,10 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     /// Whether each residual row contains `X'` (its residual is scaled by `delta` in the
     /// convergence test).
     dynamic_row: Vec<bool>,
+    /// The plant's constraint rows with the power of `1 / delta` by which their residual is
+    /// amplified into the multipliers and the control: 2 for position constraints (index 3),
+    /// 1 for velocity constraints (index 2).
+    constraint_rows: Vec<(usize, i32)>,
     /// Per inner step `j = 1..=steps`: the last accepted `[X_j; Z_j]`, the warm start.
     warm: Vec<Vec<f64>>,
     have_warm: bool,
@@ -288,6 +293,13 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         for &(i, _) in model.structure().pattern_f_xdot.iter() {
             dynamic_row[i] = true;
         }
+        let constraints = ConstraintStructure::of(&model);
+        let constraint_rows = constraints
+            .position_constraints
+            .iter()
+            .map(|&i| (i, 2))
+            .chain(constraints.velocity_constraints.iter().map(|&i| (i, 1)))
+            .collect();
         let steps = nu + 2;
         let order = model.reference_orders().max().unwrap_or(0);
         let n_inputs = model.plant_inputs();
@@ -304,6 +316,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             opts,
             nu,
             dynamic_row,
+            constraint_rows,
             warm: vec![vec![0.0; n]; steps],
             have_warm: false,
             x_prev: vec![0.0; nx],
@@ -564,6 +577,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             }
             let mut converged = false;
             let mut residual = f64::INFINITY;
+            let mut last_constraint = f64::INFINITY;
             for _ in 0..self.opts.max_newton_iterations {
                 iterations += 1;
                 for i in 0..nx {
@@ -583,8 +597,21 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                     break;
                 }
                 if residual <= self.opts.residual_tolerance {
-                    converged = true;
-                    break;
+                    // A plant constraint's residual reaches the multipliers and the control
+                    // amplified by delta^-2 (position) or delta^-1 (velocity): it must meet the
+                    // tolerance after that amplification, or stop decreasing (round-off).
+                    let constraint = max_or_nan(
+                        self.constraint_rows
+                            .iter()
+                            .map(|&(i, k)| (self.res[i] / delta.powi(k)).abs()),
+                    ) / scale;
+                    if constraint <= self.opts.residual_tolerance
+                        || constraint >= 0.5 * last_constraint
+                    {
+                        converged = true;
+                        break;
+                    }
+                    last_constraint = constraint;
                 }
                 self.evaluate_iteration_matrix(tj, 1.0 / delta);
                 self.solver

@@ -7,6 +7,25 @@
 //! Two hold variants: hold the whole input `u`, or, with a preliminary feedback, apply
 //! `u = u0 + K_n (x - x0) + v` continuously and hold only `v`.
 //!
+//! # Constrained plants
+//! A plant with constraint rows (no `x'` and no algebraic unknown in the row: a mechanism's
+//! position constraints with their multipliers, index 3, or velocity constraints, index 2;
+//! classified by [`ConstraintStructure`]) is handled as follows:
+//! * before the run, the pencil of its linearisation at the given state is checked
+//!   ([`crate::linear::descriptor`]): a singular pencil or an index above 3 is a
+//!   [`SimulateError::Descriptor`]; the given state is then made consistent
+//!   ([`consistent_state`]: positions onto the constraints, velocities onto their hidden
+//!   derivatives), and how far it moved is reported in [`ClosedLoop::constraints`];
+//! * at every sample the measured state is made consistent in the same way, so the controller
+//!   gets a differential state on the constraint manifold (the drift the integration left is
+//!   reported); the derivatives and the multipliers are recomputed for the applied input;
+//! * between samples the plant is integrated by Radau IIA ([`crate::radau`]) with the index of
+//!   each unknown from the structure ([`ConstraintStructure::unknown_index`]: velocities of
+//!   constrained positions index 2, multipliers index 3) for the error scaling;
+//! * a constraint whose residual at a sample, relative to the size of its terms, exceeds
+//!   [`ClosedLoopOptions::constraint_tolerance`] stops the run with
+//!   [`DivergenceCause::ConstraintViolated`], naming the equation.
+//!
 //! The loop reports divergence with its time and a typed [`DivergenceCause`] (a tracking
 //! error beyond its bound, a bounded state leaving its domain, a non-finite state, a
 //! controller failing on consecutive samples, the plant integrator failing), and stops there,
@@ -17,12 +36,18 @@
 use std::cell::RefCell;
 
 use crate::bdf::{consistent_initial_values, Bdf, BdfError, Options};
+use crate::consistent::{
+    consistent_state, ConsistentError, ConsistentOptions, ConstraintStructure,
+};
 use crate::dae::ImplicitDae;
 use crate::dpc::{Dpc, DpcError};
 use crate::linalg::{FaerDenseLu, LinearSolver};
+use crate::linear::descriptor::{descriptor_system, realise, DescriptorError, DescriptorOptions};
+use crate::linearize::OperatingPoint;
 use crate::model::DaeModel;
 use crate::numeric::{max_or_nan, Readable};
 use crate::prefeedback::Prefeedback;
+use crate::radau::{self, Radau, RadauError};
 use crate::reference::Reference;
 use crate::sink::MatrixSink;
 use crate::tracking::TrackingDae;
@@ -64,6 +89,11 @@ pub struct ClosedLoopOptions {
     /// The run counts as diverged after this many consecutive samples on which the controller
     /// failed (the previous control is held meanwhile).
     pub max_consecutive_failures: usize,
+    /// For a constrained plant: the run counts as diverged when a constraint `g_i(x) = 0` has,
+    /// at a sample before the projection, `|g_i| > constraint_tolerance * (1 + s_i)`, `s_i =
+    /// sum_j |dg_i/dx_j| |x_j|` the size of its terms. Default `1e-6`, well above the drift of an
+    /// integration at the default tolerances.
+    pub constraint_tolerance: f64,
 }
 
 impl Default for ClosedLoopOptions {
@@ -77,6 +107,7 @@ impl Default for ClosedLoopOptions {
             state_bounds: Vec::new(),
             tracking_bounds: Vec::new(),
             max_consecutive_failures: 3,
+            constraint_tolerance: 1e-6,
         }
     }
 }
@@ -114,6 +145,15 @@ pub enum SimulateError {
     /// [`Hold::Correction`] needs a controller with a preliminary feedback.
     #[error("hold = correction needs a preliminary feedback")]
     NoPrefeedback,
+    /// A constrained plant whose linearisation at the initial state has a singular pencil, an
+    /// index above 3, or an input whose derivatives drive it.
+    #[error("constrained plant at the initial state: {0}")]
+    Descriptor(DescriptorError),
+    /// A constrained plant whose initial state cannot be made consistent (the constraints
+    /// cannot be met, or the multipliers are not determined), or whose structure the
+    /// projection does not handle.
+    #[error("constrained plant at the initial state: {0}")]
+    Consistent(ConsistentError),
     /// The plant and the controller disagree on the number of inputs or outputs.
     #[error("plant has {plant} {what}, controller {controller}")]
     Mismatch {
@@ -174,6 +214,26 @@ pub enum DivergenceCause {
     /// The plant could not be integrated over a sampling interval.
     #[error("plant integration failed: {0}")]
     Plant(BdfError),
+    /// The constrained plant could not be integrated over a sampling interval.
+    #[error("integration of the constrained plant failed: {0}")]
+    ConstrainedPlant(RadauError),
+    /// A constraint of the plant was violated beyond
+    /// [`ClosedLoopOptions::constraint_tolerance`] at a sample.
+    #[error(
+        "constraint {equation} violated: residual {residual:e} above the tolerance {tolerance:e}"
+    )]
+    ConstraintViolated {
+        /// The constraint, as the model names it.
+        equation: String,
+        /// Its residual.
+        residual: f64,
+        /// The absolute tolerance it was held to (relative tolerance times the size of its
+        /// terms).
+        tolerance: f64,
+    },
+    /// The measured state of the constrained plant could not be made consistent.
+    #[error("the measured state cannot be made consistent: {0}")]
+    Consistent(ConsistentError),
 }
 
 impl serde::Serialize for DivergenceCause {
@@ -246,6 +306,28 @@ pub struct ClosedLoop {
     /// The largest round-off level `eps * delta^-nu` of an update over the run (see
     /// [`crate::dpc::UpdateReport::roundoff`]).
     pub max_roundoff: f64,
+    /// For a constrained plant: its constraint structure and how far states were moved onto
+    /// the constraint manifold; `None` for an ODE or index-1 plant.
+    pub constraints: Option<ConstraintReport>,
+}
+
+/// How a constrained plant was kept on its constraint manifold during a run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ConstraintReport {
+    /// The index of the plant's pencil at the initial state.
+    pub index: usize,
+    /// Degrees of freedom (the dimension of the constraint manifold in `x`).
+    pub dof: usize,
+    /// The constraint equations, as the model names them.
+    pub equations: Vec<String>,
+    /// `x - x0` per state: how far the given initial state was moved onto the manifold.
+    pub initial_move: Vec<f64>,
+    /// The largest move of a state by the projection at a later sample: the drift the plant
+    /// integration left.
+    pub max_drift: f64,
+    /// The largest relative constraint residual met at a sample before the projection (see
+    /// [`ClosedLoopOptions::constraint_tolerance`]).
+    pub max_residual: f64,
 }
 
 impl ClosedLoop {
@@ -404,6 +486,147 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
     }
 }
 
+/// A plant with position constraints in the stabilised index-2 form of Gear, Gupta and
+/// Leimkuhler ("Automatic integration of Euler-Lagrange equations with constraints", J. Comput.
+/// Appl. Math. 12-13, 1985): the hidden velocity constraints `G(x) phi(x) = 0` are appended
+/// with one more multiplier `mu` each, which enters the kinematic rows as `x' = phi(x) -
+/// G(x)^T mu` (scaled by the row's coefficient of `x'`). Exact solutions have `mu = 0` and
+/// satisfy the position and the velocity constraints; the positions and velocities are index 1,
+/// `z` and `mu` index 2, so the integrator controls the error of the velocities as strictly as
+/// that of the positions (in the index-3 form the velocities' error weights are relaxed by the
+/// step size and the velocity error is the tolerance divided by the step).
+///
+/// Newton's iteration matrix leaves out the terms with second derivatives of the constraints
+/// (`(dG/dx) phi` and `(dG/dx)^T mu`), which are not generated; simplified Newton converges
+/// with it, at a rate the integrator monitors.
+struct Stabilised<'h, 'a, M: DaeModel> {
+    held: &'h HeldPlant<'a, M>,
+    /// The position-constraint rows.
+    rows: &'h [usize],
+    /// Per state, its kinematic row (whose coefficient of `x'` is read at evaluation).
+    kinematic: &'h [Option<usize>],
+}
+
+impl<M: DaeModel> Stabilised<'_, '_, M> {
+    fn core(&self) -> usize {
+        let s = self.held.model.structure();
+        s.n_states() + s.n_algebraic()
+    }
+
+    /// The model's residual and Jacobians at `(t, y, yp)` into the scratch.
+    fn evaluate(&self, t: f64, y: &[f64], yp: &[f64], sc: &mut HeldScratch) {
+        let nx = self.held.model.structure().n_states();
+        let n = self.core();
+        let (x, z) = y[..n].split_at(nx);
+        self.held.inputs(t, x, sc);
+        for m in [&mut sc.f_xdot, &mut sc.f_x, &mut sc.f_z, &mut sc.f_u] {
+            m.fill(0.0);
+        }
+        self.held.model.evaluate(
+            t,
+            x,
+            &yp[..nx],
+            z,
+            &sc.u,
+            &mut sc.res,
+            &mut sc.f_xdot,
+            &mut sc.f_x,
+            &mut sc.f_z,
+            &mut sc.f_u,
+        );
+    }
+}
+
+impl<M: DaeModel> ImplicitDae for Stabilised<'_, '_, M> {
+    fn dimension(&self) -> usize {
+        self.held.model.structure().n_equations() + self.rows.len()
+    }
+
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        let (ne, n) = (self.held.model.structure().n_equations(), self.core());
+        let sc = &mut *self.held.scratch.borrow_mut();
+        self.evaluate(t, y, yp, sc);
+        let mu = &y[n..];
+        out[..ne].copy_from_slice(&sc.res);
+        for (a, &g) in self.rows.iter().enumerate() {
+            let mut hidden = 0.0;
+            for (j, row) in self.kinematic.iter().enumerate() {
+                let Some(i) = *row else { continue };
+                let gj = sc.f_x[(g, j)];
+                if gj == 0.0 {
+                    continue;
+                }
+                let c = sc.f_xdot[(i, j)];
+                // phi_j = x'_j - F_i / c: the velocity the kinematic row gives.
+                hidden += gj * (yp[j] - sc.res[i] / c);
+                out[i] += c * gj * mu[a];
+            }
+            out[ne + a] = hidden;
+        }
+    }
+
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        c: f64,
+        out: &mut S,
+    ) {
+        let nx = self.held.model.structure().n_states();
+        let (ne, n) = (self.held.model.structure().n_equations(), self.core());
+        self.held.iteration_matrix(t, &y[..n], &yp[..n], c, out);
+        let sc = &mut *self.held.scratch.borrow_mut();
+        self.evaluate(t, y, yp, sc);
+        for (a, &g) in self.rows.iter().enumerate() {
+            for (j, row) in self.kinematic.iter().enumerate() {
+                let Some(i) = *row else { continue };
+                let gj = sc.f_x[(g, j)];
+                if gj == 0.0 {
+                    continue;
+                }
+                let cj = sc.f_xdot[(i, j)];
+                out.set(i, n + a, cj * gj);
+                // d/dx of gj * phi_j with phi_j = -f_j / c_j's x-dependence (dF_i/dx / c).
+                for k in 0..nx {
+                    let d = sc.f_x[(i, k)];
+                    if d != 0.0 {
+                        out.add(ne + a, k, -gj * d / cj);
+                    }
+                }
+            }
+        }
+    }
+
+    fn is_differential(&self, i: usize) -> bool {
+        i < self.held.model.structure().n_states()
+    }
+
+    fn equation_name(&self, i: usize) -> String {
+        let ne = self.held.model.structure().n_equations();
+        if i < ne {
+            self.held.model.structure().equation_name(i)
+        } else {
+            format!(
+                "the hidden velocity constraint of {}",
+                self.held.model.structure().equation_name(self.rows[i - ne])
+            )
+        }
+    }
+
+    fn unknown_name(&self, i: usize) -> String {
+        let n = self.core();
+        if i < n {
+            self.held.model.structure().unknown_name(i)
+        } else {
+            format!(
+                "the stabilising multiplier of {}",
+                self.held.model.structure().equation_name(self.rows[i - n])
+            )
+        }
+    }
+}
+
 /// Run the closed loop of `dpc` on `plant` from the state `x0` (algebraic unknowns of the
 /// plant are initialised consistently at every sample).
 ///
@@ -470,6 +693,12 @@ where
     if opts.hold == Hold::Correction && dpc.prefeedback().is_none() {
         return Err(SimulateError::NoPrefeedback);
     }
+    if !(opts.constraint_tolerance.is_finite() && opts.constraint_tolerance > 0.0) {
+        return Err(SimulateError::InvalidOption(format!(
+            "constraint_tolerance = {} (must be positive and finite)",
+            opts.constraint_tolerance
+        )));
+    }
     let bdf_opts = Options::with_tolerances(opts.rtol, opts.atol);
     let mut result = ClosedLoop {
         samples: Vec::new(),
@@ -478,6 +707,7 @@ where
         retries: 0,
         events: Vec::new(),
         max_roundoff: 0.0,
+        constraints: None,
     };
     let mut y = vec![0.0; nx + nz];
     y[..nx].copy_from_slice(x0);
@@ -488,14 +718,53 @@ where
     let mut consecutive_failures = 0;
     let mut reference = vec![0.0; ny];
     let mut outputs = vec![0.0; ny];
+    let constrained = Constrained::new(plant, x0, opts)?;
+    if let Some(c) = &constrained {
+        let first = c.project(plant, 0.0, x0, &applied);
+        let first = first.map_err(SimulateError::Consistent)?;
+        y[..nx].copy_from_slice(&first.x);
+        result.constraints = Some(ConstraintReport {
+            index: c.index,
+            dof: c.dof,
+            equations: c
+                .rows
+                .iter()
+                .map(|&i| plant.structure().equation_name(i))
+                .collect(),
+            initial_move: first.moved,
+            max_drift: 0.0,
+            max_residual: 0.0,
+        });
+    }
     let steps = (opts.t_end / opts.h).round() as usize;
     for k in 0..=steps {
         let t = k as f64 * opts.h;
-        let x = &y[..nx];
-        if let Some(cause) = state_divergence(plant, x, &opts.state_bounds) {
+        if let Some(cause) = state_divergence(plant, &y[..nx], &opts.state_bounds) {
             result.divergence = Some(Divergence { t, cause });
             break;
         }
+        if let (Some(c), Some(report)) = (&constrained, result.constraints.as_mut()) {
+            // The measured state onto the constraint manifold, after checking the drift.
+            let checked = c
+                .check(plant, t, &y[..nx], &applied, report)
+                .and_then(|()| {
+                    c.project(plant, t, &y[..nx], &applied)
+                        .map_err(DivergenceCause::Consistent)
+                });
+            match checked {
+                Ok(state) => {
+                    if k > 0 {
+                        report.max_drift = report.max_drift.max(state.max_move);
+                    }
+                    y[..nx].copy_from_slice(&state.x);
+                }
+                Err(cause) => {
+                    result.divergence = Some(Divergence { t, cause });
+                    break;
+                }
+            }
+        }
+        let x = &y[..nx];
         match dpc.control(t, x, &mut control) {
             Ok(report) => {
                 consecutive_failures = 0;
@@ -533,6 +802,24 @@ where
             Some(pf) => pf.input(t, x, &control, &mut x0_scratch, &mut applied),
             None => applied.copy_from_slice(&control),
         }
+        if let Some(c) = &constrained {
+            // Derivatives and multipliers for the applied input (the state is already on the
+            // manifold, so only they change).
+            match c.project(plant, t, &y[..nx], &applied) {
+                Ok(state) => {
+                    y[nx..].copy_from_slice(&state.z);
+                    yp[..nx].copy_from_slice(&state.xdot);
+                    yp[nx..].fill(0.0);
+                }
+                Err(err) => {
+                    result.divergence = Some(Divergence {
+                        t,
+                        cause: DivergenceCause::Consistent(err),
+                    });
+                    break;
+                }
+            }
+        }
         let (xs, zs) = y.split_at(nx);
         plant.outputs(t, xs, zs, &applied, &mut outputs);
         let ref_ok = record_reference(dpc, t, &mut reference);
@@ -564,16 +851,190 @@ where
             Hold::Input => HeldPlant::new(plant.clone(), &applied, None),
             Hold::Correction => HeldPlant::new(plant.clone(), &control, dpc.prefeedback()),
         };
-        if let Err(err) = integrate_interval(&held_plant, &bdf_opts, t, t + opts.h, &mut y, &mut yp)
-        {
-            result.divergence = Some(Divergence {
-                t,
-                cause: DivergenceCause::Plant(err),
-            });
+        let integrated = match &constrained {
+            None => integrate_interval(&held_plant, &bdf_opts, t, t + opts.h, &mut y, &mut yp)
+                .map_err(DivergenceCause::Plant),
+            Some(c) => c
+                .integrate(&held_plant, t, t + opts.h, &mut y, &mut yp)
+                .map_err(DivergenceCause::ConstrainedPlant),
+        };
+        if let Err(cause) = integrated {
+            result.divergence = Some(Divergence { t, cause });
             break;
         }
     }
     Ok(result)
+}
+
+/// What the closed loop needs to run a constrained plant.
+struct Constrained {
+    /// The constraint rows.
+    rows: Vec<usize>,
+    /// The position-constraint rows, stabilised by their hidden velocity constraints.
+    position_rows: Vec<usize>,
+    /// Per state, its kinematic row.
+    kinematic: Vec<Option<usize>>,
+    /// Radau's options with the index of every unknown.
+    radau: radau::Options,
+    consistent: ConsistentOptions,
+    tolerance: f64,
+    index: usize,
+    dof: usize,
+}
+
+impl Constrained {
+    /// `None` for a plant without constraint rows; else the structure, checked by the pencil
+    /// at `x0` (a singular pencil or an index above 3 is refused before any projection).
+    fn new<P: DaeModel>(
+        plant: &P,
+        x0: &[f64],
+        opts: &ClosedLoopOptions,
+    ) -> Result<Option<Self>, SimulateError> {
+        let structure = ConstraintStructure::of(plant);
+        if !structure.is_constrained() && structure.prescribed.is_empty() {
+            return Ok(None);
+        }
+        structure
+            .check_supported(plant)
+            .map_err(SimulateError::Consistent)?;
+        let s = plant.structure();
+        let (nz, nu) = (s.n_algebraic(), s.n_inputs());
+        let zeros_x = vec![0.0; x0.len()];
+        let zeros_z = vec![0.0; nz];
+        let zeros_u = vec![0.0; nu];
+        // The pencil's structure (regularity, index) at the given state; its consistency is
+        // not asked for here, the projection below makes it so.
+        let pencil_opts = DescriptorOptions {
+            consistency_tol: f64::INFINITY,
+            ..DescriptorOptions::default()
+        };
+        let desc = descriptor_system(
+            plant,
+            OperatingPoint {
+                t: 0.0,
+                x: x0,
+                xdot: &zeros_x,
+                z: &zeros_z,
+                u: &zeros_u,
+            },
+            &pencil_opts,
+        )
+        .map_err(SimulateError::Descriptor)?;
+        let real = realise(&desc, &pencil_opts, |i| s.unknown_name(i))
+            .map_err(SimulateError::Descriptor)?;
+        let mut radau = radau::Options::with_tolerances(opts.rtol, opts.atol);
+        radau.index = structure.stabilised_index();
+        Ok(Some(Self {
+            rows: structure.constraint_rows(),
+            position_rows: structure.position_constraints.clone(),
+            kinematic: structure.kinematic.clone(),
+            radau,
+            consistent: ConsistentOptions::default(),
+            tolerance: opts.constraint_tolerance,
+            index: real.index,
+            dof: real.dof,
+        }))
+    }
+
+    fn project<P: DaeModel>(
+        &self,
+        plant: &P,
+        t: f64,
+        x: &[f64],
+        u: &[f64],
+    ) -> Result<crate::consistent::ConsistentState, ConsistentError> {
+        consistent_state(plant, t, x, u, &self.consistent)
+    }
+
+    /// The constraint residuals at `x`, relative to the size of their terms: the largest goes
+    /// into the report, and one beyond the tolerance is a divergence.
+    fn check<P: DaeModel>(
+        &self,
+        plant: &P,
+        t: f64,
+        x: &[f64],
+        u: &[f64],
+        report: &mut ConstraintReport,
+    ) -> Result<(), DivergenceCause> {
+        let s = plant.structure();
+        let (ne, nx, nz) = (s.n_equations(), s.n_states(), s.n_algebraic());
+        let mut r = vec![0.0; ne];
+        let mut f_x = DMatrix::zeros(ne, nx);
+        model_jacobian_x(plant, t, x, &vec![0.0; nz], u, &mut r, &mut f_x);
+        for &i in &self.rows {
+            let scale: f64 = (0..nx).map(|j| f_x[(i, j)].abs() * x[j].abs()).sum();
+            let tolerance = self.tolerance * (1.0 + scale);
+            let relative = r[i].abs() / (1.0 + scale);
+            report.max_residual = max_or_nan([report.max_residual, relative]);
+            if r[i].is_nan() || r[i].abs() > tolerance {
+                return Err(DivergenceCause::ConstraintViolated {
+                    equation: s.equation_name(i),
+                    residual: r[i],
+                    tolerance,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Integrate the plant over `[t0, t1]` in its stabilised form ([`Stabilised`]) from the
+    /// consistent `(y, yp)`, with `mu = 0`.
+    fn integrate<M: DaeModel>(
+        &self,
+        held: &HeldPlant<'_, M>,
+        t0: f64,
+        t1: f64,
+        y: &mut [f64],
+        yp: &mut [f64],
+    ) -> Result<(), RadauError> {
+        let dae = Stabilised {
+            held,
+            rows: &self.position_rows,
+            kinematic: &self.kinematic,
+        };
+        let n = y.len();
+        let mut ys = y.to_vec();
+        ys.resize(n + self.position_rows.len(), 0.0);
+        let mut yps = yp.to_vec();
+        yps.resize(ys.len(), 0.0);
+        let ls = FaerDenseLu::new(dae.dimension());
+        let mut radau = Radau::new(&dae, ls, self.radau.clone(), t0, &ys, &yps)?;
+        radau.set_stop_time(t1)?;
+        radau.solve_to(t1, &mut ys, Some(&mut yps))?;
+        y.copy_from_slice(&ys[..n]);
+        yp.copy_from_slice(&yps[..n]);
+        Ok(())
+    }
+}
+
+/// The residual and `dF/dx` of `plant` at `(t, x, x' = 0, z, u)` (constraint rows do not
+/// depend on `x'` or `z`).
+fn model_jacobian_x<P: DaeModel>(
+    plant: &P,
+    t: f64,
+    x: &[f64],
+    z: &[f64],
+    u: &[f64],
+    r: &mut [f64],
+    f_x: &mut DMatrix<f64>,
+) {
+    let s = plant.structure();
+    let (ne, nx, nz, nu) = (s.n_equations(), s.n_states(), s.n_algebraic(), s.n_inputs());
+    let mut f_xdot = DMatrix::zeros(ne, nx);
+    let mut f_z = DMatrix::zeros(ne, nz);
+    let mut f_u = DMatrix::zeros(ne, nu);
+    plant.evaluate(
+        t,
+        x,
+        &vec![0.0; nx],
+        z,
+        u,
+        r,
+        &mut f_xdot,
+        f_x,
+        &mut f_z,
+        &mut f_u,
+    );
 }
 
 /// Bounds must be positive (infinity: unbounded) and no more than there are names.

@@ -120,7 +120,8 @@ pub trait TrackingDae: DaeModel {
 
     /// Per output, the relative degree of the plant output: the number of total time
     /// derivatives after which an input appears, or `None` where it is not defined (an
-    /// output the inputs never reach, or a structurally higher-index plant).
+    /// output the inputs never reach, or a plant whose implicit equations stay structurally
+    /// singular with its constraints differentiated).
     fn relative_degrees(&self) -> &[Option<usize>];
 
     /// The coefficients of `W_i(s)` in use, lowest power first, monic (the last is 1), of

@@ -5,7 +5,12 @@
 //! * [`Pendulum`]: the planar pendulum in Cartesian coordinates with a Lagrange multiplier
 //!   (index 3);
 //! * [`FlexibleJoint`]: a flexible-joint robot arm of relative degree 4, with two
-//!   stabilised Hirschorn steps in [`FlexibleJointTracking`].
+//!   stabilised Hirschorn steps in [`FlexibleJointTracking`];
+//! * [`CartPendulum`]: an inverted pendulum on a cart in Cartesian coordinates with a rod
+//!   constraint and its multiplier (index 3), and [`CartPendulumJoint`], the same plant in
+//!   joint coordinates (an ODE);
+//! * [`SliderCrank`]: a slider-crank with the slider position, the rod constraint and its
+//!   multiplier (index 3), and [`SliderCrankJoint`], the same mechanism in the crank angle.
 //!
 //! [`wheel_design`] holds the paper's nominal motion, linear analysis and preliminary feedback
 //! for the wheel.
@@ -15,15 +20,25 @@
 //! The source files are also read by the snapshot tests of `dpc-codegen`, which store the
 //! code the macro generates for each of them.
 
+mod cart_pendulum;
 mod flexible_joint;
 mod pendulum;
+mod slider_crank;
 mod wheel;
 pub mod wheel_design;
 
+pub use cart_pendulum::{
+    CartPendulum, CartPendulumJoint, CartPendulumJointParams, CartPendulumJointReference,
+    CartPendulumJointTracking, CartPendulumParams, CartPendulumReference, CartPendulumTracking,
+};
 pub use flexible_joint::{
     FlexibleJoint, FlexibleJointParams, FlexibleJointReference, FlexibleJointTracking,
 };
 pub use pendulum::{Pendulum, PendulumParams};
+pub use slider_crank::{
+    SliderCrank, SliderCrankJoint, SliderCrankJointParams, SliderCrankJointReference,
+    SliderCrankJointTracking, SliderCrankParams, SliderCrankReference, SliderCrankTracking,
+};
 pub use wheel::{
     Wheel, WheelLinear, WheelLinearParams, WheelLinearTracking, WheelParams, WheelReference,
     WheelTracking,
