@@ -13,7 +13,10 @@ use dpc::core::{Reference, TrackingDae};
 use dpc::nalgebra::{DMatrix, DVector};
 use dpc::runtime::RuntimeModel;
 use dpc_models::{
-    FlexibleJoint, FlexibleJointReference, FlexibleJointTracking, Pendulum, Wheel, WheelLinear,
+    CartPendulum, CartPendulumJoint, CartPendulumJointReference, CartPendulumJointTracking,
+    CartPendulumReference, CartPendulumTracking, FlexibleJoint, FlexibleJointReference,
+    FlexibleJointTracking, Pendulum, SliderCrank, SliderCrankJoint, SliderCrankJointReference,
+    SliderCrankJointTracking, SliderCrankReference, SliderCrankTracking, Wheel, WheelLinear,
     WheelLinearTracking, WheelReference, WheelTracking,
 };
 use proptest::prelude::*;
@@ -302,6 +305,26 @@ fn check(name: &str, model: &RuntimeModel, v: &[f64], c: f64, scales: &[f64]) {
             check_tracking::<FlexibleJointTracking>(model, v, c, scales);
             check_reference::<FlexibleJointReference>(model, v[0] * 10.0);
         }
+        "CartPendulum" => {
+            check_plant::<CartPendulum>(model, v, c, scales);
+            check_tracking::<CartPendulumTracking>(model, v, c, scales);
+            check_reference::<CartPendulumReference>(model, v[0] * 10.0);
+        }
+        "CartPendulumJoint" => {
+            check_plant::<CartPendulumJoint>(model, v, c, scales);
+            check_tracking::<CartPendulumJointTracking>(model, v, c, scales);
+            check_reference::<CartPendulumJointReference>(model, v[0] * 10.0);
+        }
+        "SliderCrank" => {
+            check_plant::<SliderCrank>(model, v, c, scales);
+            check_tracking::<SliderCrankTracking>(model, v, c, scales);
+            check_reference::<SliderCrankReference>(model, v[0] * 10.0);
+        }
+        "SliderCrankJoint" => {
+            check_plant::<SliderCrankJoint>(model, v, c, scales);
+            check_tracking::<SliderCrankJointTracking>(model, v, c, scales);
+            check_reference::<SliderCrankJointReference>(model, v[0] * 10.0);
+        }
         other => panic!("model `{other}` of models/src has no compiled counterpart in this test"),
     }
 }
@@ -309,7 +332,7 @@ fn check(name: &str, model: &RuntimeModel, v: &[f64], c: f64, scales: &[f64]) {
 #[test]
 fn every_repository_model_is_covered() {
     let names: Vec<&str> = repository_models().iter().map(|m| m.1.as_str()).collect();
-    assert_eq!(names.len(), 4, "{names:?}");
+    assert_eq!(names.len(), 8, "{names:?}");
     // The listings are the generated ones.
     for (_, name, model) in repository_models() {
         let want = match name.as_str() {
@@ -317,6 +340,10 @@ fn every_repository_model_is_covered() {
             "WheelLinear" => WheelLinearTracking::LISTING,
             "Pendulum" => Pendulum::LISTING,
             "FlexibleJoint" => FlexibleJointTracking::LISTING,
+            "CartPendulum" => CartPendulumTracking::LISTING,
+            "CartPendulumJoint" => CartPendulumJointTracking::LISTING,
+            "SliderCrank" => SliderCrankTracking::LISTING,
+            "SliderCrankJoint" => SliderCrankJointTracking::LISTING,
             other => panic!("{other}"),
         };
         assert_eq!(model.listing(), want, "{name}");
@@ -324,7 +351,12 @@ fn every_repository_model_is_covered() {
             "Wheel" => Wheel::RELATIVE_DEGREES,
             "WheelLinear" => WheelLinear::RELATIVE_DEGREES,
             "Pendulum" => Pendulum::RELATIVE_DEGREES,
-            _ => FlexibleJoint::RELATIVE_DEGREES,
+            "FlexibleJoint" => FlexibleJoint::RELATIVE_DEGREES,
+            "CartPendulum" => CartPendulum::RELATIVE_DEGREES,
+            "CartPendulumJoint" => CartPendulumJoint::RELATIVE_DEGREES,
+            "SliderCrank" => SliderCrank::RELATIVE_DEGREES,
+            "SliderCrankJoint" => SliderCrankJoint::RELATIVE_DEGREES,
+            other => panic!("{other}"),
         };
         assert_eq!(model.relative_degrees(), degrees, "{name}");
     }
