@@ -502,7 +502,10 @@ pub struct NominalMotion {
 
 /// Values of a vector of the model: all of them in order, or some of them by name.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "an array of numbers (every entry, in the model's order) or a table of NAME = number (some entries by name)"
+)]
 pub enum Values {
     /// Every entry, in the model's order.
     All(Vec<f64>),

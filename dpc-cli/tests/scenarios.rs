@@ -401,6 +401,12 @@ fn bad_scenarios_give_one_error_line() {
             "`design.nominal.algebraic.q`: model `wheel` has no algebraic unknown `q`; it has no algebraic unknowns",
         ),
         (
+            "nominal-type.toml",
+            wheel.clone(),
+            vec!["--set", "design.nominal.state=upright"],
+            "an array of numbers (every entry, in the model's order) or a table of NAME = number",
+        ),
+        (
             "nominal-length.toml",
             wheel.clone(),
             vec!["--set", "design.nominal.input=[0.0]"],
