@@ -746,3 +746,42 @@ fn constraint_structure_of_the_crane() {
     assert!(!joint.is_constrained());
     assert_eq!(joint.stabilised_index(), vec![1; 4]);
 }
+
+dpc::model! {
+    /// A mass whose position is prescribed by the input through a constraint: the motion,
+    /// not a force, is imposed, so consistent values need the input's derivatives.
+    Prescribed {
+        params { m = 1.0 }
+        states { x, v }
+        algebraic { lam }
+        inputs { u }
+        equations {
+            der(x) = v;
+            m * der(v) == lam;
+            0.0 == x - u;
+        }
+        outputs { x }
+    }
+}
+
+/// A constraint that depends on the input is refused with a typed error naming it, by the
+/// consistent-state projection the closed loop uses on every measured state.
+#[test]
+fn a_constraint_that_depends_on_the_input_is_refused() {
+    use dpc::core::consistent::{consistent_state, ConsistentError, ConsistentOptions};
+    let err = consistent_state(
+        &Prescribed::default(),
+        0.0,
+        &[0.0, 0.0],
+        &[0.0],
+        &ConsistentOptions::default(),
+    )
+    .unwrap_err();
+    match &err {
+        ConsistentError::Unsupported { equation, .. } => {
+            assert!(equation.contains("x - u"), "{equation}")
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(err.to_string().contains("prescribes a motion"), "{err}");
+}
