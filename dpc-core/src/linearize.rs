@@ -60,6 +60,122 @@ pub struct OperatingPoint<'a> {
     pub u: &'a [f64],
 }
 
+/// The residual and every Jacobian block of a model at one [`OperatingPoint`]: what the
+/// state-space linearisation ([`linearize`]) and the descriptor linearisation
+/// ([`crate::linear::descriptor::descriptor_system`]) are built from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Jacobians {
+    /// `F` at the point (checked by the callers that need it to vanish).
+    pub residual: Vec<f64>,
+    /// `dF/dx'`.
+    pub f_xdot: DMatrix<f64>,
+    /// `dF/dx`.
+    pub f_x: DMatrix<f64>,
+    /// `dF/dz`.
+    pub f_z: DMatrix<f64>,
+    /// `dF/du`.
+    pub f_u: DMatrix<f64>,
+    /// `dh/dx` of the outputs.
+    pub h_x: DMatrix<f64>,
+    /// `dh/dz`.
+    pub h_z: DMatrix<f64>,
+    /// `dh/du`.
+    pub h_u: DMatrix<f64>,
+}
+
+/// Why [`Jacobians::at`] could not evaluate a model.
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+pub enum PointError {
+    /// A point vector has the wrong length.
+    #[error("{what} has length {found}, expected {expected}")]
+    Dimension {
+        /// Which vector (`x`, `x'`, `z` or `u`).
+        what: &'static str,
+        /// Required length.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// A Jacobian block has a NaN or infinite entry.
+    #[error("non-finite entry in {what} at the point")]
+    NonFinite {
+        /// The block (`dF/dx'`, `dF/dx`, `dF/dz`, `dF/du`, `dh/dx`, `dh/dz` or `dh/du`).
+        what: &'static str,
+    },
+}
+
+impl Jacobians {
+    /// Evaluate `model` at `point` (the generated code's exact derivatives), after checking the
+    /// lengths of the point's vectors against the model.
+    ///
+    /// # Errors
+    /// [`PointError::Dimension`] for a vector of the wrong length,
+    /// [`PointError::NonFinite`] naming the first Jacobian block with a NaN or infinite entry.
+    pub fn at<M: DaeModel>(model: &M, point: OperatingPoint<'_>) -> Result<Self, PointError> {
+        let structure = model.structure();
+        let (nx, nz, nu, ny, ne) = (
+            structure.n_states(),
+            structure.n_algebraic(),
+            structure.n_inputs(),
+            structure.n_outputs(),
+            structure.n_equations(),
+        );
+        for (what, v, n) in [
+            ("x", point.x, nx),
+            ("x'", point.xdot, nx),
+            ("z", point.z, nz),
+            ("u", point.u, nu),
+        ] {
+            if v.len() != n {
+                return Err(PointError::Dimension {
+                    what,
+                    expected: n,
+                    found: v.len(),
+                });
+            }
+        }
+        let mut j = Self {
+            residual: vec![0.0; ne],
+            f_xdot: DMatrix::zeros(ne, nx),
+            f_x: DMatrix::zeros(ne, nx),
+            f_z: DMatrix::zeros(ne, nz),
+            f_u: DMatrix::zeros(ne, nu),
+            h_x: DMatrix::zeros(ny, nx),
+            h_z: DMatrix::zeros(ny, nz),
+            h_u: DMatrix::zeros(ny, nu),
+        };
+        model.evaluate(
+            point.t,
+            point.x,
+            point.xdot,
+            point.z,
+            point.u,
+            &mut j.residual,
+            &mut j.f_xdot,
+            &mut j.f_x,
+            &mut j.f_z,
+            &mut j.f_u,
+        );
+        model.output_jacobians(
+            point.t, point.x, point.z, point.u, &mut j.h_x, &mut j.h_z, &mut j.h_u,
+        );
+        for (what, m) in [
+            ("dF/dx'", &j.f_xdot),
+            ("dF/dx", &j.f_x),
+            ("dF/dz", &j.f_z),
+            ("dF/du", &j.f_u),
+            ("dh/dx", &j.h_x),
+            ("dh/dz", &j.h_z),
+            ("dh/du", &j.h_u),
+        ] {
+            if m.iter().any(|v| !v.is_finite()) {
+                return Err(PointError::NonFinite { what });
+            }
+        }
+        Ok(j)
+    }
+}
+
 /// The state-space linearisation `(A, B, C, D)` of `model` about `point`.
 ///
 /// # Errors
@@ -70,56 +186,33 @@ pub fn linearize<M: DaeModel>(
     point: OperatingPoint<'_>,
 ) -> Result<LinearSystem, LinearizeError> {
     let structure = model.structure();
-    let (nx, nz, nu, ny, ne) = (
+    let (nx, nz, nu, ne) = (
         structure.n_states(),
         structure.n_algebraic(),
         structure.n_inputs(),
-        structure.n_outputs(),
         structure.n_equations(),
     );
-    for (what, v, n) in [
-        ("x", point.x, nx),
-        ("x'", point.xdot, nx),
-        ("z", point.z, nz),
-        ("u", point.u, nu),
-    ] {
-        if v.len() != n {
-            return Err(LinearizeError::Dimension {
-                what,
-                expected: n,
-                found: v.len(),
-            });
-        }
-    }
-    let mut r = vec![0.0; ne];
-    let mut f_xdot = DMatrix::zeros(ne, nx);
-    let mut f_x = DMatrix::zeros(ne, nx);
-    let mut f_z = DMatrix::zeros(ne, nz);
-    let mut f_u = DMatrix::zeros(ne, nu);
-    model.evaluate(
-        point.t,
-        point.x,
-        point.xdot,
-        point.z,
-        point.u,
-        &mut r,
-        &mut f_xdot,
-        &mut f_x,
-        &mut f_z,
-        &mut f_u,
-    );
-    let mut h_x = DMatrix::zeros(ny, nx);
-    let mut h_z = DMatrix::zeros(ny, nz);
-    let mut h_u = DMatrix::zeros(ny, nu);
-    model.output_jacobians(
-        point.t, point.x, point.z, point.u, &mut h_x, &mut h_z, &mut h_u,
-    );
-    let all_finite = [&f_xdot, &f_x, &f_z, &f_u, &h_x, &h_z, &h_u]
-        .iter()
-        .all(|m| m.iter().all(|v| v.is_finite()));
-    if !all_finite {
-        return Err(LinearizeError::NonFinite);
-    }
+    let Jacobians {
+        f_xdot,
+        f_x,
+        f_z,
+        f_u,
+        h_x,
+        h_z,
+        h_u,
+        ..
+    } = Jacobians::at(model, point).map_err(|e| match e {
+        PointError::Dimension {
+            what,
+            expected,
+            found,
+        } => LinearizeError::Dimension {
+            what,
+            expected,
+            found,
+        },
+        PointError::NonFinite { .. } => LinearizeError::NonFinite,
+    })?;
     // [F_x' F_z] [dx'; dz] = -[F_x F_u] [dx; du].
     let mut lhs = DMatrix::zeros(ne, nx + nz);
     lhs.columns_mut(0, nx).copy_from(&f_xdot);

@@ -68,7 +68,7 @@ use thiserror::Error;
 
 use super::subspace::{self, RankDecision};
 use super::{pencil, LinearError, LinearSystem};
-use crate::linearize::OperatingPoint;
+use crate::linearize::{Jacobians, OperatingPoint, PointError};
 use crate::model::DaeModel;
 
 /// Options of [`linearize_descriptor`] and [`realise`].
@@ -291,65 +291,35 @@ pub fn descriptor_system<M: DaeModel>(
     opts: &DescriptorOptions,
 ) -> Result<DescriptorSystem, DescriptorError> {
     let structure = model.structure();
-    let (nx, nz, nu, ny, ne) = (
+    let (nx, nz, ny, ne) = (
         structure.n_states(),
         structure.n_algebraic(),
-        structure.n_inputs(),
         structure.n_outputs(),
         structure.n_equations(),
     );
-    for (what, v, n) in [
-        ("x", point.x, nx),
-        ("x'", point.xdot, nx),
-        ("z", point.z, nz),
-        ("u", point.u, nu),
-    ] {
-        if v.len() != n {
-            return Err(DescriptorError::Dimension {
-                what,
-                expected: n,
-                found: v.len(),
-            });
-        }
-    }
-    let mut r = vec![0.0; ne];
-    let mut f_xdot = DMatrix::zeros(ne, nx);
-    let mut f_x = DMatrix::zeros(ne, nx);
-    let mut f_z = DMatrix::zeros(ne, nz);
-    let mut f_u = DMatrix::zeros(ne, nu);
-    model.evaluate(
-        point.t,
-        point.x,
-        point.xdot,
-        point.z,
-        point.u,
-        &mut r,
-        &mut f_xdot,
-        &mut f_x,
-        &mut f_z,
-        &mut f_u,
-    );
-    let mut h_x = DMatrix::zeros(ny, nx);
-    let mut h_z = DMatrix::zeros(ny, nz);
-    let mut h_u = DMatrix::zeros(ny, nu);
-    model.output_jacobians(
-        point.t, point.x, point.z, point.u, &mut h_x, &mut h_z, &mut h_u,
-    );
+    let Jacobians {
+        residual: r,
+        f_xdot,
+        f_x,
+        f_z,
+        f_u,
+        h_x,
+        h_z,
+        h_u,
+    } = Jacobians::at(model, point).map_err(|e| match e {
+        PointError::Dimension {
+            what,
+            expected,
+            found,
+        } => DescriptorError::Dimension {
+            what,
+            expected,
+            found,
+        },
+        PointError::NonFinite { what } => DescriptorError::NonFinite { what },
+    })?;
     if r.iter().any(|v| !v.is_finite()) {
         return Err(DescriptorError::NonFinite { what: "residual" });
-    }
-    for (what, m) in [
-        ("dF/dx'", &f_xdot),
-        ("dF/dx", &f_x),
-        ("dF/dz", &f_z),
-        ("dF/du", &f_u),
-        ("dh/dx", &h_x),
-        ("dh/dz", &h_z),
-        ("dh/du", &h_u),
-    ] {
-        if m.iter().any(|v| !v.is_finite()) {
-            return Err(DescriptorError::NonFinite { what });
-        }
     }
 
     // Consistency, per equation, relative to the terms that cancel in it.
