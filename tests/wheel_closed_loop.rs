@@ -90,6 +90,31 @@ fn run(
     .expect("run starts")
 }
 
+/// The controller's work over a run, pinned as a snapshot (as the BDF's counters are): a
+/// change of the Newton test, the warm start, the extrapolation or the retry ladder shows up
+/// as a diff of `tests/snapshots/wheel_closed_loop__*.snap`.
+#[derive(Debug)]
+#[allow(dead_code)] // read through Debug by the snapshot
+struct ControllerWork {
+    samples: usize,
+    newton_iterations: usize,
+    retries: usize,
+    retried_samples: usize,
+    failed_samples: usize,
+    diverged_at: Option<f64>,
+}
+
+fn work(run: &ClosedLoop) -> ControllerWork {
+    ControllerWork {
+        samples: run.samples.len(),
+        newton_iterations: run.newton_iterations,
+        retries: run.retries,
+        retried_samples: run.retried_samples(),
+        failed_samples: run.failed_samples(),
+        diverged_at: run.divergence.as_ref().map(|d| d.t),
+    }
+}
+
 /// Largest |error| per output over the last quarter of the run.
 fn late_error(run: &ClosedLoop) -> [f64; 2] {
     let t_end = run.samples.last().unwrap().t;
@@ -135,6 +160,7 @@ fn with_preliminary_feedback_the_errors_stay_small() {
     let e = late_error(&r);
     assert!(e[0] < 5e-3 && e[1] < 5e-3, "late errors {e:?}");
     assert_eq!(r.failed_samples(), 0);
+    insta::assert_debug_snapshot!("with_prefeedback_controller_work", work(&r));
 }
 
 #[test]
