@@ -176,6 +176,23 @@ impl Jacobians {
     }
 }
 
+impl From<PointError> for LinearizeError {
+    fn from(e: PointError) -> Self {
+        match e {
+            PointError::Dimension {
+                what,
+                expected,
+                found,
+            } => Self::Dimension {
+                what,
+                expected,
+                found,
+            },
+            PointError::NonFinite { .. } => Self::NonFinite,
+        }
+    }
+}
+
 /// The state-space linearisation `(A, B, C, D)` of `model` about `point`.
 ///
 /// # Errors
@@ -201,18 +218,7 @@ pub fn linearize<M: DaeModel>(
         h_z,
         h_u,
         ..
-    } = Jacobians::at(model, point).map_err(|e| match e {
-        PointError::Dimension {
-            what,
-            expected,
-            found,
-        } => LinearizeError::Dimension {
-            what,
-            expected,
-            found,
-        },
-        PointError::NonFinite { .. } => LinearizeError::NonFinite,
-    })?;
+    } = Jacobians::at(model, point)?;
     // [F_x' F_z] [dx'; dz] = -[F_x F_u] [dx; du].
     let mut lhs = DMatrix::zeros(ne, nx + nz);
     lhs.columns_mut(0, nx).copy_from(&f_xdot);

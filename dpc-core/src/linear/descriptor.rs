@@ -279,6 +279,23 @@ impl ManifoldRealisation {
     }
 }
 
+impl From<PointError> for DescriptorError {
+    fn from(e: PointError) -> Self {
+        match e {
+            PointError::Dimension {
+                what,
+                expected,
+                found,
+            } => Self::Dimension {
+                what,
+                expected,
+                found,
+            },
+            PointError::NonFinite { what } => Self::NonFinite { what },
+        }
+    }
+}
+
 /// The linear descriptor system of `model` about `point` and the residual there.
 ///
 /// # Errors
@@ -306,18 +323,7 @@ pub fn descriptor_system<M: DaeModel>(
         h_x,
         h_z,
         h_u,
-    } = Jacobians::at(model, point).map_err(|e| match e {
-        PointError::Dimension {
-            what,
-            expected,
-            found,
-        } => DescriptorError::Dimension {
-            what,
-            expected,
-            found,
-        },
-        PointError::NonFinite { what } => DescriptorError::NonFinite { what },
-    })?;
+    } = Jacobians::at(model, point)?;
     if r.iter().any(|v| !v.is_finite()) {
         return Err(DescriptorError::NonFinite { what: "residual" });
     }
