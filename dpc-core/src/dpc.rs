@@ -29,7 +29,7 @@
 
 use crate::consistent::ConstraintStructure;
 use crate::linalg::{FactorError, LinearSolver};
-use crate::numeric::max_or_nan;
+use crate::numeric::{max_or_nan, Time};
 use crate::prefeedback::Prefeedback;
 use crate::reference::{Reference, ReferenceError};
 use crate::sink::MatrixSink;
@@ -130,7 +130,7 @@ pub enum DpcError {
     Reference(#[from] ReferenceError),
     /// The tracking DAE could not be integrated from the measured state, even after retries
     /// with larger `delta`.
-    #[error("no control at t = {t}: inner step {step} did not converge (scaled residual {residual:e}) with delta up to {delta:e} after {retries} retries")]
+    #[error("no control at t = {}: inner step {step} did not converge (scaled residual {residual:e}) with delta up to {delta:e} after {retries} retries", Time(*t))]
     NoSolution {
         /// Sample time.
         t: f64,
@@ -144,7 +144,7 @@ pub enum DpcError {
         residual: f64,
     },
     /// The iteration matrix of the tracking DAE is singular.
-    #[error("singular iteration matrix of the tracking DAE at t = {t}: {source}")]
+    #[error("singular iteration matrix of the tracking DAE at t = {}: {source}", Time(*t))]
     Singular {
         /// Time of the inner step.
         t: f64,

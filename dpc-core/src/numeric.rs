@@ -46,6 +46,38 @@ impl std::fmt::Display for Readable {
     }
 }
 
+/// A time in a message, to the precision that matters: sample times `k h` carry the
+/// rounding of their sum (`1.8900000000000001`), so decimals are cut at ten places and
+/// trailing zeros dropped (`1.89`); outside `1e-4 ..= 1e9` and for non-finite values it is
+/// [`Readable`].
+///
+/// ```
+/// use dpc_core::numeric::Time;
+///
+/// assert_eq!(Time(1.8900000000000001).to_string(), "1.89");
+/// assert_eq!(Time(9.200000000000001).to_string(), "9.2");
+/// assert_eq!(Time(20.0).to_string(), "20");
+/// assert_eq!(Time(0.0).to_string(), "0");
+/// assert_eq!(Time(5.6e-16).to_string(), "5.6e-16");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Time(pub f64);
+
+impl std::fmt::Display for Time {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 {
+            return f.write_str("0");
+        }
+        if !x.is_finite() || !(1e-4..1e9).contains(&x.abs()) {
+            return Readable(x).fmt(f);
+        }
+        let text = format!("{x:.10}");
+        let text = text.trim_end_matches('0').trim_end_matches('.');
+        f.write_str(text)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::{max_or_nan, Readable};

@@ -1,5 +1,7 @@
 //! The integrator's error type.
 
+use crate::numeric::{Readable, Time};
+
 /// Everything that can stop the BDF integrator. No model- or user-caused condition panics.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BdfError {
@@ -22,7 +24,8 @@ pub enum BdfError {
     InvalidOption(String),
     /// The iteration matrix is singular and reducing the step did not help.
     #[error(
-        "singular iteration matrix at t = {t}: unknown {}, equation {}",
+        "singular iteration matrix at t = {}: unknown {}, equation {}",
+        Time(*t),
         unknown.as_deref().unwrap_or("(not identified)"),
         equation.as_deref().unwrap_or("(no zero row)")
     )]
@@ -35,7 +38,7 @@ pub enum BdfError {
         equation: Option<String>,
     },
     /// The model's residual returned NaN or an infinity.
-    #[error("non-finite residual at t = {t} in {equation}")]
+    #[error("non-finite residual at t = {} in {equation}", Time(*t))]
     NonFiniteResidual {
         /// Time of the evaluation.
         t: f64,
@@ -44,7 +47,7 @@ pub enum BdfError {
     },
     /// Newton's method failed repeatedly, down to the minimum step (variable-step mode) or at
     /// the given step (fixed-step mode).
-    #[error("Newton iteration failed at t = {t} with step {h}")]
+    #[error("Newton iteration failed at t = {} with step {}", Time(*t), Readable(*h))]
     NewtonFailed {
         /// Time the step tried to reach.
         t: f64,
@@ -52,7 +55,7 @@ pub enum BdfError {
         h: f64,
     },
     /// The local error test failed repeatedly, down to the minimum step.
-    #[error("error test failed repeatedly at t = {t} with step {h}")]
+    #[error("error test failed repeatedly at t = {} with step {}", Time(*t), Readable(*h))]
     ErrorTestFailed {
         /// Time the step tried to reach.
         t: f64,
@@ -60,7 +63,7 @@ pub enum BdfError {
         h: f64,
     },
     /// More steps than [`super::Options::max_steps`] were needed to reach an output time.
-    #[error("too many steps ({max_steps}) before reaching t = {tout}; stopped at t = {t}")]
+    #[error("too many steps ({max_steps}) before reaching t = {}; stopped at t = {}", Time(*tout), Time(*t))]
     TooManySteps {
         /// The step limit.
         max_steps: usize,
