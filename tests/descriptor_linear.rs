@@ -22,7 +22,7 @@ use dpc::core::linear::{analyze, eigenvalues, Analysis, AnalysisOptions, LinearS
 use dpc::core::linearize::{linearize, OperatingPoint};
 use dpc::nalgebra::Complex;
 use dpc::nalgebra::DMatrix;
-use dpc_models::Wheel;
+use dpc_models::{SliderCrank, SliderCrankJoint, SliderCrankParams, Wheel};
 
 type C64 = Complex<f64>;
 
@@ -66,49 +66,8 @@ dpc::model! {
     }
 }
 
-dpc::model! {
-    /// Slider-crank in descriptor form: crank angle `th` (inertia `j`, torque `tau`, damping
-    /// `bt`), slider position `xs` (mass `ms`, spring `k` to `x0`, damper `c`), connected by a
-    /// massless rod of length `l` from the crank pin at radius `r`; multiplier `lambda`.
-    pub SliderCrankDescriptor {
-        params { j = 0.05, ms = 2.0, r = 0.3, l = 1.0, k = 50.0, x0 = 1.0, c = 0.5, bt = 0.1 }
-        states { th, xs, om, vs }
-        algebraic { lambda }
-        inputs { tau }
-        equations {
-            der(th) = om;
-            der(xs) = vs;
-            j * der(om) == tau - bt * om - lambda * r * xs * sin(th);
-            ms * der(vs) == -k * (xs - x0) - c * vs - lambda * (xs - r * cos(th));
-            0.0 == 0.5 * ((xs - r * cos(th)).powi(2) + (r * sin(th)).powi(2) - l.powi(2));
-        }
-        outputs { angle = th }
-    }
-}
-
-dpc::model! {
-    /// The same slider-crank in the crank angle alone: `xs = X(th)` eliminated by the closed-form
-    /// geometry, Lagrange's equation with `X'` and `X''` written out.
-    pub SliderCrankMinimal {
-        params { j = 0.05, ms = 2.0, r = 0.3, l = 1.0, k = 50.0, x0 = 1.0, c = 0.5, bt = 0.1 }
-        states { th, om }
-        inputs { tau }
-        let sn = sin(th);
-        let cs = cos(th);
-        let q = sqrt(l.powi(2) - (r * sn).powi(2));
-        let xs = r * cs + q;
-        let dx = -r * sn - r.powi(2) * sn * cs / q;
-        let ddx = -r * cs - r.powi(2) * (cs.powi(2) - sn.powi(2)) / q
-            - r.powi(4) * sn.powi(2) * cs.powi(2) / q.powi(3);
-        equations {
-            der(th) = om;
-            (j + ms * dx.powi(2)) * der(om)
-                == tau - bt * om - c * dx.powi(2) * om - k * (xs - x0) * dx
-                    - ms * dx * ddx * om.powi(2);
-        }
-        outputs { angle = th }
-    }
-}
+// The slider-crank in descriptor form and in the crank angle alone are the repository's
+// models (`dpc_models::SliderCrank`, `dpc_models::SliderCrankJoint`).
 
 dpc::model! {
     /// An index-1 DAE with feedthrough: the algebraic `z` depends on the input.
@@ -458,21 +417,21 @@ fn cart_pendulum_multipliers_on_the_manifold() {
 
 #[test]
 fn slider_crank_matches_minimal_coordinates() {
-    let p = SliderCrankDescriptorParams::default();
+    let p = SliderCrankParams::default();
     for th0 in [1.0f64, 2.4, -0.7] {
         let what = format!("slider-crank at {th0}");
         let xs0 = p.r * th0.cos() + (p.l.powi(2) - (p.r * th0.sin()).powi(2)).sqrt();
         let lambda = -p.k * (xs0 - p.x0) / (xs0 - p.r * th0.cos());
         let tau = lambda * p.r * xs0 * th0.sin();
         let (_, real) = linearize_descriptor(
-            &SliderCrankDescriptor::default(),
+            &SliderCrank::default(),
             descriptor_point(&[th0, xs0, 0.0, 0.0], &[0.0; 4], &[lambda], &[tau]),
             &DescriptorOptions::default(),
         )
         .unwrap();
         // The minimal model's residual check: the same torque holds it at rest.
         let min = linearize(
-            &SliderCrankMinimal::default(),
+            &SliderCrankJoint::default(),
             descriptor_point(&[th0, 0.0], &[0.0, 0.0], &[], &[tau]),
         )
         .unwrap();
@@ -768,12 +727,12 @@ fn cart_pendulum_consistent_state_from_given_positions() {
 
 #[test]
 fn slider_crank_consistent_state_matches_minimal_model() {
-    let p = SliderCrankDescriptorParams::default();
+    let p = SliderCrankParams::default();
     let (th, om, tau) = (0.8, 2.5, 0.4);
     // Given: the crank angle and rate right, the slider off the rod's reach and at rest.
     let given = [th, 1.4, om, 0.0];
     let cs = consistent_state(
-        &SliderCrankDescriptor::default(),
+        &SliderCrank::default(),
         0.0,
         &given,
         &[tau],
@@ -789,7 +748,7 @@ fn slider_crank_consistent_state_matches_minimal_model() {
     let x1 = -p.r * th1.sin() - p.r * p.r * th1.sin() * th1.cos() / q;
     assert!((vs - x1 * om1).abs() < 1e-12, "hidden velocity constraint");
     // Crank acceleration from the minimal model's residual at the projected state.
-    let min = SliderCrankMinimal::default();
+    let min = SliderCrankJoint::default();
     let mut r0 = [0.0; 2];
     let mut r1 = [0.0; 2];
     use dpc::core::DaeModel;
