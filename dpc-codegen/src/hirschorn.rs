@@ -425,7 +425,7 @@ pub fn relative_degrees(model: &mut Model) -> Vec<Option<usize>> {
 /// Per output, its relative degree and how it was found.
 ///
 /// Structural first: a breadth-first search on the dependency graph of the equations
-/// (through the implicit ones by the matching of [`implicit_dependencies`]), linear in the
+/// (through the implicit ones by the matching of `implicit_dependencies`), linear in the
 /// model. Then symbolically, by repeated total derivatives along the explicit equations,
 /// which sees cancellations, but only while the derivative stays within the budget of
 /// [`SWELL_FACTOR`]; beyond it the structural value is reported. The derivatives are

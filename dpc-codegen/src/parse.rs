@@ -168,7 +168,7 @@ pub fn parse_model(input: TokenStream) -> syn::Result<ModelDef> {
 /// `syn` parses, prints and drops expressions by recursion, so its stack use grows with the
 /// depth of the user's expression (measured: a 1000-deep Horner expression overflowed the
 /// 8 MiB `rustc` gives a macro inside `syn`'s parser, where plain Rust compiles it). `f` runs
-/// on a stack with at least [`STACK_BASE`] + [`STACK_PER_LEVEL`] × [`nesting_bound`] bytes
+/// on a stack with at least `STACK_BASE` + `STACK_PER_LEVEL` × `nesting_bound` bytes
 /// free, grown on this thread (the proc-macro API is tied to it) only when the current one
 /// has less.
 pub fn with_front_end_stack<R>(input: &TokenStream, f: impl FnOnce() -> R) -> R {

@@ -654,7 +654,7 @@ pub struct DesignOptions {
     /// run's `t_end`) to measure [`Design::linearisation_drift`].
     pub horizon: f64,
     /// The relative degrees the controller's tracking DAE assumes, per output
-    /// ([`TrackingDae::relative_degrees`](crate::TrackingDae::relative_degrees)): when given
+    /// ([`crate::TrackingDae::relative_degrees`]): when given
     /// (non-empty), they are checked against the linearisation at the nominal with
     /// [`check_relative_degrees`] before the analysis, so that a tracking DAE that is
     /// singular at the nominal is reported as such. Empty: not checked.

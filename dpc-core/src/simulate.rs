@@ -20,7 +20,7 @@
 //!   gets a differential state on the constraint manifold (the drift the integration left is
 //!   reported); the derivatives and the multipliers are recomputed for the applied input;
 //! * between samples the plant is integrated by Radau IIA ([`crate::radau`]) with the index of
-//!   each unknown from the structure ([`ConstraintStructure::unknown_index`]: velocities of
+//!   each unknown from the structure ([`ConstraintStructure::stabilised_index`](crate::consistent::ConstraintStructure::stabilised_index): velocities of
 //!   constrained positions index 2, multipliers index 3) for the error scaling;
 //! * a constraint whose residual at a sample, relative to the size of its terms, exceeds
 //!   [`ClosedLoopOptions::constraint_tolerance`] stops the run with

@@ -7,17 +7,17 @@
 //! Runge-Kutta Methods*, LNM 1409, 1989), written for a general implicit `F` rather than
 //! `M y' = f`:
 //!
-//! * [`tableau`]: coefficients, and the transformation `T` with `T^{-1} A^{-1} T` block diagonal
+//! * `tableau`: coefficients, and the transformation `T` with `T^{-1} A^{-1} T` block diagonal
 //!   (one real eigenvalue `gamma`, one complex pair `alpha ± i beta`), computed from the
 //!   eigen-decomposition;
-//! * [`newton`]: the collocation conditions `F(t_n + c_i h, y_n + Z_i, Y'_i) = 0` solved by
+//! * `newton`: the collocation conditions `F(t_n + c_i h, y_n + Z_i, Y'_i) = 0` solved by
 //!   simplified Newton, one real and one complex `n x n` system per iteration;
-//! * [`linear`]: `dF/dy` and `dF/dy'` (from two calls of `iteration_matrix`), the real system in
+//! * `linear`: `dF/dy` and `dF/dy'` (from two calls of `iteration_matrix`), the real system in
 //!   the caller's [`LinearSolver`], the complex one in a dense complex LU (faer);
-//! * [`estimate`]: the embedded error estimate filtered through the real matrix, with the extra
+//! * `estimate`: the embedded error estimate filtered through the real matrix, with the extra
 //!   solve on the first step and after rejections;
-//! * [`control`]: Gustafsson's predictive step-size controller;
-//! * [`dense`]: the collocation polynomial as dense output and as Newton's starting guess;
+//! * `control`: Gustafsson's predictive step-size controller;
+//! * `dense`: the collocation polynomial as dense output and as Newton's starting guess;
 //! * the Jacobian is kept while Newton contracts fast (rate at most
 //!   [`Options::jacobian_reuse_rate`]); the step size, and with it the factorisations, is kept
 //!   when the proposed change is small ([`Options::keep_step_window`]).
