@@ -535,6 +535,25 @@ impl<M: DaeModel> Stabilised<'_, '_, M> {
             &mut sc.f_u,
         );
     }
+
+    /// The terms of the stabilisation: per position constraint `a` (row `g`) and state `j`
+    /// with a kinematic row `i` and a non-zero gradient `g_j = dG_g/dx_j` in `f_x`, the tuple
+    /// `(a, i, j, g_j)`.
+    fn gradient_terms<'s>(
+        &'s self,
+        f_x: &'s DMatrix<f64>,
+    ) -> impl Iterator<Item = (usize, usize, usize, f64)> + 's {
+        self.rows.iter().enumerate().flat_map(move |(a, &g)| {
+            self.kinematic
+                .iter()
+                .enumerate()
+                .filter_map(move |(j, row)| {
+                    let i = (*row)?;
+                    let gj = f_x[(g, j)];
+                    (gj != 0.0).then_some((a, i, j, gj))
+                })
+        })
+    }
 }
 
 impl<M: DaeModel> ImplicitDae for Stabilised<'_, '_, M> {
@@ -548,20 +567,12 @@ impl<M: DaeModel> ImplicitDae for Stabilised<'_, '_, M> {
         self.evaluate(t, y, yp, sc);
         let mu = &y[n..];
         out[..ne].copy_from_slice(&sc.res);
-        for (a, &g) in self.rows.iter().enumerate() {
-            let mut hidden = 0.0;
-            for (j, row) in self.kinematic.iter().enumerate() {
-                let Some(i) = *row else { continue };
-                let gj = sc.f_x[(g, j)];
-                if gj == 0.0 {
-                    continue;
-                }
-                let c = sc.f_xdot[(i, j)];
-                // phi_j = x'_j - F_i / c: the velocity the kinematic row gives.
-                hidden += gj * (yp[j] - sc.res[i] / c);
-                out[i] += c * gj * mu[a];
-            }
-            out[ne + a] = hidden;
+        out[ne..].fill(0.0);
+        for (a, i, j, gj) in self.gradient_terms(&sc.f_x) {
+            let c = sc.f_xdot[(i, j)];
+            // phi_j = x'_j - F_i / c: the velocity the kinematic row gives.
+            out[ne + a] += gj * (yp[j] - sc.res[i] / c);
+            out[i] += c * gj * mu[a];
         }
     }
 
@@ -578,21 +589,14 @@ impl<M: DaeModel> ImplicitDae for Stabilised<'_, '_, M> {
         self.held.iteration_matrix(t, &y[..n], &yp[..n], c, out);
         let sc = &mut *self.held.scratch.borrow_mut();
         self.evaluate(t, y, yp, sc);
-        for (a, &g) in self.rows.iter().enumerate() {
-            for (j, row) in self.kinematic.iter().enumerate() {
-                let Some(i) = *row else { continue };
-                let gj = sc.f_x[(g, j)];
-                if gj == 0.0 {
-                    continue;
-                }
-                let cj = sc.f_xdot[(i, j)];
-                out.set(i, n + a, cj * gj);
-                // d/dx of gj * phi_j with phi_j = -f_j / c_j's x-dependence (dF_i/dx / c).
-                for k in 0..nx {
-                    let d = sc.f_x[(i, k)];
-                    if d != 0.0 {
-                        out.add(ne + a, k, -gj * d / cj);
-                    }
+        for (a, i, j, gj) in self.gradient_terms(&sc.f_x) {
+            let cj = sc.f_xdot[(i, j)];
+            out.set(i, n + a, cj * gj);
+            // d/dx of gj * phi_j with phi_j = -f_j / c_j's x-dependence (dF_i/dx / c).
+            for k in 0..nx {
+                let d = sc.f_x[(i, k)];
+                if d != 0.0 {
+                    out.add(ne + a, k, -gj * d / cj);
                 }
             }
         }
