@@ -1,11 +1,11 @@
 //! The `dpc` command line for the models of this repository (`dpc-models`): the registry of
-//! their entries, handed to the library's entry point [`dpc_cli::main`]. A crate with its own
+//! their entries, handed to the library's entry point [`dpc::cli::main`]. A crate with its own
 //! plants writes the same few lines with its own entries.
 
 use std::process::ExitCode;
 
+use dpc::cli::registry::{Entry, Registry};
 use dpc::core::linalg::NalgebraLu;
-use dpc_cli::registry::{Entry, Registry};
 use dpc_models::{
     CartPendulum, CartPendulumJoint, CartPendulumJointReference, CartPendulumJointTracking,
     CartPendulumReference, CartPendulumTracking, FlexibleJoint, FlexibleJointReference,
@@ -102,5 +102,5 @@ fn registry() -> Registry {
 }
 
 fn main() -> ExitCode {
-    dpc_cli::main(registry())
+    dpc::cli::main(registry())
 }

@@ -5,10 +5,10 @@
 //! minimum-phase, so the analysis predicts plain DPC stable and builds no `K_n`), and both
 //! closed loops track, on the same trajectory.
 
-use dpc_cli::registry::{Entry, Registry};
-use dpc_cli::run::RunResult;
-use dpc_cli::scenario::{Overrides, Scenario};
-use dpc_cli::ScenarioError;
+use dpc::cli::registry::{Entry, Registry};
+use dpc::cli::run::RunResult;
+use dpc::cli::scenario::{Overrides, Scenario};
+use dpc::cli::ScenarioError;
 
 dpc::model! {
     /// The quadruple tank: levels `h1..h4`, outflows `q1..q4` as algebraic unknowns.

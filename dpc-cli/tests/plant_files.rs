@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use dpc_cli::registry::{Entry, Registry};
-use dpc_cli::scenario::{Overrides, Scenario};
+use dpc::cli::registry::{Entry, Registry};
+use dpc::cli::scenario::{Overrides, Scenario};
 use dpc_models::{Wheel, WheelReference, WheelTracking};
 
 fn scenarios() -> PathBuf {

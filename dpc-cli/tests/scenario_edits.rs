@@ -4,8 +4,8 @@
 
 use std::path::PathBuf;
 
+use dpc::cli::registry::{Entry, Registry};
 use dpc::core::linalg::NalgebraLu;
-use dpc_cli::registry::{Entry, Registry};
 use dpc_models::{
     FlexibleJoint, FlexibleJointReference, FlexibleJointTracking, Wheel, WheelReference,
     WheelTracking,
@@ -171,7 +171,7 @@ fn random_scenario_edits_never_panic_nor_write_nan() {
                 {
                     args.extend(["--set".to_string(), set]);
                 }
-                dpc_cli::cli::main_with_args(&registry, &args);
+                dpc::cli::command::main_with_args(&registry, &args);
                 let Ok(text) = std::fs::read_to_string(out.join("summary.json")) else {
                     return Ok(());
                 };

@@ -76,7 +76,7 @@ fn the_wheel_scenario_writes_summary_trajectory_and_plots() {
     let header = csv.lines().next().unwrap();
     assert_eq!(
         header,
-        "t,theta,psi,dphi,dtheta,dpsi,u1,u2,ref_theta,ref_psi,err_theta,err_psi"
+        "t [s],theta,psi,dphi,dtheta,dpsi,u1,u2,ref_theta,ref_psi,err_theta,err_psi"
     );
     assert_eq!(csv.lines().count(), 42);
     for f in ["closed-loop.svg", "closed-loop.png"] {

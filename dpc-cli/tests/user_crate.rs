@@ -1,6 +1,6 @@
 //! The user-crate entry point, proved from outside the workspace: `tests/user-crate` declares
 //! a plant the repository does not have (a quadruple tank with algebraic outflows) with
-//! `dpc::model!`, hands it to `dpc_cli::main` in a few lines, and gets `dpc simulate` and
+//! `dpc::model!`, hands it to `dpc::cli::main` in a few lines, and gets `dpc simulate` and
 //! `dpc model` for it.
 //!
 //! Building that crate takes a minute or two even with the workspace's target directory (the
@@ -88,7 +88,7 @@ fn a_user_crate_gets_the_whole_command_line_for_its_own_plant() {
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     assert_eq!(
         csv.lines().next().unwrap(),
-        "t,h1,h2,h3,h4,v1,v2,ref_h1,ref_h2,err_h1,err_h2"
+        "t [s],h1,h2,h3,h4,v1,v2,ref_h1,ref_h2,err_h1,err_h2"
     );
     let _ = std::fs::remove_dir_all(&out);
 

@@ -4,7 +4,7 @@
 
 use std::process::ExitCode;
 
-use dpc_cli::registry::{Entry, Registry};
+use dpc::cli::registry::{Entry, Registry};
 
 dpc::model! {
     /// The quadruple tank: levels `h1..h4` (cm), pump voltages `v1, v2` (V), orifice
@@ -38,7 +38,7 @@ dpc::model! {
 }
 
 fn main() -> ExitCode {
-    dpc_cli::main(
+    dpc::cli::main(
         Registry::new().model(
             Entry::new(
                 "tanks",

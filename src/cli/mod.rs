@@ -11,11 +11,11 @@
 //! (`simulate`, `sweep`, `analyze`, `models`, `model NAME`) for them in a few lines:
 //!
 //! ```no_run
-//! use dpc_cli::registry::{Entry, Registry};
+//! use dpc::cli::registry::{Entry, Registry};
 //! use dpc_models::{FlexibleJoint, FlexibleJointReference, FlexibleJointTracking};
 //!
 //! fn main() -> std::process::ExitCode {
-//!     dpc_cli::main(Registry::new().model(
+//!     dpc::cli::main(Registry::new().model(
 //!         Entry::new(
 //!             "arm",
 //!             "a flexible-joint arm",
@@ -27,8 +27,9 @@
 //! }
 //! ```
 
-pub mod cli;
+pub mod command;
 pub mod json;
+pub mod location;
 pub mod output;
 pub mod plant_file;
 pub mod plot;
@@ -39,7 +40,7 @@ pub mod scenario;
 pub mod sweep;
 pub mod text;
 
-pub use cli::main;
+pub use command::main;
 
 use dpc::core::design::DesignError;
 use dpc::core::dpc::DpcError;
@@ -81,8 +82,13 @@ pub enum ScenarioError {
     #[error("bad override: {0}")]
     Override(scenario::OverrideError),
     /// The model does not exist.
-    #[error(transparent)]
-    UnknownModel(#[from] registry::UnknownModel),
+    #[error("{origin}: {cause}")]
+    UnknownModel {
+        /// Where the name was written (`FILE:LINE:COLUMN` of a scenario's `model`).
+        origin: String,
+        /// The name and the names that exist.
+        cause: registry::UnknownModel,
+    },
     /// The plant file a scenario names cannot be read or compiled: every error, one
     /// `FILE:LINE:COLUMN: message` line each.
     #[error(transparent)]

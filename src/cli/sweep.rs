@@ -7,14 +7,14 @@ use std::path::Path;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::output::{unique_names, Staging};
-use crate::plot::{sweep_figure, SweepSeries};
-use crate::registry::Registry;
-use crate::report::{write_run, Digest};
-use crate::scenario::{
+use crate::cli::output::{unique_names, Staging};
+use crate::cli::plot::{sweep_figure, SweepSeries};
+use crate::cli::registry::Registry;
+use crate::cli::report::{write_run, Digest};
+use crate::cli::scenario::{
     parse_value, split_assignment, value_text, OverrideError, Overrides, Scenario,
 };
-use crate::ScenarioError;
+use crate::cli::ScenarioError;
 
 /// One swept key and its values.
 #[derive(Debug, Clone, PartialEq)]
@@ -130,7 +130,11 @@ pub fn sweep(
     max_runs: usize,
     progress: bool,
 ) -> Result<Vec<SweepRow>, ScenarioError> {
-    Scenario::load(path, &Overrides::default())?;
+    let base = Scenario::load(path, &Overrides::default())?;
+    let title = match &base.title {
+        Some(t) => format!("{t}: sweep"),
+        None => format!("sweep of {}", path.display()),
+    };
     let count = combination_count(axes)
         .filter(|n| *n <= max_runs)
         .ok_or_else(|| ScenarioError::TooManyRuns {
@@ -186,7 +190,8 @@ pub fn sweep(
     }
     write_table(&staging.path().join("summary.csv"), axes, &rows).map_err(not_written)?;
     let (parameter, series) = plot_series(axes, &rows);
-    sweep_figure(&staging.path().join("sweep"), &parameter, &series).map_err(not_written)?;
+    sweep_figure(&staging.path().join("sweep"), &title, &parameter, &series)
+        .map_err(not_written)?;
     staging.commit()?;
     Ok(rows)
 }
@@ -245,7 +250,7 @@ fn write_table(path: &Path, axes: &[Axis], rows: &[SweepRow]) -> Result<(), Scen
                 fields.push(if s.diverged { "diverged" } else { "ok" }.into());
                 fields.push(
                     s.t_diverged
-                        .map_or(String::new(), |t| crate::text::Num(t).to_string()),
+                        .map_or(String::new(), |t| crate::cli::text::Num(t).to_string()),
                 );
                 // An output this run's model does not have (a swept `model`) stays empty.
                 for o in &outputs {

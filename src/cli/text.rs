@@ -2,7 +2,7 @@
 //! ([`Num`]), long lists and long texts as a short excerpt ([`excerpt`], [`short`]).
 //!
 //! ```
-//! use dpc_cli::text::{excerpt, short, Num};
+//! use dpc::cli::text::{excerpt, short, Num};
 //!
 //! assert_eq!(Num(0.05).to_string(), "0.05");
 //! assert_eq!(Num(1e-300).to_string(), "1e-300");

@@ -11,9 +11,9 @@
 //!     residual: f64,
 //! }
 //!
-//! let text = dpc_cli::json::to_string_pretty(&Report { bound: f64::INFINITY, residual: 1e-15 });
+//! let text = dpc::cli::json::to_string_pretty(&Report { bound: f64::INFINITY, residual: 1e-15 });
 //! assert!(text.unwrap().contains(r#""bound": "inf""#));
-//! let err = dpc_cli::json::to_string_pretty(&Report { bound: 1.0, residual: f64::NAN });
+//! let err = dpc::cli::json::to_string_pretty(&Report { bound: 1.0, residual: f64::NAN });
 //! assert_eq!(err.unwrap_err().to_string(), "`residual` is NaN: it could not be computed");
 //! ```
 

@@ -3,12 +3,12 @@
 //! optional reference and a linear-solver factory.
 //!
 //! The trait object is only the door: [`ScenarioModel::run`] of an [`Entry`] calls
-//! [`crate::run::run`], a generic function monomorphised for the entry's plant, tracking DAE
+//! [`crate::cli::run::run`], a generic function monomorphised for the entry's plant, tracking DAE
 //! and solver, so the controller's update and the plant integration run without dynamic
 //! dispatch, as fast as hand-written code for that model.
 //!
 //! ```
-//! use dpc_cli::registry::{Entry, Registry};
+//! use dpc::cli::registry::{Entry, Registry};
 //! use dpc_models::{Wheel, WheelReference, WheelTracking};
 //!
 //! let registry = Registry::new().model(
@@ -29,9 +29,9 @@ use dpc::core::model::DaeModel;
 use dpc::core::reference::Reference;
 use dpc::core::TrackingDae;
 
-use crate::run::RunResult;
-use crate::scenario::Scenario;
-use crate::ScenarioError;
+use crate::cli::run::RunResult;
+use crate::cli::scenario::Scenario;
+use crate::cli::ScenarioError;
 
 /// A model a scenario can name: what `dpc models` lists, what `dpc model NAME` prints and
 /// how a scenario is run on it. Implemented by [`Entry`]; other implementations (a plant read
@@ -147,7 +147,7 @@ where
     }
 
     fn run(&self, scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError> {
-        crate::run::run(self, scenario, label)
+        crate::cli::run::run(self, scenario, label)
     }
 }
 
@@ -307,14 +307,14 @@ impl Registry {
     }
 
     /// Run `scenario` on the model it names: a registered model, or a plant file (a `model`
-    /// ending in `.dpc`, see [`crate::plant_file`]).
+    /// ending in `.dpc`, see [`crate::cli::plant_file`]).
     ///
     /// The whole loop as library calls: a scenario from text (with a nominal given in part,
     /// completed by the trim solver), the run, and what it found.
     ///
     /// ```
-    /// use dpc_cli::registry::{Entry, Registry};
-    /// use dpc_cli::scenario::{Overrides, Scenario};
+    /// use dpc::cli::registry::{Entry, Registry};
+    /// use dpc::cli::scenario::{Overrides, Scenario};
     /// use dpc_models::{Wheel, WheelReference, WheelTracking};
     ///
     /// let registry = Registry::new().model(
@@ -340,18 +340,24 @@ impl Registry {
     /// assert_eq!(design.nominal.solved_for, ["dphi", "der(psi)"]);
     /// assert!(!design.dpc_stable_without_prefeedback);
     /// assert!(run.closed_loop.divergence.is_none());
-    /// # Ok::<(), dpc_cli::ScenarioError>(())
+    /// # Ok::<(), dpc::cli::ScenarioError>(())
     /// ```
     ///
     /// # Errors
-    /// [`ScenarioError::UnknownModel`], the errors of [`crate::plant_file::load`] and those
+    /// [`ScenarioError::UnknownModel`], the errors of [`crate::cli::plant_file::load`] and those
     /// of [`ScenarioModel::run`].
     pub fn run(&self, scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError> {
-        match crate::plant_file::scenario_path(scenario) {
+        match crate::cli::plant_file::scenario_path(scenario) {
             Some(path) => self
                 .plant_file(&path, &scenario.model)?
                 .run(scenario, label),
-            None => self.get(&scenario.model)?.run(scenario, label),
+            None => self
+                .get(&scenario.model)
+                .map_err(|cause| ScenarioError::UnknownModel {
+                    origin: scenario.locate("model"),
+                    cause,
+                })?
+                .run(scenario, label),
         }
     }
 
@@ -363,7 +369,7 @@ impl Registry {
         if let Some((_, model)) = files.iter().find(|(p, _)| p == path) {
             return Ok(Arc::clone(model));
         }
-        let model: Arc<dyn ScenarioModel> = crate::plant_file::load(path, name)?.into();
+        let model: Arc<dyn ScenarioModel> = crate::cli::plant_file::load(path, name)?.into();
         files.push((path.to_path_buf(), Arc::clone(&model)));
         Ok(model)
     }

@@ -9,9 +9,9 @@ use dpc::core::numeric::max_or_nan;
 use dpc::core::simulate::{ConstraintReport, ControllerEvent};
 use serde::Serialize;
 
-use crate::run::{DesignReport, ModelInUse, RunResult};
-use crate::scenario::Scenario;
-use crate::ScenarioError;
+use crate::cli::run::{DesignReport, ModelInUse, RunResult};
+use crate::cli::scenario::Scenario;
+use crate::cli::ScenarioError;
 
 /// The contents of `summary.json`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -178,9 +178,9 @@ fn write_error(path: &Path, e: impl std::fmt::Display) -> ScenarioError {
 }
 
 /// Write `summary.json` and `trajectory.csv` of `run` into `dir` (created if needed; the
-/// callers write into a [`crate::output::Staging`] directory that is moved into place when
+/// callers write into a [`crate::cli::output::Staging`] directory that is moved into place when
 /// everything is written). Infinite numbers in `summary.json` are written as `"inf"` or
-/// `"-inf"` ([`crate::json`]).
+/// `"-inf"` ([`crate::cli::json`]).
 ///
 /// # Errors
 /// [`ScenarioError::Write`] when a file cannot be written, [`ScenarioError::NotFinite`] when
@@ -190,7 +190,7 @@ pub fn write_run(dir: &Path, run: &RunResult) -> Result<Summary, ScenarioError> 
     let summary = Summary::of(run);
     let path = dir.join("summary.json");
     let json =
-        crate::json::to_string_pretty(&summary).map_err(|cause| ScenarioError::NotFinite {
+        crate::cli::json::to_string_pretty(&summary).map_err(|cause| ScenarioError::NotFinite {
             path: path.display().to_string(),
             cause,
         })?;
@@ -199,18 +199,42 @@ pub fn write_run(dir: &Path, run: &RunResult) -> Result<Summary, ScenarioError> 
     Ok(summary)
 }
 
-/// Write the samples as CSV: `t`, states, inputs, `ref_<output>`, `err_<output>`.
+/// A CSV column header: the name, and its unit in brackets when the model gives one
+/// (`theta [rad]`).
+fn column(name: String, unit: Option<&str>) -> String {
+    match unit {
+        Some(u) if !u.is_empty() => format!("{name} [{u}]"),
+        _ => name,
+    }
+}
+
+/// Write the samples as CSV: `t [s]`, states, inputs, `ref_<output>`, `err_<output>`, each
+/// with its unit where the model gives one. Numbers are written plainly, in the shortest
+/// decimal form that reads back to the same `f64` (no exponent: `0.05`, `0`,
+/// `0.000001`).
 ///
 /// # Errors
 /// [`ScenarioError::Write`] when the file cannot be written.
 pub fn write_trajectory(path: &Path, run: &RunResult) -> Result<(), ScenarioError> {
     let file = std::fs::File::create(path).map_err(|e| write_error(path, e))?;
     let mut out = std::io::BufWriter::new(file);
-    let mut header = vec!["t".to_string()];
-    header.extend(run.names.states.iter().cloned());
-    header.extend(run.names.inputs.iter().cloned());
-    header.extend(run.names.outputs.iter().map(|o| format!("ref_{o}")));
-    header.extend(run.names.outputs.iter().map(|o| format!("err_{o}")));
+    let names = &run.names;
+    let mut header = vec!["t [s]".to_string()];
+    for n in names.states.iter().chain(&names.inputs) {
+        header.push(column(n.clone(), names.unit(n)));
+    }
+    header.extend(
+        names
+            .outputs
+            .iter()
+            .map(|o| column(format!("ref_{o}"), names.unit(o))),
+    );
+    header.extend(
+        names
+            .outputs
+            .iter()
+            .map(|o| column(format!("err_{o}"), names.unit(o))),
+    );
     writeln!(out, "{}", header.join(",")).map_err(|e| write_error(path, e))?;
     for s in &run.closed_loop.samples {
         let row: Vec<String> = std::iter::once(s.t)
@@ -218,7 +242,7 @@ pub fn write_trajectory(path: &Path, run: &RunResult) -> Result<(), ScenarioErro
             .chain(s.u.iter().copied())
             .chain(s.reference.iter().copied())
             .chain(s.error.iter().copied())
-            .map(|v| format!("{v:e}"))
+            .map(|v| v.to_string())
             .collect();
         writeln!(out, "{}", row.join(",")).map_err(|e| write_error(path, e))?;
     }

@@ -2,7 +2,7 @@
 //! (a path ending in `.dpc`, relative to the scenario file) and `dpc model FILE.dpc`.
 //!
 //! A plant file becomes an [`Entry`] of its run-time plant, tracking DAE and references, so
-//! a scenario runs on it through the same [`ScenarioModel`] and [`crate::run::run`] as on a
+//! a scenario runs on it through the same [`ScenarioModel`] and [`crate::cli::run::run`] as on a
 //! compiled model: `simulate`, `sweep` and the comparison runs work unchanged.
 
 use std::path::{Path, PathBuf};
@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use dpc::core::DaeModel;
 use dpc::runtime::{PlantFileError, RelativeDegree, RuntimeModel};
 
-use crate::registry::{Entry, ScenarioModel};
-use crate::scenario::Scenario;
-use crate::ScenarioError;
+use crate::cli::registry::{Entry, ScenarioModel};
+use crate::cli::scenario::Scenario;
+use crate::cli::ScenarioError;
 
 /// Whether a scenario's `model` (or the argument of `dpc model`) names a plant file.
 pub fn is_plant_file(model: &str) -> bool {
@@ -28,8 +28,8 @@ pub fn scenario_path(scenario: &Scenario) -> Option<PathBuf> {
     }
     let dir = scenario
         .source
-        .as_deref()
-        .and_then(Path::parent)
+        .as_ref()
+        .and_then(|s| s.path.parent())
         .unwrap_or(Path::new(""));
     Some(dir.join(&scenario.model))
 }

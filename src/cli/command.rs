@@ -5,13 +5,46 @@
 pub mod analyze;
 pub mod simulate;
 
+use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set once standard output is found closed: nothing more is printed to it.
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+
+/// Print to standard output. When the reader has gone (`dpc sweep ... | head`), the rest of
+/// the text is dropped quietly and the command goes on to finish and write its files; any
+/// other failure to print is said once on standard error.
+pub(crate) fn say(args: std::fmt::Arguments<'_>) {
+    if STDOUT_CLOSED.load(Ordering::Relaxed) {
+        return;
+    }
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_fmt(args).and_then(|()| out.flush()) {
+        STDOUT_CLOSED.store(true, Ordering::Relaxed);
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            let _ = writeln!(
+                std::io::stderr(),
+                "warning: cannot print to standard output ({e}); the results are still written"
+            );
+        }
+    }
+}
+
+/// `println!` through [`say`].
+macro_rules! sayln {
+    ($($arg:tt)*) => {
+        $crate::cli::command::say(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+pub(crate) use sayln;
+
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use thiserror::Error;
 
-use crate::registry::Registry;
-use crate::ScenarioError;
+use crate::cli::registry::Registry;
+use crate::cli::ScenarioError;
 
 /// Descriptor Predictive Control toolkit.
 #[derive(Parser)]
@@ -133,24 +166,30 @@ fn run(registry: &Registry, cli: Cli) -> ExitCode {
         Command::Sweep(args) => simulate::sweep(registry, &args).map_err(CliError::from),
         Command::Models => {
             for m in registry.models() {
-                println!("{:<16} {}", m.name(), m.summary());
+                sayln!("{:<16} {}", m.name(), m.summary());
             }
             Ok(())
         }
-        Command::Model { name } if crate::plant_file::is_plant_file(&name) => {
-            crate::plant_file::describe(std::path::Path::new(&name))
-                .map(|text| print!("{text}"))
+        Command::Model { name } if crate::cli::plant_file::is_plant_file(&name) => {
+            crate::cli::plant_file::describe(std::path::Path::new(&name))
+                .map(|text| say(format_args!("{text}")))
                 .map_err(CliError::from)
         }
         Command::Model { name } => registry
             .get(&name)
-            .map(|m| print!("{}", m.describe()))
-            .map_err(|e| CliError::Scenario(e.into())),
+            .map(|m| say(format_args!("{}", m.describe())))
+            .map_err(|cause| {
+                CliError::Scenario(ScenarioError::UnknownModel {
+                    origin: format!("dpc model {name}"),
+                    cause,
+                })
+            }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("{}", e.report());
+            // A closed standard error has nowhere to report to either.
+            let _ = writeln!(std::io::stderr(), "{}", e.report());
             ExitCode::FAILURE
         }
     }

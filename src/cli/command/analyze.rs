@@ -16,6 +16,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
+
+use crate::cli::command::sayln;
 use dpc::core::linear::transfer::transfer_matrix;
 use dpc::core::linear::{
     analyze, Analysis, AnalysisOptions, LinearError, LinearSystem, Prefeedback,
@@ -24,10 +26,10 @@ use dpc::nalgebra::{Complex, DMatrix};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::json::JsonError;
-use crate::scenario::{check_scalar, check_w_roots, ValueError};
-use crate::text::short;
-use crate::ScenarioError;
+use crate::cli::json::JsonError;
+use crate::cli::scenario::{check_scalar, check_w_roots, ValueError};
+use crate::cli::text::short;
+use crate::cli::ScenarioError;
 
 /// Arguments of `dpc analyze`.
 #[derive(Args)]
@@ -247,7 +249,7 @@ fn parse(
     text: &str,
 ) -> Result<(LinearSystem, AnalysisOptions, Vec<Complex<f64>>), ParseError> {
     let input: Input = toml::from_str(text)
-        .map_err(|e| ParseError::Syntax(crate::toml_error(origin, text, &e)))?;
+        .map_err(|e| ParseError::Syntax(crate::cli::toml_error(origin, text, &e)))?;
     let a = matrix("a", &input.a)?;
     let b = matrix("b", &input.b)?;
     let c = matrix("c", &input.c)?;
@@ -342,8 +344,8 @@ pub fn run(args: &AnalyzeArgs) -> Result<(), AnalyzeError> {
         cause,
     };
     // Checked before anything is printed: no verdict beside a NaN.
-    let json = crate::json::to_string_pretty(&report).map_err(not_computed)?;
-    let transfer_json = crate::json::to_string_pretty(&transfer).map_err(not_computed)?;
+    let json = crate::cli::json::to_string_pretty(&report).map_err(not_computed)?;
+    let transfer_json = crate::cli::json::to_string_pretty(&transfer).map_err(not_computed)?;
     if args.json {
         // Both texts are JSON with infinities as "inf"; join them as values.
         let mut value: serde_json::Value = serde_json::from_str(&json)
@@ -352,9 +354,9 @@ pub fn run(args: &AnalyzeArgs) -> Result<(), AnalyzeError> {
             .map_err(|e| not_computed(JsonError::Other(e.to_string())))?;
         let s = serde_json::to_string_pretty(&value)
             .map_err(|e| not_computed(JsonError::Other(e.to_string())))?;
-        println!("{s}");
+        sayln!("{s}");
     } else {
-        print!("{}", text_report(&path, &report, &transfer));
+        crate::cli::command::say(format_args!("{}", text_report(&path, &report, &transfer)));
     }
     Ok(())
 }
@@ -362,7 +364,7 @@ pub fn run(args: &AnalyzeArgs) -> Result<(), AnalyzeError> {
 fn num(x: f64) -> String {
     let x = if x.abs() < 1e-10 { 0.0 } else { x };
     if !x.is_finite() {
-        return crate::text::Num(x).to_string();
+        return crate::cli::text::Num(x).to_string();
     }
     if x.abs() >= 1e9 {
         // Four decimals of the mantissa, never hundreds of digits.

@@ -1,4 +1,4 @@
-//! One closed-loop run of a scenario on a registered model ([`crate::registry::Entry`]): set
+//! One closed-loop run of a scenario on a registered model ([`crate::cli::registry::Entry`]): set
 //! the plant's and the controller's parameters by name and the roots of `W` at run time,
 //! build the reference, design the preliminary feedback on the controller's model, build the
 //! controller and simulate. [`run`] is generic over the plant, the tracking DAE and the linear
@@ -29,11 +29,11 @@ use dpc::core::tracking::{negated_real_roots, TrackingError};
 use dpc::core::TrackingDae;
 use serde::Serialize;
 
-use crate::registry::Entry;
-use crate::scenario::{
+use crate::cli::registry::Entry;
+use crate::cli::scenario::{
     scalar_reference, About, Design as DesignTable, NominalMotion, Scenario, Values,
 };
-use crate::ScenarioError;
+use crate::cli::ScenarioError;
 
 /// Names of the model's variables, in order.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -44,6 +44,15 @@ pub struct Names {
     pub inputs: Vec<String>,
     /// Outputs.
     pub outputs: Vec<String>,
+    /// The unit of each state, input and output that has one, by name (from the model).
+    pub units: BTreeMap<String, String>,
+}
+
+impl Names {
+    /// The unit of the variable `name`, if the model gives one.
+    pub fn unit(&self, name: &str) -> Option<&str> {
+        self.units.get(name).map(String::as_str)
+    }
 }
 
 /// The parameters and `W` a run actually used, after the scenario's changes.
@@ -181,9 +190,10 @@ impl Reference for ScenarioReference {
 }
 
 impl Runner<'_> {
-    fn invalid(&self, message: String) -> ScenarioError {
+    /// A scenario error about `key`, located where the file writes it.
+    fn invalid(&self, key: &str, message: String) -> ScenarioError {
         ScenarioError::Invalid {
-            origin: format!("scenario for model `{}`", self.scenario.model),
+            origin: self.scenario.locate(key),
             message,
         }
     }
@@ -197,13 +207,16 @@ impl Runner<'_> {
         if v.len() == names.len() {
             Ok(())
         } else {
-            Err(self.invalid(format!(
-                "`{what}` has {} entries, but model `{}` has {} ({})",
-                v.len(),
-                self.scenario.model,
-                names.len(),
-                names.join(", ")
-            )))
+            Err(self.invalid(
+                what,
+                format!(
+                    "`{what}` has {} entries, but model `{}` has {} ({})",
+                    v.len(),
+                    self.scenario.model,
+                    names.len(),
+                    names.join(", ")
+                ),
+            ))
         }
     }
 
@@ -214,11 +227,14 @@ impl Runner<'_> {
         outputs: &model::Names,
     ) -> Result<usize, ScenarioError> {
         outputs.position(name).ok_or_else(|| {
-            self.invalid(format!(
-                "`{what}.{name}`: model `{}` has no output `{name}`; its outputs are {}",
-                self.scenario.model,
-                outputs.join(", ")
-            ))
+            self.invalid(
+                &format!("{what}.{name}"),
+                format!(
+                    "`{what}.{name}`: model `{}` has no output `{name}`; its outputs are {}",
+                    self.scenario.model,
+                    outputs.join(", ")
+                ),
+            )
         })
     }
 
@@ -229,7 +245,7 @@ impl Runner<'_> {
     ) -> Result<ScenarioReference, ScenarioError> {
         let Some(terms) = &self.scenario.reference else {
             return own.map(ScenarioReference::Model).ok_or_else(|| {
-                self.invalid(format!(
+                self.invalid("model", format!(
                     "model `{}` declares no reference; give a `[reference]` table with a list of terms for each of {}",
                     self.scenario.model,
                     outputs.join(", ")
@@ -242,7 +258,10 @@ impl Runner<'_> {
         let mut components = Vec::with_capacity(outputs.len());
         for name in outputs.iter() {
             let t = terms.get(name).ok_or_else(|| {
-                self.invalid(format!("`[reference]` has no entry for output `{name}`"))
+                self.invalid(
+                    "reference",
+                    format!("`[reference]` has no entry for output `{name}`"),
+                )
             })?;
             components.push(scalar_reference(t));
         }
@@ -260,8 +279,9 @@ impl Runner<'_> {
         values: &BTreeMap<String, f64>,
     ) -> Result<P::Params, ScenarioError> {
         for (name, value) in values {
-            set_parameter_by_name(model, &mut params, name, *value)
-                .map_err(|e| self.invalid(format!("`{what}.{name}`: {e}")))?;
+            set_parameter_by_name(model, &mut params, name, *value).map_err(|e| {
+                self.invalid(&format!("{what}.{name}"), format!("`{what}.{name}`: {e}"))
+            })?;
         }
         Ok(params)
     }
@@ -275,11 +295,11 @@ impl Runner<'_> {
         for (name, roots) in &self.scenario.w {
             let i = self.output_index("w", name, outputs)?;
             tracking.set_w_roots(i, roots).map_err(|e| match e {
-                TrackingError::WrongDegree { expected, found, .. } => self.invalid(format!(
+                TrackingError::WrongDegree { expected, found, .. } => self.invalid(&format!("w.{name}"), format!(
                     "`w.{name}` has {found} root(s), but model `{}` is compiled with deg W = {expected} for `{name}` (the degree decides the symbolic derivatives); only the roots can change at run time, more or fewer Hirschorn steps need a change of the model's `tracking` section",
                     self.scenario.model
                 )),
-                other => self.invalid(format!("`w.{name}` = {}: {other}", crate::text::excerpt(roots))),
+                other => self.invalid(&format!("w.{name}"), format!("`w.{name}` = {}: {other}", crate::cli::text::excerpt(roots))),
             })?;
         }
         Ok(())
@@ -300,7 +320,7 @@ impl Runner<'_> {
         let retries = match ladder.retries {
             Some(n) => n,
             None => options.retries_to_reach_max_delta().ok_or_else(|| {
-                self.invalid(format!(
+                self.invalid("controller.retry", format!(
                     "`controller.retry`: no ladder from delta = {} with growth {} reaches max_delta = {max_delta}",
                     s.delta, ladder.growth
                 ))
@@ -318,7 +338,7 @@ impl Runner<'_> {
         let given = &self.scenario.divergence.state;
         for name in given.keys() {
             if states.position(name).is_none() {
-                return Err(self.invalid(format!(
+                return Err(self.invalid(&format!("divergence.state.{name}"), format!(
                     "`divergence.state.{name}`: model `{}` has no state `{name}`; its states are {}",
                     self.scenario.model,
                     states.join(", ")
@@ -441,7 +461,10 @@ where
     .map_err(ScenarioError::Controller)?;
     if s.prefeedback {
         let (table, (_, designed)) = s.design.as_ref().zip(design.as_ref()).ok_or_else(|| {
-            runner.invalid("`prefeedback = true` needs a `[design]` table".into())
+            runner.invalid(
+                "prefeedback",
+                "`prefeedback = true` needs a `[design]` table".into(),
+            )
         })?;
         let law = match table.about {
             About::Nominal => designed.prefeedback(),
@@ -485,6 +508,7 @@ where
             states: structure.states.to_vec(),
             inputs: structure.inputs.to_vec(),
             outputs: structure.outputs.to_vec(),
+            units: BTreeMap::new(),
         },
         model: in_use,
         design: design.map(|(report, _)| report),
@@ -642,12 +666,15 @@ impl Runner<'_> {
                     }
                     for (name, v) in values {
                         let i = names.position(name).ok_or_else(|| {
-                            self.invalid(format!(
-                                "`{key}.{name}`: model `{}` has no {} `{name}`; {}",
-                                self.scenario.model,
-                                kind_name(what),
-                                listed(what, names)
-                            ))
+                            self.invalid(
+                                &format!("{key}.{name}"),
+                                format!(
+                                    "`{key}.{name}`: model `{}` has no {} `{name}`; {}",
+                                    self.scenario.model,
+                                    kind_name(what),
+                                    listed(what, names)
+                                ),
+                            )
                         })?;
                         slots[i] = TrimValue::Fixed(*v);
                     }
@@ -657,16 +684,26 @@ impl Runner<'_> {
         for (name, v) in &nominal.guess {
             let current = match problem.value(structure, name) {
                 Ok(current) => current,
-                Err(e) => return Err(self.invalid(format!("`design.nominal.guess.{name}`: {e}"))),
+                Err(e) => {
+                    return Err(self.invalid(
+                        &format!("design.nominal.guess.{name}"),
+                        format!("`design.nominal.guess.{name}`: {e}"),
+                    ))
+                }
             };
             if !current.is_free() {
-                return Err(self.invalid(format!(
+                return Err(self.invalid(&format!("design.nominal.guess.{name}"), format!(
                     "`design.nominal.guess.{name}`: `{name}` is fixed by the nominal, a guess is for an entry the trim solver computes"
                 )));
             }
             problem
                 .set(structure, name, TrimValue::Free(*v))
-                .map_err(|e| self.invalid(format!("`design.nominal.guess.{name}`: {e}")))?;
+                .map_err(|e| {
+                    self.invalid(
+                        &format!("design.nominal.guess.{name}"),
+                        format!("`design.nominal.guess.{name}`: {e}"),
+                    )
+                })?;
         }
         Ok(problem)
     }
@@ -684,7 +721,7 @@ impl Runner<'_> {
                 Some(r) => roots.push(r.clone()),
                 None => roots.push(
                     negated_real_roots(tracking.w_coefficients(i)).ok_or_else(|| {
-                        self.invalid(format!(
+                        self.invalid("w", format!(
                             "the model's W for `{name}` has complex roots, which the linear design cannot take; give `w.{name}`"
                         ))
                     })?,
@@ -726,7 +763,7 @@ impl Runner<'_> {
                 .iter()
                 .map(|(state, target)| {
                     let state_index = states.position(state).ok_or_else(|| {
-                        self.invalid(format!(
+                        self.invalid(&format!("design.reference_state.{state}"), format!(
                             "`design.reference_state.{state}`: model `{}` has no state `{state}`; its states are {}",
                             self.scenario.model,
                             states.join(", ")
@@ -755,13 +792,17 @@ impl Runner<'_> {
                 .collect(),
         };
         if map.is_empty() {
-            return Err(self.invalid(format!(
+            return Err(self.invalid("design.about", format!(
                 "`design.about = \"reference\"` needs `design.reference_state`: no output of model `{}` is a state",
                 self.scenario.model
             )));
         }
-        ReferenceNominal::new(motion, reference, structure.n_states(), map)
-            .map_err(|e| self.invalid(format!("`design.reference_state`: {e}")))
+        ReferenceNominal::new(motion, reference, structure.n_states(), map).map_err(|e| {
+            self.invalid(
+                "design.reference_state",
+                format!("`design.reference_state`: {e}"),
+            )
+        })
     }
 }
 

@@ -3,16 +3,18 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
-use crate::output::{unique_names, Staging};
-use crate::plot::closed_loop_figure;
-use crate::registry::Registry;
-use crate::report::{write_run, Digest};
-use crate::run::RunResult;
-use crate::scenario::{Overrides, Scenario};
-use crate::sweep::{self, Axis};
-use crate::text::{short, Num};
-use crate::ScenarioError;
+use crate::cli::output::{unique_names, Staging};
+use crate::cli::plot::closed_loop_figure;
+use crate::cli::registry::Registry;
+use crate::cli::report::{write_run, Digest};
+use crate::cli::run::RunResult;
+use crate::cli::scenario::{Overrides, Scenario};
+use crate::cli::sweep::{self, Axis};
+use crate::cli::text::{short, Num};
+use crate::cli::ScenarioError;
 use clap::Args;
+
+use crate::cli::command::sayln;
 use dpc::core::linear::sampled::CriticalPeriod;
 
 /// Arguments of `dpc simulate`.
@@ -93,7 +95,7 @@ pub fn simulate(registry: &Registry, args: &SimulateArgs) -> Result<(), Scenario
         Ok(()) => {
             staging.commit()?;
             let out = &args.out;
-            println!(
+            sayln!(
                 "wrote {}, {}, {} and {}",
                 out.join("summary.json").display(),
                 out.join("trajectory.csv").display(),
@@ -137,7 +139,7 @@ fn write_all(
                         .find_map(|m| m.get(name).copied()),
                 }
             };
-            println!(
+            sayln!(
                 "nominal completed by the trim solver ({} iterations, residual {:.1e}): {}",
                 n.trim_iterations,
                 n.trim_residual,
@@ -152,17 +154,17 @@ fn write_all(
             );
         }
         if n.free_directions > 0 {
-            println!(
+            sayln!(
                 "note: the nominal is not unique ({} free direction(s)); the trim solver took the solution nearest the guesses (x0 for states)",
                 n.free_directions
             );
         }
         if let Some(where_) = &n.not_steady {
-            println!(
+            sayln!(
                 "note: the nominal is not a steady motion up to t_end: {where_}; K_n is designed at t = 0"
             );
         }
-        println!(
+        sayln!(
             "linear analysis of the controller's model: DPC alone predicted {}; eig(Abar_4) = [{}]",
             if d.dpc_stable_without_prefeedback {
                 "stable"
@@ -180,25 +182,25 @@ fn write_all(
             CriticalPeriod::StableUpTo(h) => format!("stable for every h up to {}", Num(h)),
             CriticalPeriod::UnstableAtAnyPeriod => "unstable at every period".to_string(),
         };
-        println!(
+        sayln!(
             "linear sampled-data prediction ({:?} hold): spectral radius {:.4} at h = {}, {critical}",
             summary.scenario.hold,
             d.sampled.spectral_radius,
             Num(summary.scenario.h)
         );
         if d.linearisation_drift > 1e-6 {
-            println!(
+            sayln!(
                 "note: the linearisation changes along the nominal motion by {:.2e} (relative) up to t_end; K_n is designed at t = 0",
                 d.linearisation_drift
             );
         }
     }
-    println!("{}", describe(&summary.digest()));
+    sayln!("{}", describe(&summary.digest()));
     let names = unique_names(compared.iter().map(|(_, label)| label.clone()));
     for ((s, label), name) in compared.iter().zip(names) {
         let r = registry.run(s, label)?;
         let summary = write_run(&dir.join("compare").join(name), &r)?;
-        println!("{}", describe(&summary.digest()));
+        sayln!("{}", describe(&summary.digest()));
         runs.push(r);
     }
     let refs: Vec<&RunResult> = runs.iter().collect();
@@ -223,11 +225,11 @@ pub fn sweep(registry: &Registry, args: &SweepArgs) -> Result<(), ScenarioError>
     )?;
     for row in &rows {
         match &row.outcome {
-            Ok(s) => println!("{}", describe(s)),
-            Err(e) => println!("{}: error: {e}", short(&row.overrides.label())),
+            Ok(s) => sayln!("{}", describe(s)),
+            Err(e) => sayln!("{}: error: {e}", short(&row.overrides.label())),
         }
     }
-    println!(
+    sayln!(
         "wrote {} and {}",
         args.out.join("summary.csv").display(),
         args.out.join("sweep.svg").display()

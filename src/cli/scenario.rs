@@ -59,8 +59,9 @@ use dpc::nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::text::{excerpt, short, Num};
-use crate::ScenarioError;
+use crate::cli::location::Source;
+use crate::cli::text::{excerpt, short, Num};
+use crate::cli::ScenarioError;
 
 /// One closed-loop run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -70,7 +71,7 @@ pub struct Scenario {
     #[serde(default)]
     pub title: Option<String>,
     /// The model's name (see `dpc models`), or the path of a plant file ending in `.dpc`,
-    /// relative to the scenario file (see [`crate::plant_file`]).
+    /// relative to the scenario file (see [`crate::cli::plant_file`]).
     pub model: String,
     /// Initial plant state.
     pub x0: Vec<f64>,
@@ -121,10 +122,10 @@ pub struct Scenario {
     /// Bounds on the work of one run, checked before it starts.
     #[serde(default)]
     pub limits: Limits,
-    /// The file the scenario was read from (not a key): a plant file's path is relative to
-    /// it.
+    /// The file and text the scenario was read from (not a key): a plant file's path is
+    /// relative to it, and errors about a key give its line and column in it.
     #[serde(skip)]
-    pub source: Option<std::path::PathBuf>,
+    pub source: Option<Source>,
 }
 
 /// Bounds on the work and memory of one run, checked before the run starts so that a typo
@@ -262,6 +263,8 @@ pub enum ValueError {
     /// A size that sets the work of the run exceeds its limit.
     #[error("{what} exceeds the limit `limits.{limit_key}` = {limit}; raise it deliberately (`--set limits.{limit_key}=N`) if the run is meant to be this large")]
     Limit {
+        /// The key whose value sets the size (`t_end`, `nu`, `delta`).
+        key: &'static str,
         /// What is too large, with its value (`` `t_end` / `h` gives 5e13 samples ``).
         what: String,
         /// The key of the limit under `[limits]`.
@@ -281,6 +284,27 @@ pub enum ValueError {
     /// An entry of `compare` is malformed.
     #[error("`compare`: {0}")]
     Compare(Box<ScenarioError>),
+}
+
+impl ValueError {
+    /// The key the error is about, as the user wrote it (`design.poles[0]`), to locate it in
+    /// the file; `None` when the cause is an entry of `compare` (which carries its own).
+    pub fn key(&self) -> Option<String> {
+        match self {
+            Self::NotPositive { key, .. }
+            | Self::NotPositiveBound { key, .. }
+            | Self::NonFinite { key, .. }
+            | Self::NotFinite { key, .. }
+            | Self::TooLarge { key, .. }
+            | Self::TooSmall { key, .. } => Some(key.clone()),
+            Self::Order { key, .. } | Self::Limit { key, .. } => Some((*key).to_string()),
+            Self::Tolerance { .. } => Some("plant.rtol".into()),
+            Self::Growth { .. } => Some("controller.retry.growth".into()),
+            Self::Reference { output } => Some(format!("reference.{output}")),
+            Self::NoDesign => Some("prefeedback".into()),
+            Self::Compare(_) => None,
+        }
+    }
 }
 
 /// Every entry of `values` finite.
@@ -757,9 +781,7 @@ impl Scenario {
             path: path.display().to_string(),
             message: e.to_string(),
         })?;
-        let mut scenario = Self::parse(&path.display().to_string(), &text, overrides)?;
-        scenario.source = Some(path.to_path_buf());
-        Ok(scenario)
+        Self::parse(&path.display().to_string(), &text, overrides)
     }
 
     /// Parse scenario text (`origin` names it in errors) and apply `overrides`.
@@ -768,12 +790,12 @@ impl Scenario {
     /// [`ScenarioError`] for malformed TOML, unknown keys, wrong types or invalid values.
     pub fn parse(origin: &str, text: &str, overrides: &Overrides) -> Result<Self, ScenarioError> {
         let mut table: toml::Table =
-            toml::from_str(text).map_err(|e| crate::toml_error(origin, text, &e))?;
+            toml::from_str(text).map_err(|e| crate::cli::toml_error(origin, text, &e))?;
         for (key, value) in &overrides.0 {
             set_path(&mut table, key, value.clone())?;
         }
         let scenario: Scenario = if overrides.0.is_empty() {
-            toml::from_str(text).map_err(|e| crate::toml_error(origin, text, &e))?
+            toml::from_str(text).map_err(|e| crate::cli::toml_error(origin, text, &e))?
         } else {
             // Re-serialise so that errors point at lines of the modified document.
             let modified = toml::to_string(&table).map_err(|e| ScenarioError::Invalid {
@@ -781,18 +803,41 @@ impl Scenario {
                 message: e.to_string(),
             })?;
             toml::from_str(&modified).map_err(|e| {
-                let mut err = crate::toml_error(origin, &modified, &e);
+                let mut err = crate::cli::toml_error(origin, &modified, &e);
                 if let ScenarioError::Invalid { message, .. } = &mut err {
                     message.push_str(&format!(" (after --set {})", short(&overrides.label())));
                 }
                 err
             })?
         };
-        scenario.validate().map_err(|cause| ScenarioError::Value {
-            origin: origin.to_string(),
-            cause,
-        })?;
+        let mut scenario = scenario;
+        scenario.source = Some(Source {
+            path: origin.into(),
+            text: text.into(),
+            overridden: overrides.0.iter().map(|(k, _)| k.clone()).collect(),
+        });
+        scenario
+            .validate()
+            .map_err(|cause| scenario.value_error(cause))?;
         Ok(scenario)
+    }
+
+    /// Where `key` is written: `FILE:LINE:COLUMN` (see [`Source::locate`]), or `scenario` for
+    /// a scenario built in code.
+    pub fn locate(&self, key: &str) -> String {
+        match &self.source {
+            Some(source) => source.locate(key),
+            None => "scenario".into(),
+        }
+    }
+
+    /// A [`ScenarioError::Value`] located at the key it is about.
+    pub fn value_error(&self, cause: ValueError) -> ScenarioError {
+        let origin = match cause.key() {
+            Some(key) => self.locate(&key),
+            None => self.locate(""),
+        };
+        ScenarioError::Value { origin, cause }
     }
 
     /// Checks that need no model: finite positive times, finite vectors, poles and roots of
@@ -941,6 +986,7 @@ impl Scenario {
         let samples = (self.t_end / self.h).round() + 1.0;
         if samples > limits.samples as f64 {
             return Err(ValueError::Limit {
+                key: "t_end",
                 what: format!(
                     "`t_end` / `h` = {} / {} gives {} samples, which",
                     Num(self.t_end),
@@ -954,6 +1000,7 @@ impl Scenario {
         if let Some(nu) = self.nu {
             if nu > limits.nu {
                 return Err(ValueError::Limit {
+                    key: "nu",
                     what: format!("`nu` = {nu}"),
                     limit_key: "nu",
                     limit: limits.nu as u64,
@@ -969,6 +1016,7 @@ impl Scenario {
         let retries = retry.retries.map_or(to_reach, |r| (r as f64).min(to_reach));
         if retries > limits.retries as f64 {
             return Err(ValueError::Limit {
+                key: "delta",
                 what: format!(
                     "the retry ladder from `delta` = {} with `controller.retry.growth` = {} to `max_delta` = {} takes {} retries, which",
                     Num(self.delta),
