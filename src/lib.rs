@@ -1,9 +1,10 @@
-#![doc = include_str!("../README.md")]
+#![doc = include_str!(concat!(env!("OUT_DIR"), "/README.md"))]
 //!
 //! ---
 //!
 //! The facade crate re-exports [`model!`], the numerical library [`core`] (`dpc-core`), and
 //! [`nalgebra`], so generated code and users name the same fixed-size types.
+#![warn(missing_docs)]
 
 // Generated code names `::dpc::...` paths; inside this crate they resolve to itself.
 extern crate self as dpc;
@@ -14,3 +15,26 @@ pub use dpc_core as core;
 pub use dpc_macros::model;
 pub use dpc_runtime as runtime;
 pub use nalgebra;
+
+/// The guide: one page per capability, the pages of the repository's `docs/` directory
+/// (every Rust snippet in them is a doctest of this crate).
+pub mod guide {
+    macro_rules! page {
+        ($(#[$meta:meta])* $module:ident, $file:literal) => {
+            $(#[$meta])*
+            #[doc = include_str!(concat!(env!("OUT_DIR"), "/", $file))]
+            pub mod $module {}
+        };
+    }
+    page!(dsl, "dsl.md");
+    page!(tracking, "tracking.md");
+    page!(controller, "controller.md");
+    page!(closed_loop, "closed_loop.md");
+    page!(own_plant, "own_plant.md");
+    page!(plant_files, "plant_files.md");
+    page!(constrained_plants, "constrained_plants.md");
+    page!(linear_analysis, "linear_analysis.md");
+    page!(sampling_period, "sampling_period.md");
+    page!(bdf, "bdf.md");
+    page!(jacobians, "jacobians.md");
+}

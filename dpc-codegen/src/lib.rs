@@ -17,6 +17,7 @@
 //!   evaluation alike;
 //! * [`emit`]: the derived roots as the generated parameter struct, model type and `DaeModel`
 //!   implementation (tokens only).
+#![warn(missing_docs)]
 
 pub mod ctxt;
 pub mod derive;

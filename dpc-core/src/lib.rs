@@ -22,6 +22,7 @@
 //! * [`reference`](mod@reference): reference trajectories with exact derivatives;
 //! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model;
 //! * [`simulate`]: the sampled closed loop, with the plant integrated accurately between samples.
+#![warn(missing_docs)]
 
 pub mod bdf;
 pub mod consistent;

@@ -59,6 +59,7 @@ impl std::fmt::Display for Readable {
 /// assert_eq!(Time(20.0).to_string(), "20");
 /// assert_eq!(Time(0.0).to_string(), "0");
 /// assert_eq!(Time(5.6e-16).to_string(), "5.6e-16");
+/// assert_eq!(Time(7.108268666266728e-17).to_string(), "7.108e-17");
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Time(pub f64);
@@ -69,8 +70,15 @@ impl std::fmt::Display for Time {
         if x == 0.0 {
             return f.write_str("0");
         }
-        if !x.is_finite() || !(1e-4..1e9).contains(&x.abs()) {
+        if !x.is_finite() {
             return Readable(x).fmt(f);
+        }
+        if !(1e-4..1e9).contains(&x.abs()) {
+            // Four significant digits say where a time so far from 1 is.
+            let text = format!("{x:.3e}");
+            let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+            return write!(f, "{mantissa}e{exponent}");
         }
         let text = format!("{x:.10}");
         let text = text.trim_end_matches('0').trim_end_matches('.');

@@ -3,6 +3,7 @@
 //! A thin shim: all parsing, symbolic work and emission live in the plain library
 //! `dpc-codegen`, where they are unit-, snapshot- and property-tested. Users depend on the
 //! facade crate `dpc`, which re-exports this macro as `dpc::model!`.
+#![warn(missing_docs)]
 
 use proc_macro::TokenStream;
 

@@ -43,6 +43,7 @@
 //! assert!(err.to_string().starts_with("bad.dpc:3:24: unknown identifier `y`"), "{err}");
 //! # Ok::<(), dpc_runtime::PlantFileError>(())
 //! ```
+#![warn(missing_docs)]
 
 mod model;
 pub mod tape;

@@ -19,6 +19,7 @@
 //!
 //! The source files are also read by the snapshot tests of `dpc-codegen`, which store the
 //! code the macro generates for each of them.
+#![warn(missing_docs)]
 
 mod cart_pendulum;
 mod flexible_joint;
