@@ -37,6 +37,27 @@ pub enum JsonError {
     Other(String),
 }
 
+/// Read back a number that [`to_string_pretty`] wrote: a JSON number, or `"inf"` / `"-inf"`.
+///
+/// # Errors
+/// The deserialiser's error for anything else.
+pub fn number_or_inf<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum Number {
+        Finite(f64),
+        Marker(String),
+    }
+    match <Number as serde::Deserialize>::deserialize(d)? {
+        Number::Finite(x) => Ok(x),
+        Number::Marker(m) if m == "inf" => Ok(f64::INFINITY),
+        Number::Marker(m) if m == "-inf" => Ok(f64::NEG_INFINITY),
+        Number::Marker(m) => Err(serde::de::Error::custom(format!(
+            "expected a number, \"inf\" or \"-inf\", found \"{m}\""
+        ))),
+    }
+}
+
 /// `value` as pretty-printed JSON, infinities as `"inf"` / `"-inf"`.
 ///
 /// # Errors

@@ -152,6 +152,21 @@ pub enum ScenarioError {
         /// Whether it holds earlier results (left as they were).
         previous: bool,
     },
+    /// `--shard` is not `K/N` with `1 <= K <= N`.
+    #[error("--shard {text}: expected K/N, part K of N parts with 1 <= K <= N (e.g. --shard 2/8)")]
+    Shard {
+        /// The text given (a short excerpt).
+        text: String,
+    },
+    /// The parts of a sweep cannot be merged.
+    #[error("sweep merge: {0}")]
+    Merge(sweep::MergeError),
+    /// A run of a sweep's part failed; its error as the part recorded it.
+    #[error("{message}")]
+    InPart {
+        /// The error's message.
+        message: String,
+    },
     /// A sweep has more combinations than its limit.
     #[error("the sweep has {} combinations ({}), more than --max-runs = {limit}; raise it deliberately (--max-runs N) if the sweep is meant to be this large", sizes.iter().try_fold(1_usize, |n, k| n.checked_mul(*k)).map_or("more than 2^64".to_string(), |n| n.to_string()), text::short(&sizes.iter().map(ToString::to_string).collect::<Vec<_>>().join(" x ")))]
     TooManyRuns {

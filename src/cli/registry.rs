@@ -225,8 +225,12 @@ where
         };
         let w = entry.tracking.w_coefficients(i);
         s += &format!(
-            "  output {output}: relative degree {degree}, deg W = {}, W coefficients (lowest power first) {w:?}\n",
-            w.len().saturating_sub(1)
+            "  output {output}: relative degree {degree}, deg W = {}, W coefficients (lowest power first) [{}]\n",
+            w.len().saturating_sub(1),
+            w.iter()
+                .map(|c| crate::cli::text::Num(*c).to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     s += &match entry.tracking.remaining_relative_degree() {

@@ -135,7 +135,7 @@ impl Summary {
 /// What a sweep keeps of each run for its table, its plot and its report lines: the verdict
 /// and a few numbers per output, not the samples, events or scenario (those are in the run's
 /// own `summary.json`), so that a sweep's memory does not grow with the length of its runs.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct Digest {
     /// The overrides that made this run.
     pub label: String,
@@ -157,7 +157,9 @@ pub struct Digest {
     pub retries: usize,
     /// Samples on which the controller failed.
     pub failed_samples: usize,
-    /// The largest round-off level `eps * delta^-nu` of a control update.
+    /// The largest round-off level `eps * delta^-nu` of a control update (infinite when the
+    /// controls carry no digit; written as `"inf"`).
+    #[serde(deserialize_with = "crate::cli::json::number_or_inf")]
     pub roundoff_level: f64,
     /// Wall-clock time of the simulation, in seconds.
     pub wall_time_s: f64,

@@ -102,6 +102,8 @@ pub fn combinations(axes: &[Axis]) -> impl Iterator<Item = Overrides> + '_ {
 /// The outcome of one combination.
 #[derive(Debug, Clone)]
 pub struct SweepRow {
+    /// The combination's index ([`combination`]).
+    pub index: usize,
     /// The overrides of this run.
     pub overrides: Overrides,
     /// The directory of its results under `runs/`.
@@ -129,6 +131,7 @@ pub fn sweep(
     out: &Path,
     max_runs: usize,
     progress: bool,
+    shard: Shard,
 ) -> Result<Vec<SweepRow>, ScenarioError> {
     let base = Scenario::load(path, &Overrides::default())?;
     let title = match &base.title {
@@ -149,9 +152,11 @@ pub fn sweep(
     };
     let runs_dir = staging.path().join("runs");
     std::fs::create_dir_all(&runs_dir).map_err(|e| not_written(write_error(&runs_dir, &e)))?;
+    // Names over every combination, so that each shard names its runs as a single run would.
     let names = unique_names((0..count).map(|i| combination(axes, i).label()));
+    let indices: Vec<usize> = (0..count).filter(|i| shard.contains(*i)).collect();
     let bar = if progress {
-        ProgressBar::new(count as u64)
+        ProgressBar::new(indices.len() as u64)
     } else {
         ProgressBar::hidden()
     };
@@ -159,7 +164,7 @@ pub fn sweep(
         ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} elapsed, eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let rows: Vec<SweepRow> = (0..count)
+    let rows: Vec<SweepRow> = indices
         .into_par_iter()
         .map(|index| {
             let overrides = combination(axes, index);
@@ -171,6 +176,7 @@ pub fn sweep(
                 .map(|summary| summary.digest());
             bar.inc(1);
             SweepRow {
+                index,
                 overrides,
                 directory,
                 outcome,
@@ -188,12 +194,309 @@ pub fn sweep(
             });
         }
     }
-    write_table(&staging.path().join("summary.csv"), axes, &rows).map_err(not_written)?;
-    let (parameter, series) = plot_series(axes, &rows);
-    sweep_figure(&staging.path().join("sweep"), &title, &parameter, &series)
-        .map_err(not_written)?;
+    let manifest = Manifest::new(path, &title, axes, shard, count, &rows);
+    write_results(staging.path(), &manifest, axes, &rows).map_err(not_written)?;
     staging.commit()?;
     Ok(rows)
+}
+
+/// `summary.csv`, `sweep.{svg,png}` and the manifest `sweep.json` of `rows` into `dir`.
+fn write_results(
+    dir: &Path,
+    manifest: &Manifest,
+    axes: &[Axis],
+    rows: &[SweepRow],
+) -> Result<(), ScenarioError> {
+    write_table(&dir.join("summary.csv"), axes, rows)?;
+    let (parameter, series) = plot_series(axes, rows);
+    sweep_figure(&dir.join("sweep"), &manifest.title, &parameter, &series)?;
+    let path = dir.join(MANIFEST);
+    let text =
+        crate::cli::json::to_string_pretty(manifest).map_err(|cause| ScenarioError::NotFinite {
+            path: path.display().to_string(),
+            cause,
+        })?;
+    std::fs::write(&path, text + "\n").map_err(|e| write_error(&path, &e))
+}
+
+/// The file in a sweep's output that says which sweep and which part of it the results are.
+pub const MANIFEST: &str = "sweep.json";
+
+/// Part `part` of `count` of a sweep (`--shard K/N`): the combinations whose index is
+/// `part - 1` modulo `count`. The split depends only on the combinations, so a batch system's
+/// job array (Slurm's `--array=1-N`, a Kubernetes indexed job) runs the parts on as many
+/// machines, and [`merge`] joins them into the results of a single run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Shard {
+    /// Which part, from 1.
+    pub part: usize,
+    /// Of how many.
+    pub count: usize,
+}
+
+impl Shard {
+    /// The whole sweep: part 1 of 1.
+    pub const WHOLE: Shard = Shard { part: 1, count: 1 };
+
+    /// Parse `K/N` with `1 <= K <= N`.
+    ///
+    /// # Errors
+    /// [`ScenarioError::Shard`] quoting the text.
+    pub fn parse(text: &str) -> Result<Self, ScenarioError> {
+        let bad = || ScenarioError::Shard {
+            text: crate::cli::text::short(text),
+        };
+        let (k, n) = text.split_once('/').ok_or_else(bad)?;
+        let part: usize = k.trim().parse().map_err(|_| bad())?;
+        let count: usize = n.trim().parse().map_err(|_| bad())?;
+        if part == 0 || part > count {
+            return Err(bad());
+        }
+        Ok(Self { part, count })
+    }
+
+    /// Whether combination `index` belongs to this part.
+    pub fn contains(self, index: usize) -> bool {
+        index % self.count == self.part - 1
+    }
+}
+
+/// What a sweep's output holds, for [`merge`]: the sweep (scenario, title, axes as written,
+/// number of combinations), the part, and per combination run its index with its digest or
+/// its error.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct Manifest {
+    scenario: String,
+    title: String,
+    axes: Vec<(String, Vec<String>)>,
+    combinations: usize,
+    shard: Shard,
+    rows: Vec<ManifestRow>,
+}
+
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct ManifestRow {
+    index: usize,
+    directory: String,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    digest: Option<Digest>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    error: Option<String>,
+}
+
+impl Manifest {
+    fn new(
+        scenario: &Path,
+        title: &str,
+        axes: &[Axis],
+        shard: Shard,
+        combinations: usize,
+        rows: &[SweepRow],
+    ) -> Self {
+        Self {
+            scenario: scenario.file_name().map_or_else(
+                || scenario.display().to_string(),
+                |n| n.to_string_lossy().into(),
+            ),
+            title: title.to_string(),
+            axes: axes
+                .iter()
+                .map(|a| (a.key.clone(), a.values.iter().map(value_text).collect()))
+                .collect(),
+            combinations,
+            shard,
+            rows: rows
+                .iter()
+                .map(|r| ManifestRow {
+                    index: r.index,
+                    directory: r.directory.clone(),
+                    digest: r.outcome.as_ref().ok().cloned(),
+                    error: r.outcome.as_ref().err().map(ToString::to_string),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Why the parts of a sweep cannot be merged.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MergeError {
+    /// No directory was given.
+    #[error("nothing to merge: give the output directories of the sweep's parts")]
+    Nothing,
+    /// A directory has no readable manifest.
+    #[error("{path}: {message} (not the output of `dpc sweep`?)")]
+    Manifest {
+        /// The manifest's path.
+        path: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A part belongs to another sweep than the first.
+    #[error("{path} is part of another sweep than {first}: its {what} differs")]
+    Mismatch {
+        /// The directory that differs.
+        path: String,
+        /// The first directory.
+        first: String,
+        /// What differs (`scenario`, `axes`, `number of parts`).
+        what: &'static str,
+    },
+    /// Two directories hold the same part.
+    #[error("part {part} of {count} is given twice: {first} and {second}")]
+    Duplicate {
+        /// The part.
+        part: usize,
+        /// Of how many.
+        count: usize,
+        /// The first directory holding it.
+        first: String,
+        /// The second.
+        second: String,
+    },
+    /// Parts are missing.
+    #[error("{} of {count} {} missing", match missing.as_slice() { [one] => format!("part {one}"), _ => format!("parts {}", missing.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")) }, if missing.len() == 1 { "is" } else { "are" })]
+    Missing {
+        /// The missing parts.
+        missing: Vec<usize>,
+        /// Of how many.
+        count: usize,
+    },
+}
+
+/// Join the outputs of the parts of a sweep (`dpc sweep ... --shard K/N`, one directory each)
+/// into `out`: the runs, `summary.csv`, the figure and the manifest of a single run of the whole
+/// sweep. The parts are checked to be the parts of one sweep, each exactly once; they are
+/// left as they are, and `out` is written like a sweep's output (atomically).
+///
+/// # Errors
+/// [`ScenarioError::Merge`] when the directories are not the complete parts of one sweep,
+/// and the errors of writing the results.
+pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<SweepRow>, ScenarioError> {
+    let merge_error = ScenarioError::Merge;
+    let first_dir = dirs.first().ok_or(merge_error(MergeError::Nothing))?;
+    let mut parts: Vec<(std::path::PathBuf, Manifest)> = Vec::with_capacity(dirs.len());
+    for dir in dirs {
+        let path = dir.join(MANIFEST);
+        let malformed = |message: String| {
+            merge_error(MergeError::Manifest {
+                path: path.display().to_string(),
+                message,
+            })
+        };
+        let text = std::fs::read_to_string(&path).map_err(|e| malformed(e.to_string()))?;
+        let manifest: Manifest =
+            serde_json::from_str(&text).map_err(|e| malformed(e.to_string()))?;
+        parts.push((dir.clone(), manifest));
+    }
+    let first = parts[0].1.clone();
+    let count = first.shard.count;
+    let mut holder: Vec<Option<&Path>> = vec![None; count];
+    for (dir, m) in &parts {
+        let differs = |what| {
+            merge_error(MergeError::Mismatch {
+                path: dir.display().to_string(),
+                first: first_dir.display().to_string(),
+                what,
+            })
+        };
+        if m.scenario != first.scenario || m.title != first.title {
+            return Err(differs("scenario"));
+        }
+        if m.axes != first.axes || m.combinations != first.combinations {
+            return Err(differs("axes"));
+        }
+        if m.shard.count != count || m.shard.part == 0 || m.shard.part > count {
+            return Err(differs("number of parts"));
+        }
+        let slot = &mut holder[m.shard.part - 1];
+        if let Some(other) = slot {
+            return Err(merge_error(MergeError::Duplicate {
+                part: m.shard.part,
+                count,
+                first: other.display().to_string(),
+                second: dir.display().to_string(),
+            }));
+        }
+        *slot = Some(dir);
+    }
+    let missing: Vec<usize> = (1..=count).filter(|k| holder[k - 1].is_none()).collect();
+    if !missing.is_empty() {
+        return Err(merge_error(MergeError::Missing { missing, count }));
+    }
+    let axes: Vec<Axis> = first
+        .axes
+        .iter()
+        .map(|(key, values)| Axis {
+            key: key.clone(),
+            values: values.iter().map(|v| parse_value(v)).collect(),
+        })
+        .collect();
+    let staging = Staging::new(out, "summary.csv")?;
+    let not_written = |cause: ScenarioError| ScenarioError::NotWritten {
+        target: staging.target().display().to_string(),
+        previous: staging.had_previous(),
+        cause: Box::new(cause),
+    };
+    let runs_dir = staging.path().join("runs");
+    std::fs::create_dir_all(&runs_dir).map_err(|e| not_written(write_error(&runs_dir, &e)))?;
+    let mut rows: Vec<SweepRow> = Vec::with_capacity(first.combinations);
+    for (dir, m) in &parts {
+        for row in &m.rows {
+            if row.digest.is_some() {
+                copy_dir(
+                    &dir.join("runs").join(&row.directory),
+                    &runs_dir.join(&row.directory),
+                )
+                .map_err(not_written)?;
+            }
+            rows.push(SweepRow {
+                index: row.index,
+                overrides: combination(&axes, row.index),
+                directory: row.directory.clone(),
+                outcome: match (&row.digest, &row.error) {
+                    (Some(d), _) => Ok(d.clone()),
+                    (None, message) => Err(ScenarioError::InPart {
+                        message: message.clone().unwrap_or_default(),
+                    }),
+                },
+            });
+        }
+    }
+    rows.sort_by_key(|r| r.index);
+    let manifest = Manifest::new(
+        Path::new(&first.scenario),
+        &first.title,
+        &axes,
+        Shard::WHOLE,
+        first.combinations,
+        &rows,
+    );
+    write_results(staging.path(), &manifest, &axes, &rows).map_err(not_written)?;
+    staging.commit()?;
+    Ok(rows)
+}
+
+/// Copy the directory `from` (files and subdirectories) to the new directory `to`.
+fn copy_dir(from: &Path, to: &Path) -> Result<(), ScenarioError> {
+    std::fs::create_dir_all(to).map_err(|e| write_error(to, &e))?;
+    let entries = std::fs::read_dir(from).map_err(|e| ScenarioError::Read {
+        path: from.display().to_string(),
+        message: e.to_string(),
+    })?;
+    for entry in entries {
+        let entry = entry.map_err(|e| ScenarioError::Read {
+            path: from.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let target = to.join(entry.file_name());
+        if entry.path().is_dir() {
+            copy_dir(&entry.path(), &target)?;
+        } else {
+            std::fs::copy(entry.path(), &target).map_err(|e| write_error(&target, &e))?;
+        }
+    }
+    Ok(())
 }
 
 fn write_error(path: &Path, e: &std::io::Error) -> ScenarioError {
@@ -257,14 +560,14 @@ fn write_table(path: &Path, axes: &[Axis], rows: &[SweepRow]) -> Result<(), Scen
                     fields.push(
                         s.max_abs_error
                             .get(o)
-                            .map_or(String::new(), |v| format!("{v:e}")),
+                            .map_or(String::new(), |v| v.to_string()),
                     );
                 }
                 for o in &outputs {
                     fields.push(
                         s.final_error
                             .get(o)
-                            .map_or(String::new(), |v| format!("{v:e}")),
+                            .map_or(String::new(), |v| v.to_string()),
                     );
                 }
                 fields.extend([

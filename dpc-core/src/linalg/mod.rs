@@ -39,7 +39,11 @@ pub enum FactorError {
     /// `column` is the unknown whose pivot vanished, `row` an equation whose row of the matrix
     /// is entirely zero, when such a row exists (the usual cause: an equation that does not
     /// depend on any unknown at this `alpha/h`).
-    #[error("singular matrix (zero pivot in column {column:?}, zero row {row:?})")]
+    #[error(
+        "singular matrix ({}; {})",
+        column.map_or("pivot not identified".to_string(), |c| format!("zero pivot in column {c}")),
+        row.map_or("no zero row".to_string(), |r| format!("row {r} is zero"))
+    )]
     Singular {
         /// Column (unknown) index whose pivot vanished, when known.
         column: Option<usize>,

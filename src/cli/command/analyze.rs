@@ -440,7 +440,14 @@ fn text_report(name: &str, r: &Analysis, transfer: &[TransferPoint]) -> String {
     ));
     match &r.w {
         Some(w) => o.push_str(&format!(
-            "  partial stabilisation W_i(s) = prod (s + w): w = {w:?}\n"
+            "  partial stabilisation W_i(s) = prod (s + w): w = [{}]\n",
+            w.iter()
+                .map(|roots| format!(
+                    "[{}]",
+                    roots.iter().map(|v| num(*v)).collect::<Vec<_>>().join(", ")
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
         )),
         None => o.push_str("  no partial stabilisation (W = I)\n"),
     }

@@ -33,19 +33,44 @@ pub struct SimulateArgs {
 
 /// Arguments of `dpc sweep`.
 #[derive(Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct SweepArgs {
+    /// `dpc sweep merge DIR... --out DIR`: join the parts of a sharded sweep.
+    #[command(subcommand)]
+    pub command: Option<SweepCommand>,
     /// The scenario file.
-    pub scenario: PathBuf,
+    #[arg(required = true)]
+    pub scenario: Option<PathBuf>,
     /// A swept key and its values, e.g. --set h=0.01,0.05,0.1 (repeatable: all combinations).
     #[arg(long = "set", value_name = "KEY=V1,V2,...", required = true)]
     pub set: Vec<String>,
     /// Output directory (created if needed; earlier sweep results in it are replaced as a
     /// whole when the sweep is written).
-    #[arg(long)]
-    pub out: PathBuf,
+    #[arg(long, required = true)]
+    pub out: Option<PathBuf>,
     /// The most combinations the sweep may have; a larger sweep is an error before any run.
     #[arg(long, value_name = "N", default_value_t = 10_000)]
     pub max_runs: usize,
+    /// Run only part K of N of the combinations (deterministic: those whose index is K - 1
+    /// modulo N), e.g. for a Slurm job array `--shard $SLURM_ARRAY_TASK_ID/8`; join the
+    /// parts' directories with `dpc sweep merge`.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+}
+
+/// Subcommands of `dpc sweep`.
+#[derive(clap::Subcommand)]
+pub enum SweepCommand {
+    /// Join the output directories of the parts of a sweep (`--shard K/N`) into the
+    /// summary.csv, figure and runs of a single run of the whole sweep.
+    Merge {
+        /// The parts' output directories, each part exactly once.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// Output directory of the merged sweep.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn describe(summary: &Digest) -> String {
@@ -183,8 +208,11 @@ fn write_all(
             CriticalPeriod::UnstableAtAnyPeriod => "unstable at every period".to_string(),
         };
         sayln!(
-            "linear sampled-data prediction ({:?} hold): spectral radius {:.4} at h = {}, {critical}",
-            summary.scenario.hold,
+            "linear sampled-data prediction ({} hold): spectral radius {:.4} at h = {}, {critical}",
+            match summary.scenario.hold {
+                dpc::core::simulate::Hold::Input => "input",
+                dpc::core::simulate::Hold::Correction => "correction",
+            },
             d.sampled.spectral_radius,
             Num(summary.scenario.h)
         );
@@ -210,29 +238,55 @@ fn write_all(
 
 /// Run `dpc sweep`.
 pub fn sweep(registry: &Registry, args: &SweepArgs) -> Result<(), ScenarioError> {
+    if let Some(SweepCommand::Merge { parts, out }) = &args.command {
+        let rows = sweep::merge(parts, out)?;
+        report_rows(&rows);
+        sayln!(
+            "merged {} parts ({} runs) into {} and {}",
+            parts.len(),
+            rows.len(),
+            out.join("summary.csv").display(),
+            out.join("sweep.svg").display()
+        );
+        return Ok(());
+    }
+    // clap requires both without the subcommand.
+    let (Some(scenario), Some(out)) = (&args.scenario, &args.out) else {
+        return Ok(());
+    };
     let axes = args
         .set
         .iter()
         .map(|s| Axis::parse(s))
         .collect::<Result<Vec<_>, _>>()?;
+    let shard = match &args.shard {
+        Some(text) => sweep::Shard::parse(text)?,
+        None => sweep::Shard::WHOLE,
+    };
     let rows = sweep::sweep(
         registry,
-        &args.scenario,
+        scenario,
         &axes,
-        &args.out,
+        out,
         args.max_runs,
         std::io::stderr().is_terminal(),
+        shard,
     )?;
-    for row in &rows {
+    report_rows(&rows);
+    sayln!(
+        "wrote {} and {}",
+        out.join("summary.csv").display(),
+        out.join("sweep.svg").display()
+    );
+    Ok(())
+}
+
+/// One line per run of a sweep.
+fn report_rows(rows: &[sweep::SweepRow]) {
+    for row in rows {
         match &row.outcome {
             Ok(s) => sayln!("{}", describe(s)),
             Err(e) => sayln!("{}: error: {e}", short(&row.overrides.label())),
         }
     }
-    sayln!(
-        "wrote {} and {}",
-        args.out.join("summary.csv").display(),
-        args.out.join("sweep.svg").display()
-    );
-    Ok(())
 }
