@@ -169,7 +169,7 @@ fn assert_same_transfer(what: &str, a: &LinearSystem, b: &LinearSystem) {
 
 fn assert_same_analysis(what: &str, a: &Analysis, b: &Analysis) {
     assert_eq!(a.n, b.n, "{what}: state dimensions");
-    assert_eq!(a.index, b.index, "{what}: index of the hat system");
+    assert_eq!(a.nu, b.nu, "{what}: nu of the hat system");
     assert_same_spectrum(
         &format!("{what}: eig(Abar_4)"),
         &a.abar4_eigenvalues,

@@ -59,7 +59,7 @@ fn extracted_control_converges_to_the_linear_limit() {
         },
     )
     .unwrap();
-    assert_eq!(analysis.index, 2);
+    assert_eq!(analysis.nu, 2);
     let x = [0.1, -0.2, 0.3, 0.05, -0.1];
     let exact = &analysis.k_j * DVector::from_column_slice(&x);
     let err = |delta: f64, e: Extraction| {

@@ -73,7 +73,7 @@ fn json_has_the_documented_keys() {
     for key in [
         "n",
         "m",
-        "index",
+        "nu",
         "transmission_zeros",
         "abar4_eigenvalues",
         "dpc_stable",
@@ -88,7 +88,7 @@ fn json_has_the_documented_keys() {
     }
     assert_eq!(v["n"], 5);
     assert_eq!(v["m"], 2);
-    assert_eq!(v["index"], 2);
+    assert_eq!(v["nu"], 2);
     assert_eq!(v["dpc_stable"], false);
     assert_eq!(v["dpc_stable_prefeedback"], true);
     // Eigenvalues as [re, im] pairs, matrices as arrays of rows.
@@ -114,7 +114,7 @@ fn without_w_and_poles_the_defaults_apply() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     // Without W the index is one higher and there are no zeros.
-    assert_eq!(v["index"], 3);
+    assert_eq!(v["nu"], 3);
     assert_eq!(v["transmission_zeros"].as_array().unwrap().len(), 0);
 }
 

@@ -537,3 +537,32 @@ fn sweep_directories_never_collide_and_a_sweep_that_all_fails_exits_non_zero() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(std::fs::read_dir(out.join("runs")).unwrap().count(), 1);
 }
+
+#[test]
+fn roots_of_w_far_beyond_the_plant_are_named_when_the_analysis_fails() {
+    let dir = scratch("w-scale");
+    let path = dir.join("w.toml");
+    let paper = std::fs::read_to_string(
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../examples/linear/paper-4-1.toml"),
+    )
+    .unwrap();
+    std::fs::write(
+        &path,
+        paper.replace("w = [[5.0], [5.0]]", "w = [[5.0], [5e7]]"),
+    )
+    .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_dpc"))
+        .arg("analyze")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("W of output 1 (`w[1]`) has a root at -5.000e7"),
+        "{err}"
+    );
+    assert!(err.contains("times the plant's scale"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+}

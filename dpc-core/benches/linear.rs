@@ -2,7 +2,7 @@
 //! states (normal form with zero dynamics, random orthogonal coordinates).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, Prefeedback};
+use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
 use nalgebra::DMatrix;
 
 fn rng(seed: &mut u64) -> f64 {
@@ -42,7 +42,7 @@ fn random_system(n: usize, m: usize, seed: u64) -> LinearSystem {
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("analyze");
     let opts = AnalysisOptions {
-        prefeedback: Prefeedback::Always,
+        prefeedback: PrefeedbackPolicy::Always,
         ..Default::default()
     };
     for n in [20usize, 50, 100] {

@@ -133,7 +133,7 @@ fn bad_w() {
         ..Default::default()
     };
     let r = analyze(&sys, &ok).unwrap();
-    assert_eq!(r.index, 0);
+    assert_eq!(r.nu, 0);
     assert_eq!(r.finite_dim, 2);
 }
 
@@ -161,14 +161,14 @@ fn bad_poles() {
     let sys = double_integrator();
     let opts = AnalysisOptions {
         poles: Some(vec![Complex::new(-1.0, 1.0), Complex::new(-2.0, 0.0)]),
-        prefeedback: dpc_core::linear::Prefeedback::Always,
+        prefeedback: dpc_core::linear::PrefeedbackPolicy::Always,
         ..Default::default()
     };
     let e = analyze(&sys, &opts).unwrap_err();
     assert!(matches!(e, LinearError::BadPoles { .. }), "{e}");
     let opts = AnalysisOptions {
         poles: Some(vec![Complex::new(-1.0, 0.0)]),
-        prefeedback: dpc_core::linear::Prefeedback::Always,
+        prefeedback: dpc_core::linear::PrefeedbackPolicy::Always,
         ..Default::default()
     };
     let e = analyze(&sys, &opts).unwrap_err();

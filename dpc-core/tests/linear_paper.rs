@@ -81,7 +81,7 @@ fn paper_example_abar4_zeros_and_verdict() {
     let r = analyze(&sys, &opts()).unwrap();
     assert_eq!((r.n, r.m), (5, 2));
     assert_eq!(r.finite_dim, 2);
-    assert_eq!(r.index, 2);
+    assert_eq!(r.nu, 2);
     assert_same_set(&r.transmission_zeros, &[c(-5.0, 0.0), c(-5.0, 0.0)], 1e-6);
     assert_same_set(
         &r.abar4_eigenvalues,

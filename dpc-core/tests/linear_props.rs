@@ -7,7 +7,7 @@
 //! and c), closed loop = zeros ∪ eig(Abar_4), Theorem 3.3, and after the preliminary feedback
 //! eig(Abar_4 + Bbar_2 K_2) = the requested poles.
 
-use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, Prefeedback};
+use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
 use nalgebra::DMatrix;
 use num_complex::Complex;
 use proptest::prelude::*;
@@ -150,12 +150,12 @@ proptest! {
         let poles: Vec<C64> = (0..ni).map(|i| C64::new(-1.0 - 0.5 * i as f64, 0.0)).collect();
         let opts = AnalysisOptions {
             poles: Some(poles.clone()),
-            prefeedback: Prefeedback::Always,
+            prefeedback: PrefeedbackPolicy::Always,
             ..Default::default()
         };
         let r = analyze(&k.sys, &opts).unwrap();
         prop_assert_eq!(r.finite_dim, k.n0);
-        prop_assert_eq!(r.index, k.max_r);
+        prop_assert_eq!(r.nu, k.max_r);
         prop_assert!(same_set(&r.transmission_zeros, &k.zeros, 1e-7),
             "zeros {:?} vs {:?}", r.transmission_zeros, k.zeros);
         for z in &r.transmission_zeros {
@@ -194,12 +194,12 @@ fn hundred_states_random_system() {
     // Realistic size: 100 states, 4 inputs with relative degrees 1..4, zero dynamics of 90.
     let k = build(0x5eed_1234, &[1, 2, 3, 4], 90);
     let opts = AnalysisOptions {
-        prefeedback: Prefeedback::Always,
+        prefeedback: PrefeedbackPolicy::Always,
         ..Default::default()
     };
     let r = analyze(&k.sys, &opts).unwrap();
     assert_eq!(r.finite_dim, 90);
-    assert_eq!(r.index, 4);
+    assert_eq!(r.nu, 4);
     assert!(same_set(&r.transmission_zeros, &k.zeros, 1e-6));
     assert!(r.law.theorem_3_1_residual < 1e-8);
     assert!(r.law.vstar_distance < 1e-7);
@@ -237,11 +237,11 @@ proptest! {
         let opts = AnalysisOptions {
             w: Some(w.clone()),
             poles: Some(poles.clone()),
-            prefeedback: Prefeedback::Always,
+            prefeedback: PrefeedbackPolicy::Always,
             ..Default::default()
         };
         let r = analyze(&k.sys, &opts).unwrap();
-        prop_assert_eq!(r.index, index);
+        prop_assert_eq!(r.nu, index);
         prop_assert_eq!(r.finite_dim, zeros.len());
         prop_assert!(same_set(&r.transmission_zeros, &zeros, 1e-6),
             "zeros {:?} vs {:?}", r.transmission_zeros, zeros);

@@ -1,7 +1,7 @@
 //! The verdict of Theorem 3.2 in the three typical situations: stable without help, stable only
 //! with the preliminary feedback, and non-minimum phase (no preliminary feedback can help).
 
-use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, Prefeedback};
+use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
 use nalgebra::DMatrix;
 use num_complex::Complex;
 
@@ -23,7 +23,7 @@ fn full_hirschorn_leaves_no_infinite_part() {
         ..Default::default()
     };
     let r = analyze(&sys, &opts).unwrap();
-    assert_eq!((r.index, r.finite_dim), (0, 2));
+    assert_eq!((r.nu, r.finite_dim), (0, 2));
     assert!(r.abar4_eigenvalues.is_empty());
     assert!(r.dpc_stable);
     assert!(r.k_n.is_none());
@@ -51,7 +51,7 @@ fn non_minimum_phase_cannot_be_fixed_by_prefeedback() {
     )
     .unwrap();
     let opts = AnalysisOptions {
-        prefeedback: Prefeedback::Always,
+        prefeedback: PrefeedbackPolicy::Always,
         ..Default::default()
     };
     let r = analyze(&sys, &opts).unwrap();

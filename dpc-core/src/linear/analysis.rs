@@ -19,7 +19,7 @@ type C64 = Complex<f64>;
 /// When to build the preliminary feedback `K_n`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Prefeedback {
+pub enum PrefeedbackPolicy {
     /// When `Abar_4` is unstable, or when poles were given.
     #[default]
     Auto,
@@ -40,7 +40,7 @@ pub struct AnalysisOptions {
     /// `max(1, spectral radius of Abar_4)`.
     pub poles: Option<Vec<C64>>,
     /// When to build `K_n`.
-    pub prefeedback: Prefeedback,
+    pub prefeedback: PrefeedbackPolicy,
     /// Points at which to report the transfer matrix `H(s)` of the original system.
     pub transfer_points: Vec<C64>,
     /// Multiple of `max(rows, cols) * eps * sigma_max` below which singular values count as
@@ -53,7 +53,7 @@ impl Default for AnalysisOptions {
         Self {
             w: None,
             poles: None,
-            prefeedback: Prefeedback::Auto,
+            prefeedback: PrefeedbackPolicy::Auto,
             transfer_points: Vec::new(),
             tol_factor: 100.0,
         }
@@ -91,8 +91,9 @@ pub struct Tolerances {
 /// The DPC law of one system (3.8)-(3.10) and its structure in `z = Q^-1 x` coordinates.
 #[derive(Debug, Clone, Serialize)]
 pub struct DpcLaw {
-    /// Nilpotency index `nu` of `N`.
-    pub index: usize,
+    /// `nu`, the nilpotency index of `N`: the number of inner steps whose controls are
+    /// dominated by an inconsistent start (the DPC controller's `DpcOptions::nu`).
+    pub nu: usize,
     /// Dimension of the finite part `z_1`.
     pub finite_dim: usize,
     /// `K_J` in `x` coordinates.
@@ -205,7 +206,7 @@ pub struct Analysis {
     /// Inputs = outputs.
     pub m: usize,
     /// `nu`, the nilpotency index of `N` of the partially stabilised system.
-    pub index: usize,
+    pub nu: usize,
     /// `n_f`.
     pub finite_dim: usize,
     /// `W_i` roots used (`w_ij`).
@@ -401,7 +402,7 @@ pub fn dpc_law(sys: &LinearSystem, tol_factor: f64) -> Result<DpcLaw, LinearErro
     };
 
     Ok(DpcLaw {
-        index: sp.index,
+        nu: sp.index,
         finite_dim: nf,
         k_j,
         k_j_bar,
@@ -441,6 +442,37 @@ pub fn dpc_law(sys: &LinearSystem, tol_factor: f64) -> Result<DpcLaw, LinearErro
 /// Run the whole analysis: partial stabilisation, DPC law, verdict, and (as asked by
 /// `opts.prefeedback`) the preliminary feedback and the analysis of the pre-fed-back system.
 pub fn analyze(sys: &LinearSystem, opts: &AnalysisOptions) -> Result<Analysis, LinearError> {
+    analyze_as_given(sys, opts).map_err(|cause| match w_out_of_scale(sys, opts) {
+        Some((output, root, scale)) => LinearError::WOutOfScale {
+            output,
+            root,
+            scale,
+            cause: Box::new(cause),
+        },
+        None => cause,
+    })
+}
+
+/// Ratio of the largest root of `W` to the plant's scale beyond which a failed analysis is
+/// blamed on `W`'s scale.
+const W_SCALE_RATIO: f64 = 1e3;
+
+/// The output with the largest root of `W`, that root and the plant's scale, when the root
+/// exceeds the scale by more than [`W_SCALE_RATIO`].
+fn w_out_of_scale(sys: &LinearSystem, opts: &AnalysisOptions) -> Option<(usize, f64, f64)> {
+    let norm = sys.a.norm();
+    let scale = if norm > 0.0 { norm } else { 1.0 };
+    let (output, root) = opts
+        .w
+        .as_ref()?
+        .iter()
+        .enumerate()
+        .flat_map(|(i, roots)| roots.iter().map(move |r| (i, r.abs())))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (root > W_SCALE_RATIO * scale).then_some((output, root, scale))
+}
+
+fn analyze_as_given(sys: &LinearSystem, opts: &AnalysisOptions) -> Result<Analysis, LinearError> {
     let hat = match &opts.w {
         Some(w) => sys.stabilise(w)?,
         None => sys.clone(),
@@ -461,15 +493,15 @@ pub fn analyze(sys: &LinearSystem, opts: &AnalysisOptions) -> Result<Analysis, L
 
     let build = ni > 0
         && match opts.prefeedback {
-            Prefeedback::Never => false,
-            Prefeedback::Always => true,
-            Prefeedback::Auto => !law.abar4_stable || opts.poles.is_some(),
+            PrefeedbackPolicy::Never => false,
+            PrefeedbackPolicy::Always => true,
+            PrefeedbackPolicy::Auto => !law.abar4_stable || opts.poles.is_some(),
         };
 
     let mut out = Analysis {
         n: sys.n(),
         m: sys.m(),
-        index: law.index,
+        nu: law.nu,
         finite_dim: law.finite_dim,
         w: opts.w.clone(),
         c_hat: hat.c.clone(),
@@ -512,7 +544,7 @@ pub fn analyze(sys: &LinearSystem, opts: &AnalysisOptions) -> Result<Analysis, L
         Some(p) => p.clone(),
         None => default_poles(&out.law, opts.w.as_deref()),
     };
-    let explicit = opts.poles.is_some() || opts.prefeedback == Prefeedback::Always;
+    let explicit = opts.poles.is_some() || opts.prefeedback == PrefeedbackPolicy::Always;
     let k2 = match place::place(&out.law.abar4, &out.law.bbar2, &poles, opts.tol_factor) {
         Ok(k2) => k2,
         // Asked for explicitly: the caller gets the typed error. In `Auto` mode the verdict

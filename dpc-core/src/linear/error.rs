@@ -91,4 +91,17 @@ pub enum LinearError {
         /// Which decomposition.
         what: &'static str,
     },
+    /// The analysis failed with roots of `W` so far beyond the plant's own scale that the
+    /// partially stabilised system is singular or uncontrollable to working precision.
+    #[error("W of output {output} (`w[{output}]`) has a root at -{root:.3e}, {ratio:.0e} times the plant's scale |A| = {scale:.4}: the partially stabilised system is numerically degenerate ({cause}); choose roots of W within a few decades of the plant's dynamics", ratio = root / scale)]
+    WOutOfScale {
+        /// The output whose `W` has the largest root.
+        output: usize,
+        /// That root's magnitude.
+        root: f64,
+        /// The plant's scale, the Frobenius norm of `A` (1 when `A` is zero).
+        scale: f64,
+        /// The failure it caused.
+        cause: Box<LinearError>,
+    },
 }

@@ -49,7 +49,9 @@ pub mod transfer;
 pub mod vstar;
 pub mod zeros;
 
-pub use analysis::{analyze, dpc_law, Analysis, AnalysisOptions, DpcLaw, Prefeedback, Tolerances};
+pub use analysis::{
+    analyze, dpc_law, Analysis, AnalysisOptions, DpcLaw, PrefeedbackPolicy, Tolerances,
+};
 pub use error::LinearError;
 pub use subspace::eigenvalues;
 pub use system::LinearSystem;

@@ -20,7 +20,7 @@ use clap::Args;
 use crate::cli::command::sayln;
 use dpc::core::linear::transfer::transfer_matrix;
 use dpc::core::linear::{
-    analyze, Analysis, AnalysisOptions, LinearError, LinearSystem, Prefeedback,
+    analyze, Analysis, AnalysisOptions, LinearError, LinearSystem, PrefeedbackPolicy,
 };
 use dpc::nalgebra::{Complex, DMatrix};
 use serde::{Deserialize, Serialize};
@@ -259,9 +259,9 @@ fn parse(
     };
     let sys = LinearSystem::new(a, b, c, d).map_err(ParseError::Linear)?;
     let prefeedback = match input.prefeedback.as_deref() {
-        None | Some("auto") => Prefeedback::Auto,
-        Some("always") => Prefeedback::Always,
-        Some("never") => Prefeedback::Never,
+        None | Some("auto") => PrefeedbackPolicy::Auto,
+        Some("always") => PrefeedbackPolicy::Always,
+        Some("never") => PrefeedbackPolicy::Never,
         Some(other) => return Err(ParseError::Prefeedback(other.to_string())),
     };
     for (i, roots) in input.w.iter().flatten().enumerate() {
@@ -452,10 +452,10 @@ fn text_report(name: &str, r: &Analysis, transfer: &[TransferPoint]) -> String {
         None => o.push_str("  no partial stabilisation (W = I)\n"),
     }
     o.push_str(&format!(
-        "  pencil -Es + F: finite part {}, infinite part {}, index nu = {}\n",
+        "  pencil -Es + F: finite part {}, infinite part {}, nilpotency index nu = {}\n",
         r.finite_dim,
         r.n - r.finite_dim,
-        r.index
+        r.nu
     ));
     o.push_str(&format!(
         "  transmission zeros (eig A_1): {}{}\n",
