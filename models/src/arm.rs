@@ -14,8 +14,9 @@
 //! matrix or the Coriolis terms being written out. The mass matrix stays implicit: the
 //! macro never inverts it.
 //!
-//! [`Arm1`] is [`crate::FlexibleJoint`] with the link inertia split into its centre-of-mass
-//! part and `m r^2`; [`Arm2`] and [`Arm6`] are the plants of `scenarios/arm2.toml` and
+//! The motors and springs are those of [`crate::FlexibleJoint`] (`j_motor = 0.5`, `ks = 40`);
+//! [`Arm1`] is that model with the link inertia split into its centre-of-mass part and
+//! `m r^2`; [`Arm2`] and [`Arm6`] are the plants of `scenarios/arm2.toml` and
 //! `scenarios/arm6.toml`. All three apply two stabilised Hirschorn steps per joint,
 //! `W(s) = (s + 4)^2`; `docs/arms.md` measures the same declaration for other `N` and steps.
 
@@ -33,9 +34,9 @@ dpc::model! {
             /// Link inertias about their centres of mass.
             i_link[N] = 0.02,
             /// Motor inertias.
-            j_motor[N] = 0.05,
+            j_motor[N] = 0.5,
             /// Joint stiffnesses.
-            ks[N] = 100.0,
+            ks[N] = 40.0,
             /// Gravity.
             g = 9.81
         }
@@ -83,9 +84,9 @@ dpc::model! {
             /// Link inertias about their centres of mass.
             i_link[N] = 0.02,
             /// Motor inertias.
-            j_motor[N] = 0.05,
+            j_motor[N] = 0.5,
             /// Joint stiffnesses.
-            ks[N] = 100.0,
+            ks[N] = 40.0,
             /// Gravity.
             g = 9.81
         }
@@ -133,9 +134,9 @@ dpc::model! {
             /// Link inertias about their centres of mass.
             i_link[N] = 0.02,
             /// Motor inertias.
-            j_motor[N] = 0.05,
+            j_motor[N] = 0.5,
             /// Joint stiffnesses.
-            ks[N] = 100.0,
+            ks[N] = 40.0,
             /// Gravity.
             g = 9.81
         }
