@@ -13,11 +13,12 @@ use dpc::core::{Reference, TrackingDae};
 use dpc::nalgebra::{DMatrix, DVector};
 use dpc::runtime::RuntimeModel;
 use dpc_models::{
-    CartPendulum, CartPendulumJoint, CartPendulumJointReference, CartPendulumJointTracking,
-    CartPendulumReference, CartPendulumTracking, FlexibleJoint, FlexibleJointReference,
-    FlexibleJointTracking, Pendulum, SliderCrank, SliderCrankJoint, SliderCrankJointReference,
-    SliderCrankJointTracking, SliderCrankReference, SliderCrankTracking, Wheel, WheelLinear,
-    WheelLinearTracking, WheelReference, WheelTracking,
+    Arm1, Arm1Reference, Arm1Tracking, Arm2, Arm2Reference, Arm2Tracking, Arm6, Arm6Reference,
+    Arm6Tracking, CartPendulum, CartPendulumJoint, CartPendulumJointReference,
+    CartPendulumJointTracking, CartPendulumReference, CartPendulumTracking, FlexibleJoint,
+    FlexibleJointReference, FlexibleJointTracking, Pendulum, SliderCrank, SliderCrankJoint,
+    SliderCrankJointReference, SliderCrankJointTracking, SliderCrankReference, SliderCrankTracking,
+    Wheel, WheelLinear, WheelLinearTracking, WheelReference, WheelTracking,
 };
 use proptest::prelude::*;
 use std::path::Path;
@@ -332,6 +333,21 @@ fn check(name: &str, model: &RuntimeModel, v: &[f64], c: f64, scales: &[f64]) {
             check_tracking::<SliderCrankJointTracking>(model, v, c, scales);
             check_reference::<SliderCrankJointReference>(model, v[0] * 10.0);
         }
+        "Arm1" => {
+            check_plant::<Arm1>(model, v, c, scales);
+            check_tracking::<Arm1Tracking>(model, v, c, scales);
+            check_reference::<Arm1Reference>(model, v[0] * 10.0);
+        }
+        "Arm2" => {
+            check_plant::<Arm2>(model, v, c, scales);
+            check_tracking::<Arm2Tracking>(model, v, c, scales);
+            check_reference::<Arm2Reference>(model, v[0] * 10.0);
+        }
+        "Arm6" => {
+            check_plant::<Arm6>(model, v, c, scales);
+            check_tracking::<Arm6Tracking>(model, v, c, scales);
+            check_reference::<Arm6Reference>(model, v[0] * 10.0);
+        }
         other => panic!("model `{other}` of models/src has no compiled counterpart in this test"),
     }
 }
@@ -339,7 +355,7 @@ fn check(name: &str, model: &RuntimeModel, v: &[f64], c: f64, scales: &[f64]) {
 #[test]
 fn every_repository_model_is_covered() {
     let names: Vec<&str> = repository_models().iter().map(|m| m.1.as_str()).collect();
-    assert_eq!(names.len(), 8, "{names:?}");
+    assert_eq!(names.len(), 11, "{names:?}");
     // The listings are the generated ones.
     for (_, name, model) in repository_models() {
         let want = match name.as_str() {
@@ -351,6 +367,9 @@ fn every_repository_model_is_covered() {
             "CartPendulumJoint" => CartPendulumJointTracking::LISTING,
             "SliderCrank" => SliderCrankTracking::LISTING,
             "SliderCrankJoint" => SliderCrankJointTracking::LISTING,
+            "Arm1" => Arm1Tracking::LISTING,
+            "Arm2" => Arm2Tracking::LISTING,
+            "Arm6" => Arm6Tracking::LISTING,
             other => panic!("{other}"),
         };
         assert_eq!(model.listing(), want, "{name}");
@@ -363,6 +382,9 @@ fn every_repository_model_is_covered() {
             "CartPendulumJoint" => CartPendulumJoint::RELATIVE_DEGREES,
             "SliderCrank" => SliderCrank::RELATIVE_DEGREES,
             "SliderCrankJoint" => SliderCrankJoint::RELATIVE_DEGREES,
+            "Arm1" => Arm1::RELATIVE_DEGREES,
+            "Arm2" => Arm2::RELATIVE_DEGREES,
+            "Arm6" => Arm6::RELATIVE_DEGREES,
             other => panic!("{other}"),
         };
         assert_eq!(model.relative_degrees(), degrees, "{name}");

@@ -7,7 +7,8 @@ use std::process::ExitCode;
 use dpc::cli::registry::{Entry, Registry};
 use dpc::core::linalg::NalgebraLu;
 use dpc_models::{
-    CartPendulum, CartPendulumJoint, CartPendulumJointReference, CartPendulumJointTracking,
+    Arm2, Arm2Reference, Arm2Tracking, Arm6, Arm6Reference, Arm6Tracking, CartPendulum,
+    CartPendulumJoint, CartPendulumJointReference, CartPendulumJointTracking,
     CartPendulumReference, CartPendulumTracking, FlexibleJoint, FlexibleJointReference,
     FlexibleJointTracking, SliderCrank, SliderCrankJoint, SliderCrankJointReference,
     SliderCrankJointTracking, SliderCrankReference, SliderCrankTracking, Wheel, WheelLinear,
@@ -54,6 +55,28 @@ fn registry() -> Registry {
             .reference(FlexibleJointReference::default())
             .listing(FlexibleJointTracking::LISTING)
             .solver(NalgebraLu::<{ FlexibleJointTracking::N_EQUATIONS }>::new),
+        )
+        .model(
+            Entry::new(
+                "arm2",
+                "a planar two-link arm with flexible joints (relative degree 4 per joint); outputs q[0], q[1]; W = (s + 4)^2 on both",
+                Arm2::default(),
+                Arm2Tracking::default(),
+            )
+            .reference(Arm2Reference::default())
+            .listing(Arm2Tracking::LISTING)
+            .solver(NalgebraLu::<{ Arm2Tracking::N_EQUATIONS }>::new),
+        )
+        .model(
+            Entry::new(
+                "arm6",
+                "a planar six-link arm with flexible joints (relative degree 4 per joint); outputs q[0] .. q[5]; W = (s + 4)^2 on each",
+                Arm6::default(),
+                Arm6Tracking::default(),
+            )
+            .reference(Arm6Reference::default())
+            .listing(Arm6Tracking::LISTING)
+            .solver(NalgebraLu::<{ Arm6Tracking::N_EQUATIONS }>::new),
         )
         .model(
             Entry::new(

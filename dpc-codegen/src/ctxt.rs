@@ -39,9 +39,17 @@ impl Ctxt {
         !self.errors.is_empty()
     }
 
-    /// All recorded errors combined into one, or `Ok(())` if there were none.
+    /// All recorded errors combined into one, or `Ok(())` if there were none. An error with
+    /// the message and position of an earlier one is dropped: a family of equations written
+    /// once (`for i in 0..N { ... }`) is checked once per index, and a mistake that does not
+    /// depend on the index is reported once, on its tokens.
     pub fn check(self) -> syn::Result<()> {
-        let mut iter = self.errors.into_iter();
+        let mut seen = std::collections::HashSet::new();
+        let mut iter = self
+            .errors
+            .into_iter()
+            .flat_map(|e| e.into_iter())
+            .filter(|e| seen.insert((e.to_string(), format!("{:?}", e.span()))));
         match iter.next() {
             None => Ok(()),
             Some(mut first) => {

@@ -251,13 +251,13 @@ pub fn listing(model: &Model) -> String {
         let ps: Vec<String> = model
             .params
             .iter()
-            .map(|p| format!("{} = {:?}", p.name, p.default))
+            .map(|p| format!("{} = {:?}", p.label, p.default))
             .collect();
         s += &format!("  params     {}\n", ps.join(", "));
     }
     let names = |d: &[crate::ir::Decl]| {
         d.iter()
-            .map(|x| x.name.to_string())
+            .map(|x| x.label.clone())
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -269,7 +269,7 @@ pub fn listing(model: &Model) -> String {
         s += &format!("  inputs     {}\n", names(&model.inputs));
     }
     for l in &model.intermediates {
-        s += &format!("  let {} = {}\n", l.name, l.text);
+        s += &format!("  let {} = {}\n", l.label, l.text);
     }
     s += "  equations\n";
     for (i, e) in model.equations.iter().enumerate() {
@@ -278,7 +278,7 @@ pub fn listing(model: &Model) -> String {
     if !model.outputs.is_empty() {
         s += "  outputs\n";
         for o in &model.outputs {
-            s += &format!("    {} = {}\n", o.name, o.text);
+            s += &format!("    {} = {}\n", o.label, o.text);
         }
     }
     s
@@ -290,7 +290,7 @@ pub fn derive(model: &mut Model, rows: Option<&[TrackingRow]>) -> Derived {
     let plant_outputs: Vec<(String, ExprId)> = model
         .outputs
         .iter()
-        .map(|o| (o.name.to_string(), o.expr))
+        .map(|o| (o.label.clone(), o.expr))
         .collect();
     let plant = derive_dae(
         model,
@@ -388,11 +388,11 @@ fn derive_tracking(
     let mut residuals: Vec<ExprId> = model.equations.iter().map(|e| e.residual).collect();
     let mut texts: Vec<String> = model.equations.iter().map(|e| e.text.clone()).collect();
     let mut listing_text = listing(model);
-    let input_names: Vec<String> = model.inputs.iter().map(|d| d.name.to_string()).collect();
+    let input_names: Vec<String> = model.inputs.iter().map(|d| d.label.clone()).collect();
     let w_names: Vec<String> = model
         .outputs
         .iter()
-        .map(|o| format!("w_{}", o.name))
+        .map(|o| format!("w_{}", o.label))
         .collect();
     listing_text += &format!(
         "tracking {}: the equations above, with {} as algebraic unknowns and inputs {}, plus\n",
@@ -401,7 +401,7 @@ fn derive_tracking(
         w_names.join(", ")
     );
     for row in rows {
-        let out = model.outputs[row.output].name.to_string();
+        let out = model.outputs[row.output].label.clone();
         let roots: Vec<f64> = tracking
             .entries
             .iter()
@@ -465,7 +465,7 @@ fn derive_references(
     for i in 0..m {
         // Lowering checks that every output has exactly one reference.
         let r = model.references.iter().find(|r| r.output == i)?.clone();
-        texts.push(format!("{} = {}", model.outputs[i].name, r.text));
+        texts.push(format!("{} = {}", model.outputs[i].label, r.text));
         let mut ds = vec![r.expr];
         for k in 0..max_order {
             let d = model.graph.diff(ds[k], time);

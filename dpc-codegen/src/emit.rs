@@ -459,7 +459,7 @@ pub fn emit_dae_type(
     let alg_names = sym_names(&layout.algebraic);
     let input_names = sym_names(&layout.inputs);
     let output_names = str_list(ty.outputs.iter().map(|o| o.0.clone()));
-    let param_names = str_list(model.params.iter().map(|p| p.name.to_string()));
+    let param_names = str_list(model.params.iter().map(|p| p.label.clone()));
     let equations = str_list(ty.equation_texts.iter().cloned());
     let (p_xdot, p_x, p_z, p_u, p_hx) = (
         pattern(f_xdot),

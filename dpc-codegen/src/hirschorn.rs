@@ -587,7 +587,7 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
                 Ok(d) => derivatives.push(d),
                 Err(obstacle) => {
                     let span = entry.map(|e| e.span).unwrap_or(tracking.span);
-                    let out = model.outputs[i].name.to_string();
+                    let out = model.outputs[i].label.clone();
                     let n = roots.len();
                     let steps = format!("{n} step{}", if n == 1 { "" } else { "s" });
                     let limit = format!(
@@ -597,18 +597,18 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
                     let msg = match obstacle {
                         Obstacle::Input(u) if k == 0 => format!(
                             "cannot apply a Hirschorn step to output `{out}`: it depends on input `{}` directly (relative degree 0), so `W` must be empty; write `{out}: []` or remove the entry",
-                            model.inputs[u].name
+                            model.inputs[u].label
                         ),
                         Obstacle::Input(u) => format!(
                             "cannot apply {steps} to output `{out}`: its derivative of order {k} already depends on input `{}` (relative degree {k}), and a further step would need the input's derivative; {limit}",
-                            model.inputs[u].name
+                            model.inputs[u].label
                         ),
                         Obstacle::Algebraic(z) => format!(
                             "cannot apply {steps} to output `{out}`: its derivative of order {k} depends on the algebraic unknown `{}`, whose derivative is not available; {limit}",
-                            model.algebraic[z].name
+                            model.algebraic[z].label
                         ),
                         Obstacle::ImplicitDerivative(j) => {
-                            let x = &model.states[j].name;
+                            let x = &model.states[j].label;
                             format!(
                                 "cannot apply {steps} to output `{out}`: its derivative of order {k} contains `der({x})`, so a further step would need the second derivative of `{x}`, which has no explicit equation `der({x}) = ...`; {limit}, or state `der({x})` explicitly"
                             )
@@ -665,7 +665,7 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
             span,
             format!(
                 "cannot track output `{}` = `{}`: no input reaches it (none of its time derivatives depends on an input, so its relative degree is undefined and the tracking DAE cannot determine the inputs); track an output that an input influences",
-                out.name, out.text
+                out.label, out.text
             ),
         );
         ok = false;

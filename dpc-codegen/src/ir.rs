@@ -73,11 +73,15 @@ impl Symbols {
     }
 }
 
-/// A declared name (state, algebraic unknown, input) with its doc attributes.
+/// A declared name (state, algebraic unknown, input) with its doc attributes. An element of
+/// an indexed family is one of these: `label` `q[2]`, `name` `q_2`.
 #[derive(Clone)]
 pub struct Decl {
-    /// The name as declared.
+    /// The name in generated code: as declared for a scalar, `q_2` for element `q[2]` of a
+    /// family.
     pub name: Ident,
+    /// The name as the user writes it (`q`, `q[2]`), for listings, structures and messages.
+    pub label: String,
     /// Doc comments attached to it.
     pub docs: Vec<Attribute>,
 }
@@ -85,8 +89,11 @@ pub struct Decl {
 /// A parameter with its default.
 #[derive(Clone)]
 pub struct Param {
-    /// The name as declared.
+    /// The name in generated code (a field of the parameter struct): as declared, or `m_2`
+    /// for element `m[2]` of a family.
     pub name: Ident,
+    /// The name as the user writes it (`m`, `m[2]`).
+    pub label: String,
     /// Its default value.
     pub default: f64,
     /// Doc comments attached to it.
@@ -109,8 +116,10 @@ pub struct Equation {
 /// An output `y_i = h_i(t, x, z, u)`.
 #[derive(Clone)]
 pub struct Output {
-    /// The output's name.
+    /// The output's name in generated code (`y`, `y_2`).
     pub name: Ident,
+    /// The output's name as the user writes it (`y`, `y[2]`).
+    pub label: String,
     /// Its expression.
     pub expr: ExprId,
     /// Its expression as written.
@@ -124,6 +133,8 @@ pub struct Output {
 pub struct Intermediate {
     /// The name.
     pub name: Ident,
+    /// The name with the subscripts of a family as written (`c[i in 0..N]`), or the name.
+    pub label: String,
     /// The expression as written.
     pub text: String,
 }
@@ -203,17 +214,17 @@ impl Model {
     pub fn symbol_name(&self, symbol: Symbol) -> String {
         match symbol {
             Symbol::Time => "t".into(),
-            Symbol::State(i) => self.states[i].name.to_string(),
-            Symbol::StateDot(i) => format!("der({})", self.states[i].name),
-            Symbol::Algebraic(i) => self.algebraic[i].name.to_string(),
-            Symbol::AlgebraicDot(i) => format!("der({})", self.algebraic[i].name),
-            Symbol::Input(i) => self.inputs[i].name.to_string(),
-            Symbol::InputDot(i) => format!("der({})", self.inputs[i].name),
-            Symbol::Param(i) => self.params[i].name.to_string(),
+            Symbol::State(i) => self.states[i].label.clone(),
+            Symbol::StateDot(i) => format!("der({})", self.states[i].label),
+            Symbol::Algebraic(i) => self.algebraic[i].label.clone(),
+            Symbol::AlgebraicDot(i) => format!("der({})", self.algebraic[i].label),
+            Symbol::Input(i) => self.inputs[i].label.clone(),
+            Symbol::InputDot(i) => format!("der({})", self.inputs[i].label),
+            Symbol::Param(i) => self.params[i].label.clone(),
             Symbol::IterationCoefficient => "c".into(),
-            Symbol::TrackingInput(i) => format!("w_{}", self.outputs[i].name),
+            Symbol::TrackingInput(i) => format!("w_{}", self.outputs[i].label),
             Symbol::TrackingCoefficient { output, power } => {
-                format!("W_{}[{power}]", self.outputs[output].name)
+                format!("W_{}[{power}]", self.outputs[output].label)
             }
         }
     }

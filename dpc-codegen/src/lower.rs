@@ -10,7 +10,7 @@ use crate::ir::{
     Decl, Equation, Intermediate, Model, Output, Param, Reference, Symbol, Symbols, Tracking,
     TrackingEntry,
 };
-use crate::parse::{Item, ModelDef, SectionBody, SECTION_ORDER};
+use crate::parse::{EquationItem, Item, ModelDef, SectionBody, Subscript, SECTION_ORDER};
 use crate::symbolic::{ExprId, Func, Graph};
 use crate::text::expr_text;
 use proc_macro2::Span;
@@ -59,7 +59,14 @@ enum Binding {
     State(usize),
     Algebraic(usize),
     Input(usize),
-    Let { expr: ExprId, uses_der: bool },
+    Let {
+        expr: ExprId,
+        uses_der: bool,
+    },
+    /// An integer constant of the `consts` section.
+    Const(i64),
+    /// An indexed family: index into `Lowerer::families`.
+    Family(usize),
 }
 
 impl Binding {
@@ -70,8 +77,75 @@ impl Binding {
             Binding::Algebraic(_) => "an algebraic unknown",
             Binding::Input(_) => "an input",
             Binding::Let { .. } => "a `let` intermediate",
+            Binding::Const(_) => "a constant",
+            Binding::Family(_) => "an indexed family",
         }
     }
+
+    /// The plural of [`Binding::describe`], for families.
+    fn plural(self) -> &'static str {
+        match self {
+            Binding::Param(_) => "parameters",
+            Binding::State(_) => "states",
+            Binding::Algebraic(_) => "algebraic unknowns",
+            Binding::Input(_) => "inputs",
+            Binding::Let { .. } => "`let` intermediates",
+            Binding::Const(_) => "constants",
+            Binding::Family(_) => "indexed families",
+        }
+    }
+}
+
+/// An indexed family (`states { q[N] }`, `let c[i in 0..N] = ...`): its lengths and the
+/// scalar binding of every element, row-major. Lowering unrolls families into scalars, so
+/// everything after it sees only elements (`q[2]`, named `q_2` in generated code).
+struct Family {
+    /// What its elements are, plural (`states`).
+    plural: &'static str,
+    /// Its lengths, one per index.
+    dims: Vec<usize>,
+    /// The element bindings; `None` for an element a `let` family does not (yet) define.
+    elements: Vec<Option<Binding>>,
+    /// For a `let` family, its subscripts as written (`[i in 1..N]`), for messages.
+    defined: Option<String>,
+    /// A family whose lengths could not be evaluated (reported there): uses of it are
+    /// not reported again.
+    poisoned: bool,
+    /// Offsets of `let` elements whose expressions had errors (reported there): uses of
+    /// them are not reported again.
+    failed: HashSet<usize>,
+}
+
+/// The row-major list of all multi-indices of a family with lengths `dims`.
+fn multi_indices(dims: &[usize]) -> Vec<Vec<usize>> {
+    let mut out = vec![Vec::new()];
+    for &d in dims {
+        out = out
+            .into_iter()
+            .flat_map(|prefix| {
+                (0..d).map(move |k| {
+                    let mut ix = prefix.clone();
+                    ix.push(k);
+                    ix
+                })
+            })
+            .collect();
+    }
+    out
+}
+
+/// `q[1][2]` and the generated-code name `q_1_2` of an element.
+fn element_names(name: &Ident, ix: &[usize]) -> (String, Ident) {
+    let base = name.unraw().to_string();
+    let label = format!(
+        "{base}{}",
+        ix.iter().map(|k| format!("[{k}]")).collect::<String>()
+    );
+    let code = format!(
+        "{base}{}",
+        ix.iter().map(|k| format!("_{k}")).collect::<String>()
+    );
+    (label, Ident::new(&code, name.span()))
 }
 
 /// Where an expression appears, which decides what it may use.
@@ -101,6 +175,15 @@ struct Lowerer<'a> {
     env: HashMap<String, (Binding, Span)>,
     /// Names of `let`s not yet defined, for a better message on forward use.
     pending_lets: HashSet<String>,
+    /// Indexed families, referred to by [`Binding::Family`].
+    families: Vec<Family>,
+    /// Index variables in scope (`for`, `sum`, the subscripts of a family definition) with
+    /// their current values, innermost last.
+    indices: Vec<(String, i64)>,
+    /// Names the generated code binds (parameters, states, algebraic unknowns, inputs), with
+    /// the name as the user wrote it: an element `q[2]` is bound as `q_2` and must not meet
+    /// a declared `q_2`.
+    code_names: HashMap<String, String>,
 }
 
 /// Lower a parsed model, recording every problem in `cx`. Returns `None` if there were
@@ -112,6 +195,9 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
         symbols: Symbols::default(),
         env: HashMap::new(),
         pending_lets: HashSet::new(),
+        families: Vec::new(),
+        indices: Vec::new(),
+        code_names: HashMap::new(),
     };
     let attrs = lw.doc_attrs(&def.attrs, "the model");
     check_section_order(&def, lw.cx);
@@ -138,17 +224,24 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
             Item::Let(l) => {
                 lw.pending_lets.remove(&l.name.to_string());
                 let text = expr_text(&l.expr);
-                if let Some(expr) = lw.lower_expr(&l.expr, Place::Let) {
-                    let uses_der = lw.uses_derivatives(expr);
-                    lw.declare(&l.name, Binding::Let { expr, uses_der });
-                }
+                let label = if l.subscripts.is_empty() {
+                    if let Some(expr) = lw.lower_expr(&l.expr, Place::Let) {
+                        let uses_der = lw.uses_derivatives(expr);
+                        lw.declare(&l.name, Binding::Let { expr, uses_der });
+                    }
+                    l.name.to_string()
+                } else {
+                    lw.lower_let_family(l)
+                };
                 intermediates.push(Intermediate {
                     name: l.name.clone(),
+                    label,
                     text,
                 });
             }
             Item::Section(section) => {
                 let empty = match &section.body {
+                    SectionBody::Consts(v) => v.is_empty(),
                     SectionBody::Params(v) => v.is_empty(),
                     SectionBody::States(v) | SectionBody::Algebraic(v) | SectionBody::Inputs(v) => {
                         v.is_empty()
@@ -168,138 +261,91 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                     );
                 }
                 match &section.body {
+                    SectionBody::Consts(list) => {
+                        for c in list {
+                            if let Some(v) = lw.eval_int(&c.value) {
+                                lw.declare(&c.name, Binding::Const(v));
+                            }
+                        }
+                    }
                     SectionBody::Params(list) => {
                         for p in list {
                             let docs = lw.doc_attrs(&p.attrs, "a parameter");
-                            let default = match numeric_literal(&p.default) {
-                                Some(v) if !v.is_finite() => {
-                                    lw.cx.error_spanned_by(
-                                        &p.default,
-                                        format!(
-                                            "the default of parameter `{}` is out of range for `f64`: `{}` overflows to infinity (the largest finite value is about 1.8e308)",
-                                            p.name,
-                                            expr_text(&p.default)
-                                        ),
-                                    );
-                                    Some(0.0)
-                                }
-                                other => other,
-                            };
-                            let default = default.unwrap_or_else(|| {
-                                lw.cx.error_spanned_by(
-                                    &p.default,
-                                    format!(
-                                        "the default of parameter `{}` must be a number such as `1.0` or `-9.81`, found `{}`",
-                                        p.name,
-                                        expr_text(&p.default)
-                                    ),
+                            if p.dims.is_empty() {
+                                let default = lw.param_default(&p.default, &p.name.to_string());
+                                lw.declare(&p.name, Binding::Param(params.len()));
+                                lw.claim_code_name(&p.name, &p.name.unraw().to_string(), None);
+                                params.push(Param {
+                                    name: p.name.clone(),
+                                    label: p.name.unraw().to_string(),
+                                    default,
+                                    docs,
+                                });
+                                continue;
+                            }
+                            let Some(dims) = lw.eval_dims(&p.dims) else {
+                                lw.declare_family(
+                                    &p.name,
+                                    Binding::Param(0),
+                                    Vec::new(),
+                                    Vec::new(),
                                 );
-                                0.0
-                            });
-                            lw.declare(&p.name, Binding::Param(params.len()));
-                            params.push(Param {
-                                name: p.name.clone(),
-                                default,
-                                docs,
-                            });
+                                continue;
+                            };
+                            let defaults = lw.param_defaults(&p.default, &p.name, &dims);
+                            let elements = multi_indices(&dims)
+                                .into_iter()
+                                .zip(defaults)
+                                .map(|(ix, default)| {
+                                    let (label, name) = element_names(&p.name, &ix);
+                                    lw.claim_code_name(&name, &label, Some(&p.name));
+                                    params.push(Param {
+                                        name,
+                                        label,
+                                        default,
+                                        docs: docs.clone(),
+                                    });
+                                    Some(Binding::Param(params.len() - 1))
+                                })
+                                .collect();
+                            lw.declare_family(&p.name, Binding::Param(0), dims, elements);
                         }
                     }
                     SectionBody::States(list) => {
-                        for n in list {
-                            lw.declare(&n.name, Binding::State(states.len()));
-                            states.push(Decl {
-                                name: n.name.clone(),
-                                docs: lw.doc_attrs(&n.attrs, "a state"),
-                            });
-                        }
+                        lw.declare_decls(list, &mut states, Binding::State);
                     }
                     SectionBody::Algebraic(list) => {
-                        for n in list {
-                            lw.declare(&n.name, Binding::Algebraic(algebraic.len()));
-                            algebraic.push(Decl {
-                                name: n.name.clone(),
-                                docs: lw.doc_attrs(&n.attrs, "an algebraic unknown"),
-                            });
-                        }
+                        lw.declare_decls(list, &mut algebraic, Binding::Algebraic);
                     }
                     SectionBody::Inputs(list) => {
-                        for n in list {
-                            lw.declare(&n.name, Binding::Input(inputs.len()));
-                            inputs.push(Decl {
-                                name: n.name.clone(),
-                                docs: lw.doc_attrs(&n.attrs, "an input"),
-                            });
-                        }
+                        lw.declare_decls(list, &mut inputs, Binding::Input);
                     }
                     SectionBody::Equations(list) => {
                         equations_keyword = Some(section.keyword.clone());
                         let mut explicit_seen: HashMap<usize, Span> = HashMap::new();
-                        for e in list {
-                            if let Some(eq) = lw.lower_equation(e) {
-                                if let Some((j, _)) = eq.explicit {
-                                    if let Some(prev) = explicit_seen.insert(j, eq.span) {
-                                        let mut err = syn::Error::new(
-                                            eq.span,
-                                            format!(
-                                                "state `{}` has a second explicit equation `der({0}) = ...`; write at most one per state (make the other implicit with `==`)",
-                                                states[j].name
-                                            ),
-                                        );
-                                        err.combine(syn::Error::new(
-                                            prev,
-                                            "first explicit equation here",
-                                        ));
-                                        lw.cx.push(err);
-                                    }
-                                }
-                                equations.push(eq);
-                            }
-                        }
+                        lw.lower_equation_items(list, &states, &mut explicit_seen, &mut equations);
                     }
                     SectionBody::Outputs(list) => {
                         for o in list {
-                            if outputs.iter().any(|p| p.name == o.name) {
-                                lw.cx.error_spanned_by(
-                                    &o.name,
-                                    format!("duplicate output `{}`", o.name),
-                                );
-                                continue;
-                            }
                             if let Some(msg) = crate::names::check(&o.name, "an output") {
                                 lw.cx.error_spanned_by(&o.name, msg);
                                 continue;
                             }
                             let docs = lw.doc_attrs(&o.attrs, "an output");
-                            let lowered = match &o.expr {
-                                Some(e) => {
-                                    lw.lower_expr(e, Place::Output).map(|x| (x, expr_text(e)))
+                            for (label, name, expr, text) in lw.lower_output(o) {
+                                if outputs.iter().any(|p| p.label == label || p.name == name) {
+                                    lw.cx.error_spanned_by(
+                                        &o.name,
+                                        format!("duplicate output `{label}`"),
+                                    );
+                                    continue;
                                 }
-                                None => {
-                                    let name = &o.name;
-                                    let path: Expr = syn::parse_quote_spanned!(name.span()=> #name);
-                                    match lw.env.get(&o.name.to_string()) {
-                                        Some(_) => lw
-                                            .lower_expr(&path, Place::Output)
-                                            .map(|x| (x, o.name.to_string())),
-                                        None => {
-                                            lw.cx.error_spanned_by(
-                                                &o.name,
-                                                format!(
-                                                    "output `{}` is not a declared name; write `{0} = <expression>` to define it",
-                                                    o.name
-                                                ),
-                                            );
-                                            None
-                                        }
-                                    }
-                                }
-                            };
-                            if let Some((expr, text)) = lowered {
                                 outputs.push(Output {
-                                    name: o.name.clone(),
+                                    name,
+                                    label,
                                     expr,
                                     text,
-                                    docs,
+                                    docs: docs.clone(),
                                 });
                             }
                         }
@@ -307,37 +353,44 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                     SectionBody::References(list) => {
                         let mut seen = HashSet::new();
                         for r in list {
-                            let Some(index) = outputs.iter().position(|o| o.name == r.output)
-                            else {
-                                lw.cx.error_spanned_by(
-                                    &r.output,
-                                    format!(
-                                        "`{}` is not an output; references are given per output",
-                                        r.output
-                                    ),
-                                );
+                            let Some(targets) = lw.target_outputs(
+                                &r.output,
+                                &r.subscripts,
+                                &outputs,
+                                "references are given per output",
+                            ) else {
                                 continue;
                             };
-                            if !seen.insert(index) {
-                                lw.cx.error_spanned_by(
-                                    &r.output,
-                                    format!("duplicate reference for output `{}`", r.output),
-                                );
-                                continue;
-                            }
-                            if let Some(expr) = lw.lower_expr(&r.expr, Place::Reference) {
-                                references.push(Reference {
-                                    output: index,
-                                    expr,
-                                    text: expr_text(&r.expr),
-                                });
+                            for (index, bound) in targets {
+                                if !seen.insert(index) {
+                                    lw.cx.error_spanned_by(
+                                        &r.output,
+                                        format!(
+                                            "duplicate reference for output `{}`",
+                                            outputs[index].label
+                                        ),
+                                    );
+                                    continue;
+                                }
+                                let depth = lw.indices.len();
+                                lw.indices.extend(bound);
+                                let text = lw.indexed_text(&r.expr);
+                                let expr = lw.lower_expr(&r.expr, Place::Reference);
+                                lw.indices.truncate(depth);
+                                if let Some(expr) = expr {
+                                    references.push(Reference {
+                                        output: index,
+                                        expr,
+                                        text,
+                                    });
+                                }
                             }
                         }
                         let missing: Vec<String> = outputs
                             .iter()
                             .enumerate()
                             .filter(|(i, _)| !seen.contains(i))
-                            .map(|(_, o)| format!("`{}`", o.name))
+                            .map(|(_, o)| format!("`{}`", o.label))
                             .collect();
                         if !missing.is_empty() && !list.is_empty() {
                             lw.cx.error_spanned_by(
@@ -352,27 +405,14 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                     SectionBody::Tracking(t) => {
                         let mut entries: Vec<TrackingEntry> = Vec::new();
                         for entry in &t.entries {
-                            let Some(index) = outputs.iter().position(|o| o.name == entry.output)
-                            else {
-                                lw.cx.error_spanned_by(
-                                    &entry.output,
-                                    format!(
-                                        "`{}` is not an output; `tracking` names outputs declared in `outputs`",
-                                        entry.output
-                                    ),
-                                );
+                            let Some(targets) = lw.target_outputs(
+                                &entry.output,
+                                &entry.subscripts,
+                                &outputs,
+                                "`tracking` names outputs declared in `outputs`",
+                            ) else {
                                 continue;
                             };
-                            if entries.iter().any(|e| e.output == index) {
-                                lw.cx.error_spanned_by(
-                                    &entry.output,
-                                    format!(
-                                        "duplicate tracking entry for output `{}`",
-                                        entry.output
-                                    ),
-                                );
-                                continue;
-                            }
                             let mut roots = Vec::new();
                             for r in &entry.roots {
                                 match numeric_literal(r) {
@@ -416,11 +456,23 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                 .span()
                                 .join(entry.bracket_span)
                                 .unwrap_or_else(|| entry.output.span());
-                            entries.push(TrackingEntry {
-                                output: index,
-                                roots,
-                                span,
-                            });
+                            for (index, _) in targets {
+                                if entries.iter().any(|e| e.output == index) {
+                                    lw.cx.error_spanned_by(
+                                        &entry.output,
+                                        format!(
+                                            "duplicate tracking entry for output `{}`",
+                                            outputs[index].label
+                                        ),
+                                    );
+                                    continue;
+                                }
+                                entries.push(TrackingEntry {
+                                    output: index,
+                                    roots: roots.clone(),
+                                    span,
+                                });
+                            }
                         }
                         entries.sort_by_key(|e| e.output);
                         tracking = Some(Tracking {
@@ -690,6 +742,12 @@ impl Lowerer<'_> {
     }
 
     fn declare(&mut self, name: &Ident, binding: Binding) {
+        self.declare_as(name, binding, binding.describe());
+    }
+
+    /// Declares `name`; `what` names what it is in refusals of reserved names (`a state`,
+    /// also for a family of states).
+    fn declare_as(&mut self, name: &Ident, binding: Binding, what: &str) {
         let s = name.unraw().to_string();
         if s == "t" {
             self.cx
@@ -703,7 +761,7 @@ impl Lowerer<'_> {
             );
             return;
         }
-        if let Some(msg) = crate::names::check(name, binding.describe()) {
+        if let Some(msg) = crate::names::check(name, what) {
             self.cx.error_spanned_by(name, msg);
             return;
         }
@@ -747,20 +805,18 @@ impl Lowerer<'_> {
     }
 
     fn lower_equation(&mut self, e: &Expr) -> Option<Equation> {
-        let text = expr_text(e);
+        let text = self.indexed_text(e);
         let span = e.span();
         match e {
             Expr::Assign(a) => {
                 let state = match &*a.left {
                     Expr::Call(c) if call_name(c).as_deref() == Some("der") => {
                         let d = self.lower_expr(&a.left, Place::Equation)?;
-                        let c_arg = c.args.first()?;
-                        let name = path_ident(c_arg)?;
-                        match self.env.get(&name.to_string()) {
-                            Some((Binding::State(j), _)) => {
-                                let j = *j;
-                                Some((j, d))
-                            }
+                        match self.graph.node(d) {
+                            crate::symbolic::Node::Var(v) => match self.symbols.symbol(*v) {
+                                Symbol::StateDot(j) => Some((j, d)),
+                                _ => None,
+                            },
                             _ => None,
                         }
                     }
@@ -852,6 +908,10 @@ impl Lowerer<'_> {
                 };
                 self.lower_name(ident, place)
             }
+            Expr::Index(_) => {
+                let (binding, label) = self.resolve_element(e)?;
+                self.lower_binding(binding, e, &label, place)
+            }
             Expr::Unary(u) => match u.op {
                 UnOp::Neg(_) => {
                     let a = self.lower_expr(&u.expr, place)?;
@@ -912,6 +972,9 @@ impl Lowerer<'_> {
                 if name == "der" {
                     return self.lower_der(c, place);
                 }
+                if name == "sum" {
+                    return self.lower_sum(c, place);
+                }
                 self.lower_call(&name, &c.func, &args, place, false)
             }
             Expr::MethodCall(m) => {
@@ -956,30 +1019,51 @@ impl Lowerer<'_> {
         if s == "t" {
             return Some(self.symbol(Symbol::Time));
         }
+        if let Some((_, v)) = self.indices.iter().rev().find(|(n, _)| *n == s) {
+            let v = *v as f64;
+            return Some(self.graph.constant(v));
+        }
         let Some((binding, _)) = self.env.get(&s).copied() else {
             if let Some((_, v)) = CONSTANTS.iter().find(|(c, _)| *c == s) {
                 return Some(self.graph.constant(*v));
             }
-            let msg = if self.pending_lets.contains(&s) {
-                format!("`{s}` is used before its `let` definition; move the definition up")
-            } else {
-                let mut known: Vec<&String> = self.env.keys().collect();
-                known.sort();
-                format!(
-                    "unknown identifier `{s}`; expected a declared parameter, state, algebraic unknown, input or `let`, `t`, or a constant such as `PI`{}",
-                    if known.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" (declared: {})", known.iter().map(|k| k.as_str()).collect::<Vec<_>>().join(", "))
-                    }
-                )
-            };
+            let msg = self.unknown_name_message(&s);
             self.cx.error_spanned_by(ident, msg);
             return None;
         };
-        if place == Place::Reference && !matches!(binding, Binding::Param(_)) {
+        self.lower_binding(binding, ident, &s, place)
+    }
+
+    /// The message for a name that is not declared.
+    fn unknown_name_message(&self, s: &str) -> String {
+        if self.pending_lets.contains(s) {
+            format!("`{s}` is used before its `let` definition; move the definition up")
+        } else {
+            let mut known: Vec<&String> = self.env.keys().collect();
+            known.sort();
+            format!(
+                "unknown identifier `{s}`; expected a declared parameter, state, algebraic unknown, input or `let`, `t`, or a constant such as `PI`{}",
+                if known.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (declared: {})", known.iter().map(|k| k.as_str()).collect::<Vec<_>>().join(", "))
+                }
+            )
+        }
+    }
+
+    /// The expression of a scalar binding (a declared name or a family's element, written
+    /// `s` by the user at `tokens`) in `place`.
+    fn lower_binding(
+        &mut self,
+        binding: Binding,
+        tokens: &dyn ToTokens,
+        s: &str,
+        place: Place,
+    ) -> Option<ExprId> {
+        if place == Place::Reference && !matches!(binding, Binding::Param(_) | Binding::Const(_)) {
             self.cx.error_spanned_by(
-                ident,
+                tokens,
                 format!(
                     "a reference may depend only on `t` and parameters, but `{s}` is {}",
                     binding.describe()
@@ -992,10 +1076,25 @@ impl Lowerer<'_> {
             Binding::State(i) => self.symbol(Symbol::State(i)),
             Binding::Algebraic(i) => self.symbol(Symbol::Algebraic(i)),
             Binding::Input(i) => self.symbol(Symbol::Input(i)),
+            Binding::Const(v) => self.graph.constant(v as f64),
+            Binding::Family(f) => {
+                let fam = &self.families[f];
+                if fam.poisoned {
+                    return None;
+                }
+                let example = fam.dims.iter().map(|_| "[i]").collect::<String>();
+                let msg = format!(
+                    "`{s}` is a family of {} {}; use one element, e.g. `{s}{example}` inside `for i in ...` or `sum(.., |i| ..)`",
+                    fam.elements.len(),
+                    fam.plural,
+                );
+                self.cx.error_spanned_by(tokens, msg);
+                return None;
+            }
             Binding::Let { expr, uses_der } => {
                 if uses_der && place == Place::Output {
                     self.cx.error_spanned_by(
-                        ident,
+                        tokens,
                         format!("`{s}` uses `der()`, which an output may not depend on"),
                     );
                     return None;
@@ -1036,6 +1135,22 @@ impl Lowerer<'_> {
                 return None;
             }
         }
+        if matches!(crate::text::strip_parentheses(arg), Expr::Index(_)) {
+            let (binding, label) = self.resolve_element(arg)?;
+            return match binding {
+                Binding::State(i) => Some(self.symbol(Symbol::StateDot(i))),
+                b => {
+                    self.cx.error_spanned_by(
+                        arg,
+                        format!(
+                            "`der()` applies to states only, but `{label}` is {}",
+                            b.describe()
+                        ),
+                    );
+                    None
+                }
+            };
+        }
         let Some(ident) = path_ident(arg) else {
             self.cx.error_spanned_by(
                 arg,
@@ -1048,6 +1163,16 @@ impl Lowerer<'_> {
         };
         match self.env.get(&ident.to_string()).copied() {
             Some((Binding::State(i), _)) => Some(self.symbol(Symbol::StateDot(i))),
+            Some((Binding::Family(f), _)) if self.families[f].poisoned => None,
+            Some((Binding::Family(f), _)) => {
+                let msg = format!(
+                    "`der()` applies to one state, but `{ident}` is a family of {} {}; write `der({ident}[i])` inside `for i in ...`",
+                    self.families[f].elements.len(),
+                    self.families[f].plural
+                );
+                self.cx.error_spanned_by(arg, msg);
+                None
+            }
             Some((b, _)) => {
                 let hint = match b {
                     Binding::Algebraic(_) => {
@@ -1175,3 +1300,1010 @@ fn std_constant(path: &syn::Path) -> Option<f64> {
     };
     CONSTANTS.iter().find(|(n, _)| n == tail).map(|(_, v)| *v)
 }
+
+/// Every combination of values of `ranges` (half-open), row-major.
+fn range_product(ranges: &[(i64, i64)]) -> Vec<Vec<i64>> {
+    let mut out = vec![Vec::new()];
+    for &(a, b) in ranges {
+        out = out
+            .into_iter()
+            .flat_map(|prefix| {
+                (a..b).map(move |k| {
+                    let mut ix = prefix.clone();
+                    ix.push(k);
+                    ix
+                })
+            })
+            .collect();
+    }
+    out
+}
+
+/// The subscripts of a definition as written: `[i in 0..N][2]`.
+fn subscripts_text(subscripts: &[Subscript]) -> String {
+    subscripts
+        .iter()
+        .map(|s| match s {
+            Subscript::Binder { var, range } => format!("[{var} in {}]", expr_text(range)),
+            Subscript::Index(e) => format!("[{}]", expr_text(e)),
+        })
+        .collect()
+}
+
+/// What the integer expressions of lengths, ranges and indices may contain.
+const INDEX_EXPRESSIONS: &str = "integer literals, constants of the `consts` section and index variables (of `for`, `sum` or a family definition), combined with `+ - *`, `min` and `max`";
+
+/// Indexed families: declaration, element access, index arithmetic and unrolling.
+impl Lowerer<'_> {
+    /// The value of an integer expression (a length, range bound or index), or `None` with
+    /// the error recorded on the offending tokens.
+    fn eval_int(&mut self, e: &Expr) -> Option<i64> {
+        match e {
+            Expr::Paren(p) => self.eval_int(&p.expr),
+            Expr::Group(g) => self.eval_int(&g.expr),
+            Expr::Lit(l) => match &l.lit {
+                Lit::Int(i) if matches!(i.suffix(), "" | "usize" | "i64" | "i32") => {
+                    match i.base10_parse::<i64>() {
+                        Ok(v) => Some(v),
+                        Err(_) => {
+                            self.cx.error_spanned_by(
+                                l,
+                                format!(
+                                    "the integer `{}` is too large for an index or length",
+                                    l.lit.to_token_stream()
+                                ),
+                            );
+                            None
+                        }
+                    }
+                }
+                _ => {
+                    self.cx.error_spanned_by(
+                        l,
+                        format!(
+                            "lengths, ranges and indices are integers, found `{}`; write e.g. `3` or `N`",
+                            l.lit.to_token_stream()
+                        ),
+                    );
+                    None
+                }
+            },
+            Expr::Path(p) => {
+                let Some(ident) = p.path.get_ident().filter(|_| p.qself.is_none()) else {
+                    self.cx.error_spanned_by(
+                        p,
+                        format!(
+                            "expected an integer constant or index variable, found the path `{}`",
+                            expr_text(e)
+                        ),
+                    );
+                    return None;
+                };
+                let s = ident.unraw().to_string();
+                if let Some((_, v)) = self.indices.iter().rev().find(|(n, _)| *n == s) {
+                    return Some(*v);
+                }
+                match self.env.get(&s).copied() {
+                    Some((Binding::Const(v), _)) => Some(v),
+                    Some((b, _)) => {
+                        self.cx.error_spanned_by(
+                            ident,
+                            format!(
+                                "`{s}` is {}, not a constant: lengths, ranges and indices must be known when the model is compiled, so they may use only {INDEX_EXPRESSIONS}",
+                                b.describe()
+                            ),
+                        );
+                        None
+                    }
+                    None => {
+                        let mut scope: Vec<&str> =
+                            self.indices.iter().map(|(n, _)| n.as_str()).collect();
+                        scope.dedup();
+                        let in_scope = if scope.is_empty() {
+                            "no index variable is in scope here".to_string()
+                        } else {
+                            format!("in scope: {}", scope.join(", "))
+                        };
+                        self.cx.error_spanned_by(
+                            ident,
+                            format!(
+                                "unknown index variable `{s}` ({in_scope}); an index may use {INDEX_EXPRESSIONS}"
+                            ),
+                        );
+                        None
+                    }
+                }
+            }
+            Expr::Unary(u) if matches!(u.op, UnOp::Neg(_)) => {
+                let v = self.eval_int(&u.expr)?;
+                self.checked(v.checked_neg(), e)
+            }
+            Expr::Binary(b) if matches!(b.op, BinOp::Add(_) | BinOp::Sub(_) | BinOp::Mul(_)) => {
+                let l = self.eval_int(&b.left);
+                let r = self.eval_int(&b.right);
+                let (l, r) = (l?, r?);
+                let v = match b.op {
+                    BinOp::Add(_) => l.checked_add(r),
+                    BinOp::Sub(_) => l.checked_sub(r),
+                    _ => l.checked_mul(r),
+                };
+                self.checked(v, e)
+            }
+            Expr::Call(c)
+                if c.args.len() == 2
+                    && matches!(call_name(c).as_deref(), Some("min") | Some("max")) =>
+            {
+                let a = self.eval_int(&c.args[0]);
+                let b = self.eval_int(&c.args[1]);
+                let (a, b) = (a?, b?);
+                Some(if call_name(c).as_deref() == Some("min") {
+                    a.min(b)
+                } else {
+                    a.max(b)
+                })
+            }
+            other => {
+                self.cx.error_spanned_by(
+                    other,
+                    format!(
+                        "unsupported index expression `{}`; lengths, ranges and indices may use {INDEX_EXPRESSIONS}",
+                        expr_text(other)
+                    ),
+                );
+                None
+            }
+        }
+    }
+
+    fn checked(&mut self, v: Option<i64>, e: &Expr) -> Option<i64> {
+        if v.is_none() {
+            self.cx.error_spanned_by(
+                e,
+                format!("the index expression `{}` overflows", expr_text(e)),
+            );
+        }
+        v
+    }
+
+    /// A range `a..b` or `a..=b` as half-open bounds.
+    fn eval_range(&mut self, e: &Expr) -> Option<(i64, i64)> {
+        let Expr::Range(r) = crate::text::strip_parentheses(e) else {
+            self.cx.error_spanned_by(
+                e,
+                format!(
+                    "expected an index range such as `0..N` or `1..=3`, found `{}`",
+                    expr_text(e)
+                ),
+            );
+            return None;
+        };
+        let (Some(start), Some(end)) = (&r.start, &r.end) else {
+            self.cx.error_spanned_by(
+                r,
+                format!(
+                    "an index range needs both bounds, e.g. `0..N`, found `{}`",
+                    expr_text(e)
+                ),
+            );
+            return None;
+        };
+        let a = self.eval_int(start);
+        let b = self.eval_int(end);
+        let (a, b) = (a?, b?);
+        match r.limits {
+            syn::RangeLimits::HalfOpen(_) => Some((a, b)),
+            syn::RangeLimits::Closed(_) => Some((a, self.checked(b.checked_add(1), e)?)),
+        }
+    }
+
+    /// The lengths of a declared family, each at least 1.
+    fn eval_dims(&mut self, dims: &[Expr]) -> Option<Vec<usize>> {
+        let mut out = Vec::new();
+        let mut ok = true;
+        for d in dims {
+            match self.eval_int(d) {
+                Some(v) if v >= 1 => out.push(v as usize),
+                Some(v) => {
+                    self.cx.error_spanned_by(
+                        d,
+                        format!(
+                            "the length of an indexed family must be at least 1, found `{}` = {v}",
+                            expr_text(d)
+                        ),
+                    );
+                    ok = false;
+                }
+                None => ok = false,
+            }
+        }
+        let total = out.iter().try_fold(1usize, |acc, &d| acc.checked_mul(d));
+        if ok && total.is_none_or(|n| n > MAX_FAMILY_ELEMENTS) {
+            self.cx.error_spanned_by(
+                &dims[0],
+                format!(
+                    "an indexed family may have at most {MAX_FAMILY_ELEMENTS} elements, found lengths {}",
+                    out.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" x ")
+                ),
+            );
+            ok = false;
+        }
+        ok.then_some(out)
+    }
+
+    /// The default of a scalar parameter (or one element), or 0 with the error recorded.
+    fn param_default(&mut self, e: &Expr, label: &str) -> f64 {
+        match numeric_literal(e) {
+            Some(v) if !v.is_finite() => {
+                self.cx.error_spanned_by(
+                    e,
+                    format!(
+                        "the default of parameter `{label}` is out of range for `f64`: `{}` overflows to infinity (the largest finite value is about 1.8e308)",
+                        expr_text(e)
+                    ),
+                );
+                0.0
+            }
+            Some(v) => v,
+            None => {
+                self.cx.error_spanned_by(
+                    e,
+                    format!(
+                        "the default of parameter `{label}` must be a number such as `1.0` or `-9.81`, found `{}`",
+                        expr_text(e)
+                    ),
+                );
+                0.0
+            }
+        }
+    }
+
+    /// The defaults of a parameter family, row-major: one number for every element, or an
+    /// array literal (nested per index) of exactly the family's lengths.
+    fn param_defaults(&mut self, e: &Expr, name: &Ident, dims: &[usize]) -> Vec<f64> {
+        let total: usize = dims.iter().product();
+        if numeric_literal(e).is_some() {
+            let v = self.param_default(e, &name.unraw().to_string());
+            return vec![v; total];
+        }
+        let mut out = Vec::with_capacity(total);
+        self.collect_defaults(e, name, dims, &mut Vec::new(), &mut out);
+        out.resize(total, 0.0);
+        out
+    }
+
+    fn collect_defaults(
+        &mut self,
+        e: &Expr,
+        name: &Ident,
+        dims: &[usize],
+        prefix: &mut Vec<usize>,
+        out: &mut Vec<f64>,
+    ) {
+        let Some((&len, rest)) = dims.split_first() else {
+            let (label, _) = element_names(name, prefix);
+            let v = self.param_default(e, &label);
+            out.push(v);
+            return;
+        };
+        let (label, _) = element_names(name, prefix);
+        let Expr::Array(a) = crate::text::strip_parentheses(e) else {
+            self.cx.error_spanned_by(
+                e,
+                format!(
+                    "the default of `{label}` must be an array of {len} value{} such as `[{}]`, or one number for every element, found `{}`",
+                    plural(len),
+                    vec!["1.0"; len.min(3)].join(", ") + if len > 3 { ", ..." } else { "" },
+                    expr_text(e)
+                ),
+            );
+            out.extend(std::iter::repeat_n(
+                0.0,
+                rest.iter().product::<usize>() * len,
+            ));
+            return;
+        };
+        if a.elems.len() != len {
+            self.cx.error_spanned_by(
+                a,
+                format!(
+                    "length mismatch: `{label}` has length {len} as declared, but its default lists {} value{}",
+                    a.elems.len(),
+                    plural(a.elems.len())
+                ),
+            );
+            out.extend(std::iter::repeat_n(
+                0.0,
+                rest.iter().product::<usize>() * len,
+            ));
+            return;
+        }
+        for (k, x) in a.elems.iter().enumerate() {
+            prefix.push(k);
+            self.collect_defaults(x, name, rest, prefix, out);
+            prefix.pop();
+        }
+    }
+
+    /// Records that the generated code binds `code` for the name `label`; a clash between
+    /// a family's element (`q_2` for `q[2]`) and another declared name is an error on the
+    /// later one.
+    fn claim_code_name(&mut self, code: &Ident, label: &str, family: Option<&Ident>) {
+        let key = code.unraw().to_string();
+        match self.code_names.get(&key) {
+            Some(prev) if prev != label => {
+                let (at, msg): (&dyn ToTokens, String) = match family {
+                    Some(f) => (
+                        f,
+                        format!(
+                            "element `{label}` of the family `{f}` is named `{key}` in the generated code, which is already the name of `{prev}`; rename one of them"
+                        ),
+                    ),
+                    None => (
+                        code,
+                        format!(
+                            "`{key}` is the name the generated code gives to element `{prev}`; choose another name"
+                        ),
+                    ),
+                };
+                self.cx.error_spanned_by(at, msg);
+            }
+            _ => {
+                self.code_names.insert(key, label.to_string());
+            }
+        }
+    }
+
+    /// Declares `name` as a family of `kind`s (the variant only says which).
+    fn declare_family(
+        &mut self,
+        name: &Ident,
+        kind: Binding,
+        dims: Vec<usize>,
+        elements: Vec<Option<Binding>>,
+    ) -> usize {
+        let f = self.families.len();
+        self.families.push(Family {
+            plural: kind.plural(),
+            dims,
+            poisoned: elements.is_empty(),
+            elements,
+            defined: None,
+            failed: HashSet::new(),
+        });
+        if name.unraw().to_string().ends_with('_') {
+            self.cx.error_spanned_by(
+                name,
+                format!("the name of an indexed family may not end in `_`: its elements are named `{name}_0`, ... in the generated code, and `__` is reserved for it"),
+            );
+        }
+        self.declare_as(name, Binding::Family(f), kind.describe());
+        f
+    }
+
+    /// States, algebraic unknowns or inputs, scalars and families.
+    fn declare_decls(
+        &mut self,
+        list: &[crate::parse::NameDef],
+        out: &mut Vec<Decl>,
+        binding: fn(usize) -> Binding,
+    ) {
+        for n in list {
+            let what = binding(0).describe();
+            let docs = self.doc_attrs(&n.attrs, what);
+            if n.dims.is_empty() {
+                self.declare(&n.name, binding(out.len()));
+                self.claim_code_name(&n.name, &n.name.unraw().to_string(), None);
+                out.push(Decl {
+                    name: n.name.clone(),
+                    label: n.name.unraw().to_string(),
+                    docs,
+                });
+                continue;
+            }
+            let Some(dims) = self.eval_dims(&n.dims) else {
+                self.declare_family(&n.name, binding(0), Vec::new(), Vec::new());
+                continue;
+            };
+            let elements = multi_indices(&dims)
+                .into_iter()
+                .map(|ix| {
+                    let (label, name) = element_names(&n.name, &ix);
+                    self.claim_code_name(&name, &label, Some(&n.name));
+                    out.push(Decl {
+                        name,
+                        label,
+                        docs: docs.clone(),
+                    });
+                    Some(binding(out.len() - 1))
+                })
+                .collect();
+            self.declare_family(&n.name, binding(0), dims, elements);
+        }
+    }
+
+    /// Binds an index variable for the duration of a loop; `false` (with the error
+    /// recorded) if its name is taken.
+    fn check_index_var(&mut self, var: &Ident) -> bool {
+        let s = var.unraw().to_string();
+        let taken = if s == "t" {
+            Some("`t` is time".to_string())
+        } else if let Some((b, _)) = self.env.get(&s) {
+            Some(format!("`{s}` is already declared as {}", b.describe()))
+        } else if CONSTANTS.iter().any(|(c, _)| *c == s) {
+            Some(format!("`{s}` is a named constant"))
+        } else if self.indices.iter().any(|(n, _)| *n == s) {
+            Some(format!(
+                "`{s}` is already the index variable of an enclosing loop, sum or family"
+            ))
+        } else {
+            None
+        };
+        match taken {
+            Some(why) => {
+                self.cx.error_spanned_by(
+                    var,
+                    format!("{why}; choose another name for the index variable"),
+                );
+                false
+            }
+            None => true,
+        }
+    }
+
+    /// The text of `e` with the index variables in scope written as their values.
+    fn indexed_text(&self, e: &Expr) -> String {
+        let scope = &self.indices;
+        let env = &self.env;
+        crate::text::expr_text_with(
+            e,
+            &|s| scope.iter().rev().find(|(n, _)| n == s).map(|(_, v)| *v),
+            &|s| match env.get(s) {
+                Some((Binding::Const(v), _)) => Some(*v),
+                _ => None,
+            },
+        )
+    }
+
+    /// `let name[i in a..b]... = expr;`: one intermediate per index, in row-major order; an
+    /// element may use the family's earlier elements. Returns the label for the listing.
+    fn lower_let_family(&mut self, l: &crate::parse::LetDef) -> String {
+        let label = format!("{}{}", l.name, subscripts_text(&l.subscripts));
+        let mut vars = Vec::new();
+        let mut ranges = Vec::new();
+        let mut ok = true;
+        for sub in &l.subscripts {
+            match sub {
+                Subscript::Binder { var, range } => match self.eval_range(range) {
+                    Some((a, _)) if a < 0 => {
+                        self.cx.error_spanned_by(
+                            range,
+                            format!(
+                                "the indices of `{}` start at 0; the range `{}` starts at {a}",
+                                l.name,
+                                expr_text(range)
+                            ),
+                        );
+                        ok = false;
+                    }
+                    Some(r) => {
+                        vars.push(var);
+                        ranges.push(r);
+                    }
+                    None => ok = false,
+                },
+                Subscript::Index(e) => {
+                    self.cx.error_spanned_by(
+                        e,
+                        format!(
+                            "a `let` family names each index with its range, e.g. `let {}[i in 0..N] = ...`, found `[{}]`",
+                            l.name,
+                            expr_text(e)
+                        ),
+                    );
+                    ok = false;
+                }
+            }
+        }
+        for var in &vars {
+            ok &= self.check_index_var(var);
+        }
+        if vars.len() > 1 {
+            for (k, v) in vars.iter().enumerate() {
+                if vars[..k].iter().any(|w| w.unraw() == v.unraw()) {
+                    self.cx
+                        .error_spanned_by(v, format!("index variable `{v}` appears twice"));
+                    ok = false;
+                }
+            }
+        }
+        let zero = self.graph.constant(0.0);
+        let kind = Binding::Let {
+            expr: zero,
+            uses_der: false,
+        };
+        if !ok {
+            self.declare_family(&l.name, kind, Vec::new(), Vec::new());
+            return label;
+        }
+        if ranges.iter().any(|&(a, b)| b <= a) {
+            self.cx.error_spanned_by(
+                &l.name,
+                format!("the `let` family `{label}` defines no element: a range is empty"),
+            );
+            self.declare_family(&l.name, kind, Vec::new(), Vec::new());
+            return label;
+        }
+        let dims: Vec<usize> = ranges.iter().map(|&(_, b)| b as usize).collect();
+        let total = dims.iter().try_fold(1usize, |acc, &d| acc.checked_mul(d));
+        if total.is_none_or(|n| n > MAX_FAMILY_ELEMENTS) {
+            self.cx.error_spanned_by(
+                &l.name,
+                format!("an indexed family may have at most {MAX_FAMILY_ELEMENTS} elements"),
+            );
+            self.declare_family(&l.name, kind, Vec::new(), Vec::new());
+            return label;
+        }
+        let f = self.declare_family(&l.name, kind, dims.clone(), vec![None; total.unwrap_or(0)]);
+        self.families[f].defined = Some(subscripts_text(&l.subscripts));
+        for values in range_product(&ranges) {
+            let depth = self.indices.len();
+            self.indices.extend(
+                vars.iter()
+                    .zip(&values)
+                    .map(|(v, k)| (v.unraw().to_string(), *k)),
+            );
+            let expr = self.lower_expr(&l.expr, Place::Let);
+            self.indices.truncate(depth);
+            let offset = values
+                .iter()
+                .zip(&dims)
+                .fold(0usize, |acc, (&k, &d)| acc * d + k as usize);
+            match expr {
+                Some(expr) => {
+                    let uses_der = self.uses_derivatives(expr);
+                    self.families[f].elements[offset] = Some(Binding::Let { expr, uses_der });
+                }
+                None => {
+                    self.families[f].failed.insert(offset);
+                }
+            }
+        }
+        label
+    }
+
+    /// The equations of `items`, `for` loops unrolled, in order.
+    fn lower_equation_items(
+        &mut self,
+        items: &[EquationItem],
+        states: &[Decl],
+        explicit_seen: &mut HashMap<usize, Span>,
+        out: &mut Vec<Equation>,
+    ) {
+        for item in items {
+            match item {
+                EquationItem::Equation(e) => {
+                    let Some(eq) = self.lower_equation(e) else {
+                        continue;
+                    };
+                    if let Some((j, _)) = eq.explicit {
+                        if let Some(prev) = explicit_seen.insert(j, eq.span) {
+                            let mut err = syn::Error::new(
+                                eq.span,
+                                format!(
+                                    "state `{}` has a second explicit equation `der({0}) = ...`; write at most one per state (make the other implicit with `==`)",
+                                    states[j].label
+                                ),
+                            );
+                            err.combine(syn::Error::new(prev, "first explicit equation here"));
+                            self.cx.push(err);
+                        }
+                    }
+                    out.push(eq);
+                }
+                EquationItem::For(f) => {
+                    let range = self.eval_range(&f.range);
+                    if !self.check_index_var(&f.var) {
+                        continue;
+                    }
+                    let Some((a, b)) = range else {
+                        continue;
+                    };
+                    for k in a..b {
+                        self.indices.push((f.var.unraw().to_string(), k));
+                        self.lower_equation_items(&f.body, states, explicit_seen, out);
+                        self.indices.pop();
+                    }
+                }
+            }
+        }
+    }
+
+    /// Every combination of a target's subscripts: per combination, the bound index
+    /// variables and the indices.
+    fn subscript_combinations(
+        &mut self,
+        subscripts: &[Subscript],
+    ) -> Option<Vec<(Bound, Vec<i64>)>> {
+        let mut ranges = Vec::new();
+        let mut vars: Vec<Option<String>> = Vec::new();
+        let mut ok = true;
+        for sub in subscripts {
+            match sub {
+                Subscript::Binder { var, range } => {
+                    let r = self.eval_range(range);
+                    ok &= self.check_index_var(var);
+                    match r {
+                        Some(r) => ranges.push(r),
+                        None => ok = false,
+                    }
+                    vars.push(Some(var.unraw().to_string()));
+                }
+                Subscript::Index(e) => {
+                    match self.eval_int(e) {
+                        Some(v) => ranges.push((v, v + 1)),
+                        None => ok = false,
+                    }
+                    vars.push(None);
+                }
+            }
+        }
+        if !ok {
+            return None;
+        }
+        Some(
+            range_product(&ranges)
+                .into_iter()
+                .map(|values| {
+                    let bound = vars
+                        .iter()
+                        .zip(&values)
+                        .filter_map(|(v, k)| v.clone().map(|v| (v, *k)))
+                        .collect();
+                    (bound, values)
+                })
+                .collect(),
+        )
+    }
+
+    /// The outputs an entry of `references` or `tracking` names: `y` (the output `y`, or
+    /// every element of the output family `y`), `y[2]`, or `y[i in 0..N]`; per output the
+    /// index variables bound for it.
+    fn target_outputs(
+        &mut self,
+        name: &Ident,
+        subscripts: &[Subscript],
+        outputs: &[Output],
+        hint: &str,
+    ) -> Option<Vec<(usize, Bound)>> {
+        let base = name.unraw().to_string();
+        if subscripts.is_empty() {
+            if let Some(i) = outputs.iter().position(|o| o.label == base) {
+                return Some(vec![(i, Vec::new())]);
+            }
+            let prefix = format!("{base}[");
+            let all: Vec<(usize, Vec<(String, i64)>)> = outputs
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| o.label.starts_with(&prefix))
+                .map(|(i, _)| (i, Vec::new()))
+                .collect();
+            if all.is_empty() {
+                self.cx
+                    .error_spanned_by(name, format!("`{name}` is not an output; {hint}"));
+                return None;
+            }
+            return Some(all);
+        }
+        let mut out = Vec::new();
+        for (bound, values) in self.subscript_combinations(subscripts)? {
+            let label = format!(
+                "{base}{}",
+                values.iter().map(|k| format!("[{k}]")).collect::<String>()
+            );
+            match outputs.iter().position(|o| o.label == label) {
+                Some(i) => out.push((i, bound)),
+                None => {
+                    self.cx
+                        .error_spanned_by(name, format!("`{label}` is not an output; {hint}"));
+                    return None;
+                }
+            }
+        }
+        Some(out)
+    }
+
+    /// One output, or one per element of an output family: `(label, code name, expression,
+    /// text)`.
+    fn lower_output(
+        &mut self,
+        o: &crate::parse::OutputDef,
+    ) -> Vec<(String, Ident, ExprId, String)> {
+        let mut out = Vec::new();
+        let base = o.name.unraw().to_string();
+        if o.subscripts.is_empty() {
+            if let (None, Some((Binding::Family(f), _))) = (&o.expr, self.env.get(&base).copied()) {
+                // A bare family name: one output per element.
+                let dims = self.families[f].dims.clone();
+                for ix in multi_indices(&dims) {
+                    let (label, name) = element_names(&o.name, &ix);
+                    let values: Vec<i64> = ix.iter().map(|&k| k as i64).collect();
+                    let Some((binding, _)) = self.family_element(&o.name, &values, &[], &o.name)
+                    else {
+                        continue;
+                    };
+                    if let Some(e) = self.lower_binding(binding, &o.name, &label, Place::Output) {
+                        out.push((label.clone(), name, e, label));
+                    }
+                }
+                return out;
+            }
+            let lowered = match &o.expr {
+                Some(e) => self.lower_expr(e, Place::Output).map(|x| (x, expr_text(e))),
+                None => match self.env.get(&base) {
+                    Some(_) => self
+                        .lower_name(&o.name, Place::Output)
+                        .map(|x| (x, base.clone())),
+                    None => {
+                        self.cx.error_spanned_by(
+                            &o.name,
+                            format!(
+                                "output `{}` is not a declared name; write `{0} = <expression>` to define it",
+                                o.name
+                            ),
+                        );
+                        None
+                    }
+                },
+            };
+            if let Some((expr, text)) = lowered {
+                out.push((base, o.name.clone(), expr, text));
+            }
+            return out;
+        }
+        let Some(combinations) = self.subscript_combinations(&o.subscripts) else {
+            return out;
+        };
+        for (bound, values) in combinations {
+            if values.iter().any(|&k| k < 0) {
+                self.cx.error_spanned_by(
+                    &o.name,
+                    format!("the indices of the output family `{}` start at 0", o.name),
+                );
+                return out;
+            }
+            let ix: Vec<usize> = values.iter().map(|&k| k as usize).collect();
+            let (label, name) = element_names(&o.name, &ix);
+            let depth = self.indices.len();
+            self.indices.extend(bound);
+            let lowered = match &o.expr {
+                Some(e) => {
+                    let text = self.indexed_text(e);
+                    self.lower_expr(e, Place::Output).map(|x| (x, text))
+                }
+                None => self
+                    .family_element(&o.name, &values, &[], &o.name)
+                    .and_then(|(b, l)| {
+                        self.lower_binding(b, &o.name, &l, Place::Output)
+                            .map(|x| (x, l))
+                    }),
+            };
+            self.indices.truncate(depth);
+            if let Some((expr, text)) = lowered {
+                out.push((label, name, expr, text));
+            }
+        }
+        out
+    }
+
+    /// The element of the family `base` at `values`, validated (number of indices, range,
+    /// defined), with its label; errors on `subscripts[k]` for index `k` (if given) or on
+    /// `whole`.
+    fn family_element(
+        &mut self,
+        base: &Ident,
+        values: &[i64],
+        subscripts: &[&Expr],
+        whole: &dyn ToTokens,
+    ) -> Option<(Binding, String)> {
+        let s = base.unraw().to_string();
+        let f = match self.env.get(&s).copied() {
+            Some((Binding::Family(f), _)) => f,
+            Some((b, _)) => {
+                self.cx.error_spanned_by(
+                    whole,
+                    format!(
+                        "`{s}` is {}, not an indexed family, and takes no `[...]`",
+                        b.describe()
+                    ),
+                );
+                return None;
+            }
+            None => {
+                let msg = self.unknown_name_message(&s);
+                self.cx.error_spanned_by(base, msg);
+                return None;
+            }
+        };
+        let fam = &self.families[f];
+        if fam.poisoned {
+            return None;
+        }
+        let family_text = format!(
+            "`{s}`, a family of {} {} (`{s}{}`)",
+            fam.elements.len(),
+            fam.plural,
+            fam.dims
+                .iter()
+                .map(|d| format!("[{d}]"))
+                .collect::<String>()
+        );
+        if values.len() != fam.dims.len() {
+            let msg = format!(
+                "{family_text}, takes {} ind{}, found {}",
+                fam.dims.len(),
+                if fam.dims.len() == 1 { "ex" } else { "ices" },
+                values.len()
+            );
+            self.cx.error_spanned_by(whole, msg);
+            return None;
+        }
+        let mut offset = 0usize;
+        let mut ok = true;
+        let mut errors = Vec::new();
+        for (k, (&v, &d)) in values.iter().zip(&fam.dims).enumerate() {
+            if v < 0 || v as usize >= d {
+                let context = subscripts
+                    .get(k)
+                    .map(|e| self.index_context(e))
+                    .unwrap_or_default();
+                let which = match (fam.dims.len(), k) {
+                    (1, _) => String::new(),
+                    (_, 0) => "first ".into(),
+                    (_, 1) => "second ".into(),
+                    (_, 2) => "third ".into(),
+                    (_, k) => format!("{}th ", k + 1),
+                };
+                errors.push((
+                    k,
+                    format!(
+                        "index {v} is out of range for {family_text}: the {which}index must be in 0..{d}{context}"
+                    ),
+                ));
+                ok = false;
+            } else {
+                offset = offset * d + v as usize;
+            }
+        }
+        for (k, msg) in errors {
+            match subscripts.get(k) {
+                Some(e) => self.cx.error_spanned_by(e, msg),
+                None => self.cx.error_spanned_by(whole, msg),
+            }
+        }
+        if !ok {
+            return None;
+        }
+        let fam = &self.families[f];
+        let label = format!(
+            "{s}{}",
+            values.iter().map(|k| format!("[{k}]")).collect::<String>()
+        );
+        match fam.elements[offset] {
+            Some(b) => Some((b, label)),
+            None if fam.failed.contains(&offset) => None,
+            None => {
+                let defined = fam.defined.clone().unwrap_or_default();
+                self.cx.error_spanned_by(
+                    whole,
+                    format!(
+                        "`{label}` is not defined: the `let` family defines `{s}{defined}`, and an element may use only earlier elements of its own family"
+                    ),
+                );
+                None
+            }
+        }
+    }
+
+    /// ` (with i = 2)`: the index variables an index expression uses, with their values.
+    fn index_context(&self, e: &Expr) -> String {
+        let text = expr_text(e);
+        let used: Vec<String> = self
+            .indices
+            .iter()
+            .filter(|(n, _)| {
+                text.split(|c: char| !(c.is_alphanumeric() || c == '_'))
+                    .any(|w| w == n)
+            })
+            .map(|(n, v)| format!("{n} = {v}"))
+            .collect();
+        if used.is_empty() {
+            String::new()
+        } else {
+            format!(" (here with {})", used.join(", "))
+        }
+    }
+
+    /// `q[i][j + 1]`: the element it names, with its label, or `None` with errors recorded.
+    fn resolve_element(&mut self, e: &Expr) -> Option<(Binding, String)> {
+        let mut subscripts: Vec<&Expr> = Vec::new();
+        let mut cur = e;
+        while let Expr::Index(ix) = crate::text::strip_parentheses(cur) {
+            subscripts.push(&ix.index);
+            cur = &ix.expr;
+        }
+        subscripts.reverse();
+        let Some(base) = path_ident(cur) else {
+            self.cx.error_spanned_by(
+                cur,
+                format!(
+                    "only declared families can be indexed, found `{}`",
+                    expr_text(cur)
+                ),
+            );
+            return None;
+        };
+        let values: Vec<Option<i64>> = subscripts.iter().map(|s| self.eval_int(s)).collect();
+        let values: Vec<i64> = values.into_iter().collect::<Option<_>>()?;
+        self.family_element(base, &values, &subscripts, e)
+    }
+
+    /// `sum(a..b, |j| expr)`: the sum of `expr` over `j`, unrolled (0 for an empty range).
+    fn lower_sum(&mut self, c: &syn::ExprCall, place: Place) -> Option<ExprId> {
+        let usage = "write sums as `sum(0..N, |j| expr)`";
+        if c.args.len() != 2 {
+            self.cx.error_spanned_by(
+                c,
+                format!(
+                    "`sum` takes a range and a closure, found {} argument{}; {usage}",
+                    c.args.len(),
+                    plural(c.args.len())
+                ),
+            );
+            return None;
+        }
+        let range = self.eval_range(&c.args[0]);
+        let Expr::Closure(closure) = crate::text::strip_parentheses(&c.args[1]) else {
+            self.cx.error_spanned_by(
+                &c.args[1],
+                format!("the second argument of `sum` is a closure naming the index, found `{}`; {usage}", expr_text(&c.args[1])),
+            );
+            return None;
+        };
+        let var = match closure.inputs.iter().collect::<Vec<_>>().as_slice() {
+            [syn::Pat::Ident(p)]
+                if p.by_ref.is_none() && p.mutability.is_none() && p.subpat.is_none() =>
+            {
+                &p.ident
+            }
+            _ => {
+                self.cx.error_spanned_by(
+                    &closure.inputs,
+                    format!("the closure of `sum` takes exactly one index variable, e.g. `|j|`; {usage}"),
+                );
+                return None;
+            }
+        };
+        if !self.check_index_var(var) {
+            return None;
+        }
+        let (a, b) = range?;
+        let mut total = self.graph.constant(0.0);
+        let mut ok = true;
+        for k in a..b {
+            self.indices.push((var.unraw().to_string(), k));
+            let term = self.lower_expr(&closure.body, place);
+            self.indices.pop();
+            match term {
+                Some(term) => total = self.graph.add(total, term),
+                None => ok = false,
+            }
+        }
+        ok.then_some(total)
+    }
+}
+
+/// Index variables bound to values, for one element of a target.
+type Bound = Vec<(String, i64)>;
+
+/// The largest number of elements of one indexed family.
+const MAX_FAMILY_ELEMENTS: usize = 1 << 16;

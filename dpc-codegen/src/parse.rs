@@ -6,13 +6,18 @@
 //!
 //! ```text
 //! model      := attr* vis Ident '{' item* '}'
-//! item       := section | 'let' Ident '=' expr ';'
-//! section    := 'params' '{' (attr* Ident '=' expr),* '}'
-//!             | ('states' | 'algebraic' | 'inputs') '{' (attr* Ident),* '}'
-//!             | 'equations' '{' (expr ';')* '}'
-//!             | 'outputs' '{' (attr* Ident ('=' expr)?),* '}'
-//!             | 'references' '{' (Ident '=' expr),* '}'
-//!             | 'tracking' Ident '{' (Ident ':' '[' expr,* ']'),* '}'
+//! item       := section | 'let' Ident binder* '=' expr ';'
+//! section    := 'consts' '{' (Ident '=' expr),* '}'
+//!             | 'params' '{' (attr* Ident dims '=' expr),* '}'
+//!             | ('states' | 'algebraic' | 'inputs') '{' (attr* Ident dims),* '}'
+//!             | 'equations' '{' equation* '}'
+//!             | 'outputs' '{' (attr* target ('=' expr)?),* '}'
+//!             | 'references' '{' (target '=' expr),* '}'
+//!             | 'tracking' Ident '{' (target ':' '[' expr,* ']'),* '}'
+//! dims       := ('[' expr ']')*                      lengths of an indexed family
+//! binder     := '[' Ident 'in' expr ']'              an index ranging over `a..b`
+//! target     := Ident ('[' (Ident 'in' expr | expr) ']')*
+//! equation   := expr ';' | 'for' Ident 'in' expr '{' equation* '}'
 //! ```
 
 use proc_macro2::{Span, TokenStream, TokenTree};
@@ -23,6 +28,7 @@ use syn::{braced, bracketed, Attribute, Expr, Ident, Token, Visibility};
 
 /// The sections a model may contain, in the order they must appear.
 pub const SECTION_ORDER: &[&str] = &[
+    "consts",
     "params",
     "states",
     "algebraic",
@@ -52,15 +58,18 @@ pub enum Item {
     /// A section such as `states { ... }`.
     Section(Section),
     /// `let name = expr;`, an intermediate shared by all equations and outputs.
-    Let(LetDef),
+    Let(Box<LetDef>),
 }
 
-/// A `let` intermediate.
+/// A `let` intermediate, or with subscripts (`let c[i in 0..N] = cos(q[i]);`) a family of
+/// them.
 pub struct LetDef {
     /// The `let` keyword (for spans).
     pub let_token: Token![let],
     /// The defined name.
     pub name: Ident,
+    /// The subscripts of a family; empty for a scalar.
+    pub subscripts: Vec<Subscript>,
     /// Its defining expression.
     pub expr: Expr,
 }
@@ -77,6 +86,8 @@ pub struct Section {
 
 /// The contents of a section, by kind.
 pub enum SectionBody {
+    /// `consts { N = 3, ... }`: integer constants for lengths, ranges and indices.
+    Consts(Vec<ConstDef>),
     /// `params { m = 1.0, ... }`.
     Params(Vec<ParamDef>),
     /// `states { ... }`.
@@ -86,7 +97,7 @@ pub enum SectionBody {
     /// `inputs { ... }`.
     Inputs(Vec<NameDef>),
     /// `equations { ...; ... }`.
-    Equations(Vec<Expr>),
+    Equations(Vec<EquationItem>),
     /// `outputs { y, z = expr }`.
     Outputs(Vec<OutputDef>),
     /// `references { theta = expr_of_t }`.
@@ -95,12 +106,22 @@ pub enum SectionBody {
     Tracking(TrackingDef),
 }
 
+/// `N = 3` in `consts`.
+pub struct ConstDef {
+    /// The constant's name.
+    pub name: Ident,
+    /// Its value: an integer expression of literals and earlier constants.
+    pub value: Expr,
+}
+
 /// A declared name with its attributes (doc comments).
 pub struct NameDef {
     /// Outer attributes; only doc comments are accepted.
     pub attrs: Vec<Attribute>,
     /// The name.
     pub name: Ident,
+    /// The lengths of an indexed family (`q[N]`, `a[2][3]`); empty for a scalar.
+    pub dims: Vec<Expr>,
 }
 
 /// `name = default` in `params`.
@@ -109,8 +130,44 @@ pub struct ParamDef {
     pub attrs: Vec<Attribute>,
     /// Parameter name.
     pub name: Ident,
+    /// The lengths of an indexed family; empty for a scalar.
+    pub dims: Vec<Expr>,
     /// Default value as written (checked to be numeric by the lowering).
     pub default: Expr,
+}
+
+/// One subscript of a target or a `let` family: an index variable with its range
+/// (`i in 0..N`) or one index (`2`, `N - 1`).
+pub enum Subscript {
+    /// `i in a..b`.
+    Binder {
+        /// The index variable.
+        var: Ident,
+        /// Its range as written.
+        range: Expr,
+    },
+    /// A single index.
+    Index(Expr),
+}
+
+/// One equation, or a family of them written once over an index range.
+pub enum EquationItem {
+    /// `der(x) = expr;` or `lhs == rhs;`.
+    Equation(Expr),
+    /// `for i in a..b { ... }`.
+    For(ForDef),
+}
+
+/// `for VAR in RANGE { equations }`.
+pub struct ForDef {
+    /// The `for` keyword (for spans).
+    pub for_token: Token![for],
+    /// The index variable.
+    pub var: Ident,
+    /// Its range as written.
+    pub range: Expr,
+    /// The equations written once for every index.
+    pub body: Vec<EquationItem>,
 }
 
 /// An output: a bare name (`theta`, the state of that name) or `name = expr`.
@@ -119,6 +176,8 @@ pub struct OutputDef {
     pub attrs: Vec<Attribute>,
     /// Output name.
     pub name: Ident,
+    /// Subscripts of an output family (`y[i in 0..N] = ...`); empty for a scalar.
+    pub subscripts: Vec<Subscript>,
     /// Its expression; `None` means the declared variable of the same name.
     pub expr: Option<Expr>,
 }
@@ -127,6 +186,8 @@ pub struct OutputDef {
 pub struct ReferenceDef {
     /// The output it is a reference for.
     pub output: Ident,
+    /// Subscripts selecting elements of an output family.
+    pub subscripts: Vec<Subscript>,
     /// Its expression in `t` and parameters.
     pub expr: Expr,
 }
@@ -143,6 +204,8 @@ pub struct TrackingDef {
 pub struct TrackingEntry {
     /// The output's name.
     pub output: Ident,
+    /// Subscripts selecting elements of an output family.
+    pub subscripts: Vec<Subscript>,
     /// The bracket, for spans of the whole list.
     pub bracket_span: Span,
     /// The negated roots as written.
@@ -238,16 +301,18 @@ impl Parse for Item {
         if input.peek(Token![let]) {
             let let_token: Token![let] = input.parse()?;
             let name: Ident = user_ident(input, "a `let` intermediate")?;
+            let subscripts = subscripts(input)?;
             input.parse::<Token![=]>()?;
             let expr: Expr = input.parse()?;
             input.parse::<Token![;]>().map_err(|e| {
                 syn::Error::new(e.span(), "expected `;` after the `let` intermediate")
             })?;
-            return Ok(Item::Let(LetDef {
+            return Ok(Item::Let(Box::new(LetDef {
                 let_token,
                 name,
+                subscripts,
                 expr,
-            }));
+            })));
         }
         let keyword: Ident = input.call(syn::ext::IdentExt::parse_any).map_err(|e| {
             syn::Error::new(
@@ -261,6 +326,25 @@ impl Parse for Item {
         let kw = keyword.to_string();
         let body_span;
         let body = match kw.as_str() {
+            "consts" => {
+                let content;
+                body_span = braced!(content in input).span.join();
+                SectionBody::Consts(comma_list(&content, |c| {
+                    let name = user_ident(c, "a constant")?;
+                    c.parse::<Token![=]>().map_err(|e| {
+                        syn::Error::new(
+                            e.span(),
+                            format!(
+                                "expected `= <integer>` after constant `{name}`, e.g. `{name} = 3`"
+                            ),
+                        )
+                    })?;
+                    Ok(ConstDef {
+                        name,
+                        value: c.parse()?,
+                    })
+                })?)
+            }
             "params" => {
                 let content;
                 body_span = braced!(content in input).span.join();
@@ -284,17 +368,7 @@ impl Parse for Item {
             "equations" => {
                 let content;
                 body_span = braced!(content in input).span.join();
-                let mut eqs = Vec::new();
-                while !content.is_empty() {
-                    eqs.push(content.parse::<Expr>()?);
-                    if content.is_empty() {
-                        break;
-                    }
-                    content
-                        .parse::<Token![;]>()
-                        .map_err(|e| syn::Error::new(e.span(), "expected `;` after an equation"))?;
-                }
-                SectionBody::Equations(eqs)
+                SectionBody::Equations(equation_items(&content)?)
             }
             "outputs" => {
                 let content;
@@ -306,9 +380,11 @@ impl Parse for Item {
                 body_span = braced!(content in input).span.join();
                 SectionBody::References(comma_list(&content, |c| {
                     let output: Ident = c.parse()?;
+                    let subscripts = subscripts(c)?;
                     c.parse::<Token![=]>()?;
                     Ok(ReferenceDef {
                         output,
+                        subscripts,
                         expr: c.parse()?,
                     })
                 })?)
@@ -324,12 +400,14 @@ impl Parse for Item {
                 body_span = braced!(content in input).span.join();
                 let entries = comma_list(&content, |c| {
                     let output: Ident = c.parse()?;
+                    let subscripts = subscripts(c)?;
                     c.parse::<Token![:]>()?;
                     let list;
                     let bracket = bracketed!(list in c);
                     let roots = Punctuated::<Expr, Token![,]>::parse_terminated(&list)?;
                     Ok(TrackingEntry {
                         output,
+                        subscripts,
                         bracket_span: bracket.span.join(),
                         roots: roots.into_iter().collect(),
                     })
@@ -393,16 +471,94 @@ fn keyword_or(e: syn::Error, message: &str) -> syn::Error {
     }
 }
 
+/// Equations up to the end of `input`: `expr;` or `for i in a..b { ... }`, nested.
+fn equation_items(input: ParseStream) -> syn::Result<Vec<EquationItem>> {
+    let mut items = Vec::new();
+    while !input.is_empty() {
+        if input.peek(Token![for]) {
+            let for_token: Token![for] = input.parse()?;
+            let var: Ident = input.parse().map_err(|e| {
+                syn::Error::new(
+                    e.span(),
+                    "expected an index variable after `for`, e.g. `for i in 0..N { ... }`",
+                )
+            })?;
+            input.parse::<Token![in]>().map_err(|e| {
+                syn::Error::new(
+                    e.span(),
+                    format!("expected `in` after `for {var}`, e.g. `for {var} in 0..N {{ ... }}`"),
+                )
+            })?;
+            let range = Expr::parse_without_eager_brace(input)?;
+            let content;
+            braced!(content in input);
+            let body = equation_items(&content)?;
+            // A `;` after the loop's braces is accepted, as in Rust.
+            if input.peek(Token![;]) {
+                input.parse::<Token![;]>()?;
+            }
+            items.push(EquationItem::For(ForDef {
+                for_token,
+                var,
+                range,
+                body,
+            }));
+            continue;
+        }
+        items.push(EquationItem::Equation(input.parse::<Expr>()?));
+        if input.is_empty() {
+            break;
+        }
+        input
+            .parse::<Token![;]>()
+            .map_err(|e| syn::Error::new(e.span(), "expected `;` after an equation"))?;
+    }
+    Ok(items)
+}
+
+/// The lengths `[N][3]` after a declared name.
+fn dims(input: ParseStream) -> syn::Result<Vec<Expr>> {
+    let mut out = Vec::new();
+    while input.peek(syn::token::Bracket) {
+        let content;
+        bracketed!(content in input);
+        out.push(content.parse()?);
+    }
+    Ok(out)
+}
+
+/// The subscripts `[i in 0..N][2]` after a target or a `let` name.
+fn subscripts(input: ParseStream) -> syn::Result<Vec<Subscript>> {
+    let mut out = Vec::new();
+    while input.peek(syn::token::Bracket) {
+        let content;
+        bracketed!(content in input);
+        if content.peek(Ident) && content.peek2(Token![in]) {
+            let var: Ident = content.parse()?;
+            content.parse::<Token![in]>()?;
+            out.push(Subscript::Binder {
+                var,
+                range: content.parse()?,
+            });
+        } else {
+            out.push(Subscript::Index(content.parse()?));
+        }
+    }
+    Ok(out)
+}
+
 fn parse_name(input: ParseStream, what: &str) -> syn::Result<NameDef> {
     Ok(NameDef {
         attrs: input.call(Attribute::parse_outer)?,
         name: user_ident(input, what)?,
+        dims: dims(input)?,
     })
 }
 
 fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
     let attrs = input.call(Attribute::parse_outer)?;
     let name: Ident = user_ident(input, "a parameter")?;
+    let dims = dims(input)?;
     input.parse::<Token![=]>().map_err(|e| {
         syn::Error::new(
             e.span(),
@@ -412,6 +568,7 @@ fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
     Ok(ParamDef {
         attrs,
         name,
+        dims,
         default: input.parse()?,
     })
 }
@@ -419,11 +576,17 @@ fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
 fn parse_output(input: ParseStream) -> syn::Result<OutputDef> {
     let attrs = input.call(Attribute::parse_outer)?;
     let name: Ident = user_ident(input, "an output")?;
+    let subscripts = subscripts(input)?;
     let expr = if input.peek(Token![=]) {
         input.parse::<Token![=]>()?;
         Some(input.parse()?)
     } else {
         None
     };
-    Ok(OutputDef { attrs, name, expr })
+    Ok(OutputDef {
+        attrs,
+        name,
+        subscripts,
+        expr,
+    })
 }

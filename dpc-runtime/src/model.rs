@@ -58,7 +58,7 @@ impl DaeTapes {
                 algebraic: names(&d.layout.algebraic),
                 inputs: names(&d.layout.inputs),
                 outputs: Names::Owned(d.outputs.iter().map(|o| o.0.clone()).collect()),
-                params: Names::Owned(model.params.iter().map(|p| p.name.to_string()).collect()),
+                params: Names::Owned(model.params.iter().map(|p| p.label.clone()).collect()),
                 equations: Names::Owned(d.equation_texts.clone()),
                 pattern_f_xdot: pattern(&d.f_xdot),
                 pattern_f_x: pattern(&d.f_x),

@@ -9,6 +9,9 @@
 //! * [`CartPendulum`]: an inverted pendulum on a cart in Cartesian coordinates with a rod
 //!   constraint and its multiplier (index 3), and [`CartPendulumJoint`], the same plant in
 //!   joint coordinates (an ODE);
+//! * [`Arm1`], [`Arm2`], [`Arm6`]: planar arms of 1, 2 and 6 links with flexible joints
+//!   (Spong's model, relative degree 4 per joint), declared once for every number of links
+//!   with the DSL's indexed families, with two stabilised Hirschorn steps per joint;
 //! * [`SliderCrank`]: a slider-crank with the slider position, the rod constraint and its
 //!   multiplier (index 3), and [`SliderCrankJoint`], the same mechanism in the crank angle.
 //!
@@ -21,6 +24,7 @@
 //! code the macro generates for each of them.
 #![warn(missing_docs)]
 
+mod arm;
 mod cart_pendulum;
 mod flexible_joint;
 mod pendulum;
@@ -28,6 +32,10 @@ mod slider_crank;
 mod wheel;
 pub mod wheel_design;
 
+pub use arm::{
+    Arm1, Arm1Params, Arm1Reference, Arm1Tracking, Arm2, Arm2Params, Arm2Reference, Arm2Tracking,
+    Arm6, Arm6Params, Arm6Reference, Arm6Tracking,
+};
 pub use cart_pendulum::{
     CartPendulum, CartPendulumJoint, CartPendulumJointParams, CartPendulumJointReference,
     CartPendulumJointTracking, CartPendulumParams, CartPendulumReference, CartPendulumTracking,

@@ -1,0 +1,89 @@
+//! Expansion of the planar n-link flexible-joint arm of `models/src/arm.rs` for growing `n`
+//! and numbers of stabilised Hirschorn steps per joint: the time of the macro's passes
+//! (`dpc_codegen::try_expand`: parse, lower, relative degrees, the tracking rows, derive and
+//! emit), and the generated code's size in lines (formatted with prettyplease). The arm is
+//! the repository's own declaration, `Arm2` with `N = 2` replaced by `N = n`, so the numbers
+//! are those of the models users compile. Prints the table of `docs/arms.md`.
+//!
+//! Run with `cargo bench -p dpc-codegen --bench arms` (`-- 16` for a different largest `n`).
+
+use proc_macro2::TokenStream;
+use std::time::{Duration, Instant};
+
+/// The `Arm2` declaration of `models/src/arm.rs`, as written.
+fn arm2_text() -> String {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/src/arm.rs");
+    let source = std::fs::read_to_string(path).expect("models/src/arm.rs");
+    let file = syn::parse_file(&source).expect("arm.rs parses");
+    file.items
+        .into_iter()
+        .find_map(|item| match item {
+            syn::Item::Macro(m) if m.mac.tokens.to_string().contains("pub Arm2 {") => {
+                Some(m.mac.tokens.to_string())
+            }
+            _ => None,
+        })
+        .expect("Arm2 in models/src/arm.rs")
+}
+
+/// The arm with `n` links and `steps` roots `4.0` in `W` per joint.
+fn arm(template: &str, n: usize, steps: usize) -> TokenStream {
+    let roots = vec!["4.0"; steps].join(", ");
+    let text = template
+        .replace("Arm2", &format!("Arm{n}"))
+        .replace("N = 2", &format!("N = {n}"))
+        .replace("[4.0 , 4.0]", &format!("[{roots}]"));
+    assert!(
+        text.contains(&format!("N = {n}")),
+        "the template changed: {text}"
+    );
+    text.parse().expect("arm tokenises")
+}
+
+/// Median of the times of `f` over at least 3 runs and about a second.
+fn median(mut f: impl FnMut()) -> Duration {
+    let mut times = Vec::new();
+    let start = Instant::now();
+    while times.len() < 3 || (start.elapsed() < Duration::from_secs(1) && times.len() < 50) {
+        let t = Instant::now();
+        f();
+        times.push(t.elapsed());
+    }
+    times.sort();
+    times[times.len() / 2]
+}
+
+fn main() {
+    let largest: usize = std::env::args()
+        .filter_map(|a| a.parse().ok())
+        .next()
+        .unwrap_or(16);
+    let template = arm2_text();
+    println!("| links n | steps per joint | expansion | generated lines | result |");
+    println!("| --- | --- | --- | --- | --- |");
+    for n in [1, 2, 4, 6, 8, 12, 16, 24, 32]
+        .into_iter()
+        .filter(|&n| n <= largest)
+    {
+        for steps in [2, 3, 4] {
+            let tokens = arm(&template, n, steps);
+            match dpc_codegen::try_expand(tokens.clone()) {
+                Ok(out) => {
+                    let time = median(|| {
+                        std::hint::black_box(
+                            dpc_codegen::try_expand(tokens.clone()).expect("expands"),
+                        );
+                    });
+                    let file: syn::File = syn::parse2(out).expect("generated code parses");
+                    let lines = prettyplease::unparse(&file).lines().count();
+                    println!("| {n} | {steps} | {time:.2?} | {lines} | expands |");
+                }
+                Err(e) => {
+                    let message = e.to_string();
+                    let short: String = message.chars().take(90).collect();
+                    println!("| {n} | {steps} | - | - | refused: {short}... |");
+                }
+            }
+        }
+    }
+}
