@@ -20,6 +20,7 @@ const PAGES: &[(&str, &str)] = &[
     ("sampling-period", "sampling_period"),
     ("bdf", "bdf"),
     ("jacobians", "jacobians"),
+    ("arms", "arms"),
 ];
 
 fn module_of(stem: &str) -> Option<&'static str> {

@@ -37,4 +37,5 @@ pub mod guide {
     page!(sampling_period, "sampling_period.md");
     page!(bdf, "bdf.md");
     page!(jacobians, "jacobians.md");
+    page!(arms, "arms.md");
 }
