@@ -52,6 +52,9 @@ mod transamp_constants {
     pub const R0: f64 = 1000.0;
     /// `r1 .. r9` are all 9000.
     pub const R: f64 = 9000.0;
+    /// `r1` and `r2`, named for the initial values' voltage divider `ub / (r2 / r1 + 1)`.
+    pub const R1: f64 = R;
+    pub const R2: f64 = R;
     pub const C: [f64; 5] = [1e-6, 2e-6, 3e-6, 4e-6, 5e-6];
 }
 
@@ -61,7 +64,7 @@ impl TransistorAmplifier {
     #[allow(clippy::excessive_precision)]
     pub fn initial() -> ([f64; 8], [f64; 8]) {
         use transamp_constants::*;
-        let half = UB / (R / R + 1.0);
+        let half = UB / (R2 / R1 + 1.0);
         let y = [0.0, half, half, UB, half, half, UB, 0.0];
         let yp = [
             51.338775,
