@@ -541,6 +541,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                     let h_old = self.hh;
                     self.hh *= 0.25;
                     if ncf >= self.opts.max_newton_failures || self.hh.abs() < self.hmin() {
+                        if let Some(e) = self.index_three_start(fail, saved_t + h_old, h_old) {
+                            return Err(e);
+                        }
                         return Err(fail.into_error(&self.dae, saved_t + h_old, h_old));
                     }
                     self.after_failure(h_old);
@@ -549,6 +552,20 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         self.complete_step(nef >= 2);
         Ok(())
+    }
+
+    /// The typed error for a first step that Newton cannot take on an index-3 problem with
+    /// excluded higher-index components ([`BdfError::IndexThreeStart`]).
+    fn index_three_start(&self, fail: NewtonFailure, t: f64, h: f64) -> Option<BdfError> {
+        let first = (0..self.n).find(|&i| self.opts.index_of(i) == 3)?;
+        (fail == NewtonFailure::Convergence
+            && self.nst() == 0
+            && self.opts.higher_index == HigherIndexControl::Exclude)
+            .then(|| BdfError::IndexThreeStart {
+                t,
+                h,
+                unknown: self.dae.unknown_name(first),
+            })
     }
 
     fn after_failure(&mut self, h_old: f64) {
