@@ -18,6 +18,7 @@ const PAGES: &[(&str, &str)] = &[
     ("constrained-plants", "constrained_plants"),
     ("linear-analysis", "linear_analysis"),
     ("sampling-period", "sampling_period"),
+    ("integrators", "integrators"),
     ("bdf", "bdf"),
     ("jacobians", "jacobians"),
     ("arms", "arms"),

@@ -10,6 +10,8 @@
  * rtol = atol = 1e-k and u, v, lambda excluded from the error test (IDASetId + suppressalg,
  * the same choice as dpc-core's default HigherIndexControl::Exclude), compared with RK4 on the
  * angle ODE.
+ * Transistor amplifier (index 1, Test Set transamp.F) to t = 0.2 with rtol = atol = 1e-k, all
+ * eight components scored against the Test Set's reference (PSIDE at 1e-14).
  */
 #include <math.h>
 #include <stdio.h>
@@ -79,6 +81,67 @@ static int pend_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector 
   return 0;
 }
 
+
+/* Transistor amplifier (Test Set transamp.F): F = M y' - phi(t, y), index 1, singular
+ * non-diagonal M; the same equations as dpc-core/tests/common/testset_index1.rs. */
+#define UB 6.0
+#define UF 0.026
+#define ALPHA 0.99
+#define BETA 1e-6
+#define R0 1000.0
+#define RR 9000.0
+static const double CAP[5] = {1e-6, 2e-6, 3e-6, 4e-6, 5e-6};
+static const int MASS_R[14] = {0, 0, 1, 1, 2, 3, 3, 4, 4, 5, 6, 6, 7, 7};
+static const int MASS_C[14] = {0, 1, 0, 1, 2, 3, 4, 3, 4, 5, 6, 7, 6, 7};
+static double mass_v(int k) {
+  static const int cap[14] = {0, 0, 0, 0, 1, 2, 2, 2, 2, 3, 4, 4, 4, 4};
+  static const double sign[14] = {-1, 1, 1, -1, -1, -1, 1, 1, -1, -1, -1, 1, 1, -1};
+  return sign[k] * CAP[cap[k]];
+}
+
+static int amp_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp), *r = N_VGetArrayPointer(rr);
+  (void)ud;
+  double ue = 0.1 * sin(200.0 * M_PI * t);
+  double g1 = BETA * (exp((y[1] - y[2]) / UF) - 1.0), g2 = BETA * (exp((y[4] - y[5]) / UF) - 1.0);
+  r[0] = -((y[0] - ue) / R0);
+  r[1] = -(y[1] / RR + (y[1] - UB) / RR + (1.0 - ALPHA) * g1);
+  r[2] = -(y[2] / RR - g1);
+  r[3] = -((y[3] - UB) / RR + ALPHA * g1);
+  r[4] = -(y[4] / RR + (y[4] - UB) / RR + (1.0 - ALPHA) * g2);
+  r[5] = -(y[5] / RR - g2);
+  r[6] = -((y[6] - UB) / RR + ALPHA * g2);
+  r[7] = -(y[7] / RR);
+  for (int k = 0; k < 14; k++) r[MASS_R[k]] += mass_v(k) * p[MASS_C[k]];
+  return 0;
+}
+
+static int amp_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
+                   void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
+  realtype *y = N_VGetArrayPointer(yy);
+  (void)t; (void)yp; (void)rr; (void)ud; (void)t1; (void)t2; (void)t3;
+  double d1 = BETA * exp((y[1] - y[2]) / UF) / UF, d2 = BETA * exp((y[4] - y[5]) / UF) / UF;
+  SUNMatZero(J);
+  for (int k = 0; k < 14; k++) SM_ELEMENT_D(J, MASS_R[k], MASS_C[k]) += cj * mass_v(k);
+  SM_ELEMENT_D(J, 0, 0) -= 1.0 / R0;
+  SM_ELEMENT_D(J, 1, 1) -= 2.0 / RR + (1.0 - ALPHA) * d1;
+  SM_ELEMENT_D(J, 1, 2) -= -(1.0 - ALPHA) * d1;
+  SM_ELEMENT_D(J, 2, 1) -= -d1;
+  SM_ELEMENT_D(J, 2, 2) -= 1.0 / RR + d1;
+  SM_ELEMENT_D(J, 3, 1) -= ALPHA * d1;
+  SM_ELEMENT_D(J, 3, 2) -= -ALPHA * d1;
+  SM_ELEMENT_D(J, 3, 3) -= 1.0 / RR;
+  SM_ELEMENT_D(J, 4, 4) -= 2.0 / RR + (1.0 - ALPHA) * d2;
+  SM_ELEMENT_D(J, 4, 5) -= -(1.0 - ALPHA) * d2;
+  SM_ELEMENT_D(J, 5, 4) -= -d2;
+  SM_ELEMENT_D(J, 5, 5) -= 1.0 / RR + d2;
+  SM_ELEMENT_D(J, 6, 4) -= ALPHA * d2;
+  SM_ELEMENT_D(J, 6, 5) -= -ALPHA * d2;
+  SM_ELEMENT_D(J, 6, 6) -= 1.0 / RR;
+  SM_ELEMENT_D(J, 7, 7) -= 1.0 / RR;
+  return 0;
+}
+
 static void pend_state(double th, double om, double *s) {
   s[0] = sin(th);
   s[1] = -cos(th);
@@ -117,14 +180,23 @@ static double now(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-/* One solve; returns steps, writes the final state into out. */
-static long solve(SUNContext ctx, int pendulum, double rtol, double *out) {
-  int n = pendulum ? 5 : 3;
-  double tend = pendulum ? 3.0 : 1e11;
+/* One solve (problem 0 Robertson, 1 pendulum, 2 transistor amplifier); returns steps (negative
+ * on failure), writes the final state into out and the error-test failures into netf. */
+static long solve(SUNContext ctx, int problem, double rtol, double *out, long *netf) {
+  int pendulum = problem == 1;
+  int n = problem == 2 ? 8 : pendulum ? 5 : 3;
+  double tend = problem == 2 ? 0.2 : pendulum ? 3.0 : 1e11;
   N_Vector yy = N_VNew_Serial(n, ctx), yp = N_VNew_Serial(n, ctx), atol = N_VNew_Serial(n, ctx);
   realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp), *a = N_VGetArrayPointer(atol);
   void *mem = IDACreate(ctx);
-  if (pendulum) {
+  if (problem == 2) {
+    double half = UB / 2.0;
+    double y0[8] = {0.0, half, half, UB, half, half, UB, 0.0};
+    double p0[8] = {51.338775, 51.338775, -half / (CAP[1] * RR), -24.9757667, -24.9757667,
+                    -half / (CAP[3] * RR), -10.00564453, -10.00564453};
+    for (int i = 0; i < n; i++) { y[i] = y0[i]; p[i] = p0[i]; a[i] = rtol; }
+    IDAInit(mem, amp_res, 0.0, yy, yp);
+  } else if (pendulum) {
     pend_state(1.0, 0.0, y);
     p[0] = 0.0; p[1] = 0.0; p[2] = -y[4] * y[0]; p[3] = -y[4] * y[1] - G; p[4] = 0.0;
     for (int i = 0; i < n; i++) a[i] = rtol;
@@ -140,7 +212,7 @@ static long solve(SUNContext ctx, int pendulum, double rtol, double *out) {
   SUNMatrix A = SUNDenseMatrix(n, n, ctx);
   SUNLinearSolver LS = SUNLinSol_Dense(yy, A, ctx);
   IDASetLinearSolver(mem, LS, A);
-  IDASetJacFn(mem, pendulum ? pend_jac : rober_jac);
+  IDASetJacFn(mem, problem == 2 ? amp_jac : pendulum ? pend_jac : rober_jac);
   IDASetMaxNumSteps(mem, 1000000);
   IDASetStopTime(mem, tend);
   if (pendulum) {
@@ -155,6 +227,7 @@ static long solve(SUNContext ctx, int pendulum, double rtol, double *out) {
   int flag = IDASolve(mem, tend, &tret, yy, yp, IDA_NORMAL);
   long nst = -1;
   IDAGetNumSteps(mem, &nst);
+  IDAGetNumErrTestFails(mem, netf);
   if (flag < 0) nst = -nst;
   for (int i = 0; i < n; i++) out[i] = y[i];
   IDAFree(&mem);
@@ -173,19 +246,28 @@ int main(void) {
   double pend_ref[5];
   pend_reference(1.0, 3.0, pend_ref);
   printf("| problem | rtol | steps | significant digits | time [ms] |\n|---|---|---|---|---|\n");
-  for (int pendulum = 0; pendulum <= 1; pendulum++) {
-    for (int k = 4; k <= 10; k++) {
-      double rtol = pow(10.0, -k), out[5];
-      long nst = solve(ctx, pendulum, rtol, out);
+  const double amp_ref[8] = {-0.5562145012262709e-2, 0.3006522471903042e+1,
+                             0.2849958788608128e+1, 0.2926422536206241e+1,
+                             0.2704617865010554e+1, 0.2761837778393145e+1,
+                             0.4770927631616772e+1, 0.1236995868091548e+1};
+  for (int problem = 0; problem <= 2; problem++) {
+    for (int k = 4; k <= 10; k += problem == 2 ? 2 : 1) {
+      double rtol = pow(10.0, -k), out[8];
+      long netf = 0;
+      long nst = solve(ctx, problem, rtol, out, &netf);
+      int reps = problem == 2 ? 3 : REPS;
       double t0 = now();
-      for (int r = 0; r < REPS; r++) solve(ctx, pendulum, rtol, out);
-      double ms = (now() - t0) / REPS * 1e3;
-      if (pendulum)
+      for (int r = 0; r < reps; r++) solve(ctx, problem, rtol, out, &netf);
+      double ms = (now() - t0) / reps * 1e3;
+      if (problem == 1)
         printf("| IDA pendulum (t=3) | 1e-%d | %ld | %.2f (x,y) / %.2f (all) | %.3f |\n", k, nst,
                digits(out, pend_ref, 0, 2), digits(out, pend_ref, 0, 5), ms);
-      else
+      else if (problem == 0)
         printf("| IDA Robertson (t=1e11) | 1e-%d | %ld | %.2f | %.3f |\n", k, nst,
                digits(out, rober_ref, 0, 3), ms);
+      else
+        printf("| IDA transistor amplifier (t=0.2) | 1e-%d | %ld (%ld error-test failures) | %.2f | %.3f |\n",
+               k, nst, netf, digits(out, amp_ref, 0, 8), ms);
     }
   }
   SUNContext_Free(&ctx);

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Peer comparison: SUNDIALS IDA from the Debian package libsundials-dev against dpc-core's BDF
-# on Robertson (index 1) and the Cartesian pendulum (index 3), same tolerances.
+# on Robertson (index 1), the Cartesian pendulum (index 3) and the Test Set transistor amplifier
+# (index 1, singular mass matrix), same tolerances.
 #
 #   bash bench/ida_peer.sh
 #

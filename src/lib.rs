@@ -35,6 +35,7 @@ pub mod guide {
     page!(constrained_plants, "constrained_plants.md");
     page!(linear_analysis, "linear_analysis.md");
     page!(sampling_period, "sampling_period.md");
+    page!(integrators, "integrators.md");
     page!(bdf, "bdf.md");
     page!(jacobians, "jacobians.md");
     page!(arms, "arms.md");

@@ -43,33 +43,46 @@ fn car_axis<L: LinearSolver>(tol: f64, ls: L) -> ([f64; 10], Stats) {
     (y, r.stats())
 }
 
+/// The Test Set's measure: the median of `digits(tol * f)` over the jitter `f = 0.9, 1, 1.1`.
+fn median_over_jitter(tol: f64, digits: impl Fn(f64) -> f64) -> f64 {
+    let mut d = [0.9, 1.0, 1.1].map(|f| digits(tol * f));
+    d.sort_by(f64::total_cmp);
+    d[1]
+}
+
 #[test]
 fn andrews_index3_reaches_test_set_accuracy() {
-    // Measured scd (mescd) on y1..y7: 0.49 (1.56) at 1e-4, 3.93 (4.43) at 1e-6, 5.11 (5.62) at
-    // 1e-8, in 73, 74 and 124 steps. Floors are about half a digit below.
-    for (tol, floor) in [(1e-4, 0.0), (1e-6, 3.4), (1e-8, 4.6)] {
+    // Median scd on y1..y7 over tol x (0.9, 1, 1.1), measured: 3.91 at 1e-4, 4.38 at 1e-6, 5.65
+    // at 1e-8 (60, 90 and 145 steps at tol itself). Before Newton's test used the transformed
+    // increments and the tighter tolerance of higher-index problems: 1.18, 3.93, 5.11. Floors
+    // are about half a digit below.
+    for (tol, floor) in [(1e-4, 3.4), (1e-6, 3.9), (1e-8, 5.1)] {
+        let d = median_over_jitter(tol, |t| scd(&andrews(t).0, &ANDREWS_REF, &ANDREWS_SCORED));
         let (y, s) = andrews(tol);
-        let d = scd(&y, &ANDREWS_REF, &ANDREWS_SCORED);
         let m = mescd(&y, &ANDREWS_REF, &ANDREWS_SCORED, tol, tol);
-        println!("Andrews tol {tol:e}: scd {d:.2}, mescd {m:.2}, {s:?}");
+        println!("Andrews tol {tol:e}: median scd {d:.2}, mescd {m:.2} at tol, {s:?}");
         assert!(d >= floor, "tol {tol}: scd {d}");
     }
 }
 
 #[test]
 fn car_axis_index3_reaches_test_set_accuracy() {
-    // All ten components are scored. Measured scd (mescd): 0.21 (1.35) at 1e-4, 1.88 (2.93)
-    // at 1e-6, 2.81 (4.54) at 1e-8 in 97, 199 and 417 steps; the worst components are the
-    // velocities and multipliers (index 2 and 3, whose error weights are scaled by h and h^2),
-    // the positions alone reach 3.9 and 5.4 digits at 1e-6 and 1e-8.
+    // All ten components are scored (Test Set). Median scd over tol x (0.9, 1, 1.1), measured:
+    // 0.37 / 1.41 / 2.90 at 1e-4 / 1e-6 / 1e-8 (positions alone 2.49 / 3.92 / 5.47) in 103, 206 and 427
+    // steps. The multipliers (index 3) and velocities (index 2) limit "all": Radau IIA's
+    // multipliers converge like h^2 on index-3 problems, and their error weights are relaxed
+    // by h^2 (velocities by h) as in RADAU5. Without that relaxation the run at 1e-6 reaches 4.2
+    // digits in 730 steps but fails at 1e-8 (Newton cannot resolve the multipliers to an
+    // unrelaxed tolerance). Floors about half a digit below.
     let all: Vec<usize> = (0..10).collect();
     let positions = [0, 1, 2, 3];
-    for (tol, floor, floor_pos) in [(1e-4, 0.0, 1.0), (1e-6, 1.4, 3.4), (1e-8, 2.3, 4.9)] {
+    for (tol, floor, floor_pos) in [(1e-4, -0.1, 2.0), (1e-6, 0.9, 3.4), (1e-8, 2.4, 4.9)] {
+        let run = |t| car_axis(t, NalgebraLu::<10>::new()).0;
+        let d = median_over_jitter(tol, |t| scd(&run(t), &CAR_AXIS_REF, &all));
+        let dp = median_over_jitter(tol, |t| scd(&run(t), &CAR_AXIS_REF, &positions));
         let (y, s) = car_axis(tol, NalgebraLu::<10>::new());
-        let d = scd(&y, &CAR_AXIS_REF, &all);
         let m = mescd(&y, &CAR_AXIS_REF, &all, tol, tol);
-        let dp = scd(&y, &CAR_AXIS_REF, &positions);
-        println!("car axis tol {tol:e}: scd {d:.2} (positions {dp:.2}), mescd {m:.2}, {s:?}");
+        println!("car axis tol {tol:e}: median scd {d:.2} (positions {dp:.2}), mescd {m:.2} at tol, {s:?}");
         assert!(d >= floor, "tol {tol}: scd {d}");
         assert!(dp >= floor_pos, "tol {tol}: scd of the positions {dp}");
     }
@@ -129,10 +142,11 @@ fn pendulum(tol: f64, reference: &[f64; 5]) -> (f64, f64, Stats) {
 #[test]
 fn pendulum_index3_matches_independent_reference() {
     let reference = Pendulum::default().reference(THETA0, PENDULUM_T);
-    // Measured digits (x, y / all five): 3.98 / 2.71 at 1e-4, 5.34 / 3.30 at 1e-6, 7.36 / 3.36 at
-    // 1e-8 (44, 81, 170 steps); the multiplier (index 3) limits "all". Floors about half a
-    // digit below.
-    for (tol, floor, floor_all) in [(1e-4, 3.5, 2.2), (1e-6, 4.8, 2.8), (1e-8, 6.8, 2.9)] {
+    // Measured digits (x, y / all five): 5.79 / 2.50 at 1e-4, 6.52 / 2.87 at 1e-6, 8.57 / 3.35 at
+    // 1e-8 (51, 88, 173 steps; before Newton's test for higher-index problems was tightened:
+    // 3.98 / 2.71, 5.34 / 3.30, 7.36 / 3.36); the multiplier (index 3) limits "all". Floors
+    // about half a digit below.
+    for (tol, floor, floor_all) in [(1e-4, 5.3, 2.0), (1e-6, 6.0, 2.4), (1e-8, 8.0, 2.8)] {
         let (pos, all, s) = pendulum(tol, &reference);
         println!("pendulum tol {tol:e}: {pos:.2} digits (x, y), {all:.2} (all), {s:?}");
         assert!(pos >= floor, "tol {tol}: {pos}");

@@ -54,6 +54,28 @@ pub enum BdfError {
         /// Step size of the last attempt.
         h: f64,
     },
+    /// Newton's method failed on the first step of a problem with index-3 unknowns whose error
+    /// the BDF excludes from its test ([`super::HigherIndexControl::Exclude`], the default):
+    /// the iteration matrix has condition `O(h^-3)` and Newton's test keeps those unknowns'
+    /// plain weights, so every smaller step is worse. Integrate such a problem with
+    /// [`crate::radau::Radau`], which solves index-3 DAEs as declared (the integrator the
+    /// closed loop uses for constrained plants), or choose
+    /// [`super::HigherIndexControl::Scale`].
+    #[error(
+        "the BDF cannot start this index-3 problem (unknown {unknown} has index 3): Newton failed \
+         at t = {} with step {}; integrate it with dpc_core::radau::Radau, which solves index-3 \
+         DAEs as declared, or set higher_index: HigherIndexControl::Scale",
+        Time(*t),
+        Readable(*h)
+    )]
+    IndexThreeStart {
+        /// Time the first step tried to reach.
+        t: f64,
+        /// Step size of the last attempt.
+        h: f64,
+        /// Name of the first unknown declared with index 3.
+        unknown: String,
+    },
     /// The local error test failed repeatedly, down to the minimum step.
     #[error("error test failed repeatedly at t = {} with step {}", Time(*t), Readable(*h))]
     ErrorTestFailed {

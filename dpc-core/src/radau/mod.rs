@@ -79,6 +79,14 @@ use tableau::Tableau;
 use crate::linalg::LinearSolver;
 use crate::ImplicitDae;
 
+/// Factor on RADAU5's Newton tolerance when some component has index 2 or 3 (see
+/// [`Options::newton_tolerance`]). Their weights in Newton's convergence test are relaxed by
+/// `h^(m-1)` like those of the error test, so an iteration stopped at RADAU5's tolerance leaves
+/// errors in the multipliers and accelerations that feed back into the positions: on Andrews'
+/// squeezing mechanism (index 3) the positions' significant digits at `rtol = 1e-4 / 1e-6 /
+/// 1e-8` go from 2.4 / 3.7 / 5.2 to 3.9 / 4.4 / 5.7 with this factor, for 10-20% more steps.
+const HIGHER_INDEX_NEWTON_FACTOR: f64 = 0.03;
+
 /// Weighted RMS norm `sqrt(sum (v_i w_i)^2 / n)`.
 #[inline]
 pub(crate) fn wrms(v: &[f64], w: &[f64]) -> f64 {
@@ -102,6 +110,8 @@ pub struct Radau<D: ImplicitDae, L: LinearSolver> {
     rtol: Vec<f64>,
     atol: Vec<f64>,
     fnewt: f64,
+    /// Some component has index 2 or 3 (Newton's norm and tolerance depend on it).
+    higher_index: bool,
     t: f64,
     y: Vec<f64>,
     yp: Vec<f64>,
@@ -192,9 +202,15 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         } else {
             atol.iter().copied().fold(f64::INFINITY, f64::min)
         };
-        let fnewt = opts
-            .newton_tolerance
-            .unwrap_or_else(|| (10.0 * f64::EPSILON / tolst).max(0.03f64.min(tolst.sqrt())));
+        let higher_index = (0..n).any(|i| opts.index_of(i) >= 2);
+        let fnewt = opts.newton_tolerance.unwrap_or_else(|| {
+            let f = (10.0 * f64::EPSILON / tolst).max(0.03f64.min(tolst.sqrt()));
+            if higher_index {
+                HIGHER_INDEX_NEWTON_FACTOR * f
+            } else {
+                f
+            }
+        });
         let sm = StageMatrices::new(ls, n);
         let stats = Stats {
             residual_evaluations: 1,
@@ -212,6 +228,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             rtol,
             atol,
             fnewt,
+            higher_index,
             t: t0,
             y: y0.to_vec(),
             yp: yp0.to_vec(),
@@ -606,6 +623,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 w: &self.w,
                 max_iterations: self.opts.max_newton_iterations,
                 fnewt: self.fnewt,
+                transformed_norm: self.higher_index,
             };
             let outcome = newton::solve(
                 &self.dae,

@@ -27,9 +27,11 @@ pub struct Options {
     pub min_step: f64,
     /// Simplified-Newton iterations per attempt (default 7, RADAU5's `NIT`).
     pub max_newton_iterations: usize,
-    /// Newton stops when `theta / (1 - theta) |ΔZ| <= newton_tolerance` in the weighted RMS norm
-    /// of the stage increments. `None` (default) uses RADAU5's rule
-    /// `max(10 eps / rtol', min(0.03, sqrt(rtol')))` with the mapped `rtol'`.
+    /// Newton stops when `theta / (1 - theta) |ΔW| <= newton_tolerance` in the weighted RMS norm
+    /// of the transformed stage increments (RADAU5's test). `None` (default) uses RADAU5's rule
+    /// `max(10 eps / rtol', min(0.03, sqrt(rtol')))` with the mapped `rtol'`, times `0.03` when
+    /// [`index`](Self::index) marks a component of index 2 or 3 (their relaxed weights would
+    /// otherwise let Newton's error in the multipliers reach the positions).
     pub newton_tolerance: Option<f64>,
     /// Keep the Jacobian for the next step when the last Newton contraction rate was at most
     /// this (default `0.001`, RADAU5's `THET`). A negative value re-evaluates it every step.
