@@ -164,8 +164,9 @@ fn symlog_ticks(threshold: f64, lo: f64, hi: f64) -> Vec<(f64, String)> {
     ticks
 }
 
-/// The axis range of a panel: the data's, padded; for a diverged run, the range of the data
-/// before its blow-up, with the points beyond clipped (and marked) at the edges.
+/// The axis range of a panel: the data's, padded; when a diverged run's blow-up or the kick
+/// of the first samples is much wider than the rest, the range of the rest, with the points
+/// beyond clipped (and marked) at the edges.
 fn value_range(curves: &[Curve], scale: Scale, diverged_at: Option<f64>) -> (f64, f64, bool) {
     let range = |pred: &dyn Fn(f64) -> bool| {
         curves
@@ -181,10 +182,20 @@ fn value_range(curves: &[Curve], scale: Scale, diverged_at: Option<f64>) -> (f64
     };
     let (mut lo, mut hi) = range(&|_| true);
     let mut clipped = false;
-    if let (Some(td), Scale::Linear) = (diverged_at, scale) {
-        // The motion up to 90 % of the time before the divergence sets the range; a
-        // blow-up more than five times that wide is clipped instead of flattening it.
-        let (elo, ehi) = range(&|t| t <= 0.9 * td);
+    if let Scale::Linear = scale {
+        // A diverged run: the motion up to 90 % of the time before the divergence sets the
+        // range. Otherwise the motion after the first 5 % of the run (a kick of the first
+        // samples, from an initial state off the reference, is typical of DPC). A blow-up or a
+        // kick more than five times that wide is clipped and marked instead of flattening
+        // the rest.
+        let t_last = curves
+            .iter()
+            .filter_map(|c| c.points.last().map(|p| p.0))
+            .fold(0.0, f64::max);
+        let (elo, ehi) = match diverged_at {
+            Some(td) => range(&|t| t <= 0.9 * td),
+            None => range(&|t| t >= 0.05 * t_last),
+        };
         if elo.is_finite() && ehi.is_finite() {
             let width = (ehi - elo).max(1e-12 * (1.0 + ehi.abs()));
             if hi - lo > 5.0 * width {

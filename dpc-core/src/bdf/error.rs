@@ -24,10 +24,10 @@ pub enum BdfError {
     InvalidOption(String),
     /// The iteration matrix is singular and reducing the step did not help.
     #[error(
-        "singular iteration matrix at t = {}: unknown {}, equation {}",
+        "singular iteration matrix at t = {}: {}; {}",
         Time(*t),
-        unknown.as_deref().unwrap_or("(not identified)"),
-        equation.as_deref().unwrap_or("(no zero row)")
+        unknown.as_deref().map_or("the vanishing pivot is not identified".to_string(), |u| format!("the pivot of unknown `{u}` vanished")),
+        equation.as_deref().map_or("no equation's row is zero".to_string(), |e| format!("the row of equation `{e}` is zero"))
     )]
     SingularMatrix {
         /// Time of the failure.

@@ -2,6 +2,8 @@
 
 use core::fmt;
 
+use crate::numeric::{Readable, Time};
+
 /// An option outside its range: which one, its value and what it must satisfy.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InvalidOption {
@@ -109,9 +111,11 @@ pub enum RadauError {
     },
     /// A stage system is singular and reducing the step did not help.
     #[error(
-        "singular {system} stage matrix at t = {t} (step {h}): unknown {}, equation {}",
-        unknown.as_deref().unwrap_or("(not identified)"),
-        equation.as_deref().unwrap_or("(no zero row)")
+        "singular {system} stage matrix at t = {} (step {}): {}; {}",
+        Time(*t),
+        Readable(*h),
+        unknown.as_deref().map_or("the vanishing pivot is not identified".to_string(), |u| format!("the pivot of unknown `{u}` vanished")),
+        equation.as_deref().map_or("no equation's row is zero".to_string(), |e| format!("the row of equation `{e}` is zero"))
     )]
     SingularMatrix {
         /// Start of the step.
