@@ -566,3 +566,33 @@ fn roots_of_w_far_beyond_the_plant_are_named_when_the_analysis_fails() {
     assert!(err.contains("times the plant's scale"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
 }
+
+#[test]
+fn a_system_beyond_max_states_is_refused_before_the_analysis() {
+    let dir = scratch("max-states");
+    let paper = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/linear/paper-4-1.toml");
+    let run = |args: &[&std::ffi::OsStr]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_dpc"))
+            .arg("analyze")
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&[paper.as_os_str(), "--max-states".as_ref(), "3".as_ref()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("`a` has 5 states, which exceeds --max-states = 3"),
+        "{err}"
+    );
+    // A file longer than any system of that size is not even read.
+    let big = dir.join("big.toml");
+    std::fs::write(&big, "#".repeat(200_000)).unwrap();
+    let out = run(&[big.as_os_str(), "--max-states".as_ref(), "3".as_ref()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("the file has 200000 bytes") && err.contains("--max-states = 3"),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+}

@@ -39,11 +39,30 @@ pub struct AnalyzeArgs {
     /// Print the full report as JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// The most states the system may have: the analysis is dense, its work grows like
+    /// n^3 and its memory like n^2, so a larger system is refused before it is read.
+    #[arg(long, value_name = "N", default_value_t = 2_000)]
+    pub max_states: usize,
 }
+
+/// Bytes of text per state that a system file with `n` states may need (about ten numbers
+/// of 24 characters per row of `a`, `b`, `c` and a margin): a longer file is refused
+/// before it is read.
+const BYTES_PER_STATE: u64 = 24 * 2_000 + 1_000;
 
 /// Why `dpc analyze` gave no report; each names the file.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum AnalyzeError {
+    /// The system is larger than `--max-states` allows.
+    #[error("{path}: {what} exceeds --max-states = {limit}; raise it deliberately (--max-states N) if the system is meant to be this large")]
+    TooLarge {
+        /// The file.
+        path: String,
+        /// What is too large (`a` has 200000 rows; the file has 4.8 GB).
+        what: String,
+        /// The limit in force.
+        limit: usize,
+    },
     /// The file could not be read.
     #[error("cannot read {path}: {message}")]
     Read {
@@ -329,11 +348,32 @@ fn transfer_at(sys: &LinearSystem, s: Complex<f64>) -> TransferPoint {
 /// [`AnalyzeError`] naming the file and, for a value, its key.
 pub fn run(args: &AnalyzeArgs) -> Result<(), AnalyzeError> {
     let path = args.system.display().to_string();
+    // A file far longer than a system of --max-states states can be is refused unread.
+    let limit_bytes = (args.max_states as u64).saturating_mul(BYTES_PER_STATE);
+    if let Ok(meta) = std::fs::metadata(&args.system) {
+        if meta.len() > limit_bytes {
+            return Err(AnalyzeError::TooLarge {
+                path,
+                what: format!(
+                    "the file has {} bytes, more than a system of that many states needs ({limit_bytes}); it",
+                    meta.len()
+                ),
+                limit: args.max_states,
+            });
+        }
+    }
     let text = std::fs::read_to_string(&args.system).map_err(|e| AnalyzeError::Read {
         path: path.clone(),
         message: e.to_string(),
     })?;
     let (sys, opts, points) = parse(&path, &text).map_err(|e| e.with_path(&path))?;
+    if sys.n() > args.max_states {
+        return Err(AnalyzeError::TooLarge {
+            path,
+            what: format!("`a` has {} states, which", sys.n()),
+            limit: args.max_states,
+        });
+    }
     let report = analyze(&sys, &opts).map_err(|cause| AnalyzeError::Linear {
         path: path.clone(),
         cause,
