@@ -7,9 +7,11 @@
 
 use std::path::Path;
 
+/// The page of docs/ that is the documentation of `dpc::model!` itself.
+const MACRO_PAGE: &str = "dsl";
+
 /// The guide's pages: file stem in docs/ and module name in `dpc::guide`.
 const PAGES: &[(&str, &str)] = &[
-    ("dsl", "dsl"),
     ("tracking", "tracking"),
     ("controller", "controller"),
     ("closed-loop", "closed_loop"),
@@ -43,6 +45,9 @@ fn rewrite_target(target: &str, dir: &str) -> Option<String> {
         return Some(format!("crate{anchor}"));
     }
     let stem = resolved.strip_prefix("docs/")?.strip_suffix(".md")?;
+    if stem == MACRO_PAGE {
+        return Some(format!("macro@crate::model{anchor}"));
+    }
     module_of(stem).map(|m| format!("crate::guide::{m}{anchor}"))
 }
 
@@ -72,11 +77,54 @@ fn rewrite(text: &str, dir: &str) -> String {
         if in_code {
             out.push_str(line);
         } else {
-            out.push_str(&rewrite_line(line, dir));
+            out.push_str(&escape_brackets(&rewrite_line(line, dir)));
         }
         out.push('\n');
     }
     out
+}
+
+/// Brackets that open no link (`t [s]`, `[is]` in a quotation) escaped outside code spans, so
+/// that rustdoc does not take them for intra-doc links.
+fn escape_brackets(line: &str) -> String {
+    let mut out = String::with_capacity(line.len());
+    let mut in_code = false;
+    let chars: Vec<char> = line.chars().collect();
+    for (i, &c) in chars.iter().enumerate() {
+        match c {
+            '`' => {
+                in_code = !in_code;
+                out.push(c);
+            }
+            '[' if !in_code && !opens_link(&chars[i..]) => out.push_str("\\["),
+            ']' if !in_code && !closes_link(&chars[i + 1..]) => out.push_str("\\]"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// Whether the `[` at the start of `rest` opens `[label](target)` (or an image).
+fn opens_link(rest: &[char]) -> bool {
+    let mut depth = 0;
+    for (i, &c) in rest.iter().enumerate() {
+        match c {
+            '[' => depth += 1,
+            ']' => {
+                depth -= 1;
+                if depth == 0 {
+                    return rest.get(i + 1) == Some(&'(');
+                }
+            }
+            _ => {}
+        }
+    }
+    false
+}
+
+/// Whether a `]` followed by `after` closes a link label (it is followed by `(`).
+fn closes_link(after: &[char]) -> bool {
+    after.first() == Some(&'(')
 }
 
 fn rewrite_line(line: &str, dir: &str) -> String {
@@ -131,6 +179,10 @@ fn main() {
     println!("cargo::rerun-if-changed=README.md");
     let readme = std::fs::read_to_string("README.md").expect("README.md is readable");
     std::fs::write(out.join("README.md"), rewrite(&readme, "")).expect("OUT_DIR is writable");
+    let path = format!("docs/{MACRO_PAGE}.md");
+    println!("cargo::rerun-if-changed={path}");
+    let text = std::fs::read_to_string(&path).expect("the DSL page exists");
+    std::fs::write(out.join("model.md"), rewrite(&text, "docs/")).expect("OUT_DIR is writable");
     for (stem, module) in PAGES {
         let path = format!("docs/{stem}.md");
         println!("cargo::rerun-if-changed={path}");

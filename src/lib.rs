@@ -12,6 +12,9 @@ extern crate self as dpc;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub use dpc_core as core;
+/// Declare a DAE plant: the model DSL, what it generates and its errors.
+///
+#[doc = include_str!(concat!(env!("OUT_DIR"), "/model.md"))]
 pub use dpc_macros::model;
 pub use dpc_runtime as runtime;
 pub use nalgebra;
@@ -26,7 +29,6 @@ pub mod guide {
             pub mod $module {}
         };
     }
-    page!(dsl, "dsl.md");
     page!(tracking, "tracking.md");
     page!(controller, "controller.md");
     page!(closed_loop, "closed_loop.md");

@@ -7,7 +7,8 @@
 
 use proc_macro::TokenStream;
 
-/// Declare a DAE plant; see the `dpc` README for the DSL reference.
+/// Declare a DAE plant. The grammar, the generated items and the errors are documented on
+/// the facade's re-export, `dpc::model!` (the page `docs/dsl.md` of the repository).
 ///
 /// Expands to a parameter struct, a model type implementing `dpc::core::DaeModel` with
 /// residual and analytic Jacobians, and (with a `tracking` block) the tracking DAE type.
