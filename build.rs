@@ -4,6 +4,10 @@
 //! `scenarios/wheel.toml`); on the generated docs they become intra-doc links to the guide's
 //! modules, and links to other files of the repository, which the docs do not contain, become
 //! plain names in code format. Figures are referred to by their file.
+//!
+//! With the feature `casadi-peer` (never on in CI or `cargo test`), it also compiles CasADi's
+//! generated C for the wheel (written by `bench/casadi/run.sh`, or found in the directory
+//! `DPC_CASADI_DIR`) with `-O2` into the benchmark `benches/casadi_peer.rs`.
 
 use std::path::Path;
 
@@ -23,6 +27,7 @@ const PAGES: &[(&str, &str)] = &[
     ("integrators", "integrators"),
     ("bdf", "bdf"),
     ("jacobians", "jacobians"),
+    ("performance", "performance"),
     ("arms", "arms"),
 ];
 
@@ -173,6 +178,38 @@ fn rewrite_line(line: &str, dir: &str) -> String {
 }
 
 fn main() {
+    guide_pages();
+    #[cfg(feature = "casadi-peer")]
+    casadi_peer();
+}
+
+#[cfg(feature = "casadi-peer")]
+fn casadi_peer() {
+    use std::path::PathBuf;
+    println!("cargo:rerun-if-env-changed=DPC_CASADI_DIR");
+    let dir = match std::env::var_os("DPC_CASADI_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"))
+            .join("bench/casadi/generated"),
+    };
+    let source = dir.join("wheel_casadi.c");
+    println!("cargo:rerun-if-changed={}", source.display());
+    if !source.is_file() {
+        panic!(
+            "feature `casadi-peer`: {} does not exist; generate it with `bash bench/casadi/run.sh` \
+             (or point DPC_CASADI_DIR at a directory holding wheel_casadi.c)",
+            source.display()
+        );
+    }
+    cc::Build::new()
+        .file(&source)
+        .opt_level(2)
+        .warnings(false)
+        .compile("wheel_casadi");
+}
+
+/// README.md and the guide's pages, rewritten for rustdoc into `OUT_DIR`.
+fn guide_pages() {
     let out = std::env::var("OUT_DIR").expect("cargo sets OUT_DIR");
     let out = Path::new(&out);
     println!("cargo::rerun-if-changed=build.rs");

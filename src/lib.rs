@@ -40,5 +40,6 @@ pub mod guide {
     page!(integrators, "integrators.md");
     page!(bdf, "bdf.md");
     page!(jacobians, "jacobians.md");
+    page!(performance, "performance.md");
     page!(arms, "arms.md");
 }

@@ -1,13 +1,16 @@
 //! A DPC control update for a fixed-size generated model allocates nothing on the heap
-//! after setup: counted with a global allocator wrapper.
+//! after setup, and a closed-loop run allocates per sample only the vectors of the sample it
+//! records: counted with a global allocator wrapper (the tests take a lock, so that one
+//! test's allocations are not counted in another's).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use dpc::core::dpc::{Dpc, DpcOptions, Extraction};
 use dpc::core::linalg::NalgebraLu;
+use dpc::core::simulate::{simulate, ClosedLoopOptions, Hold};
 use dpc_models::wheel_design;
 use dpc_models::{Wheel, WheelReference, WheelTracking};
 
@@ -32,6 +35,9 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// Held by each test while it counts.
+static COUNTING: Mutex<()> = Mutex::new(());
+
 /// How the controller of a test is set up.
 #[derive(Debug, Clone, Copy)]
 enum Feedback {
@@ -45,6 +51,7 @@ enum Feedback {
 
 #[test]
 fn wheel_control_updates_do_not_allocate() {
+    let _counting = COUNTING.lock().unwrap_or_else(|e| e.into_inner());
     let feedbacks = [
         Feedback::None,
         Feedback::AboutNominal,
@@ -92,5 +99,50 @@ fn wheel_control_updates_do_not_allocate() {
             "allocations during 49 control updates ({feedback:?}, {extraction:?})"
         );
         assert!(u.iter().all(|v| v.is_finite()));
+    }
+}
+
+/// Allocations of one closed-loop run of the paper's wheel (preliminary feedback about the
+/// nominal, `h = 0.05`) to `t_end`, and the number of samples it recorded.
+fn closed_loop_allocations(hold: Hold, t_end: f64) -> (usize, usize) {
+    let mut dpc = Dpc::new(
+        WheelTracking::default(),
+        WheelReference::default(),
+        NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
+        DpcOptions::default(),
+    )
+    .expect("controller")
+    .with_prefeedback(wheel_design::prefeedback(&Wheel::default()).expect("design"))
+    .expect("prefeedback");
+    let opts = ClosedLoopOptions {
+        h: 0.05,
+        t_end,
+        hold,
+        ..ClosedLoopOptions::default()
+    };
+    let x0 = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, -6.0];
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let run = simulate(&Wheel::default(), &mut dpc, &x0, &opts).expect("run starts");
+    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    assert!(run.divergence.is_none(), "{:?}", run.divergence);
+    assert!(run.events.is_empty(), "{:?}", run.events);
+    (after - before, run.samples.len())
+}
+
+#[test]
+fn a_closed_loop_sample_allocates_only_its_record() {
+    let _counting = COUNTING.lock().unwrap_or_else(|e| e.into_inner());
+    // Each recorded sample owns five vectors (x, u, y, reference, error); the controller,
+    // the hold, the consistent initialisation and the plant integrator allocate once per run,
+    // so a run twice as long allocates exactly five more per extra sample.
+    for hold in [Hold::Input, Hold::Correction] {
+        let (short, n_short) = closed_loop_allocations(hold, 2.0);
+        let (long, n_long) = closed_loop_allocations(hold, 4.0);
+        assert_eq!((n_short, n_long), (41, 81));
+        assert_eq!(
+            long - short,
+            5 * (n_long - n_short),
+            "allocations: {short} for {n_short} samples, {long} for {n_long} ({hold:?})"
+        );
     }
 }

@@ -198,6 +198,15 @@ impl DaeDerivatives {
         roots
     }
 
+    /// The roots of one `residual_and_iteration_matrix` call: residual rows, then the entries
+    /// of the iteration matrix (scheduled together, so the residual's subexpressions serve
+    /// the matrix).
+    pub fn residual_and_iteration_roots(&self) -> Vec<ExprId> {
+        let mut roots = self.residuals.clone();
+        roots.extend(self.iteration.exprs());
+        roots
+    }
+
     /// The roots of one `output_jacobians` call: the entries of `dh/dx`, `dh/dz`, `dh/du`.
     pub fn output_jacobian_roots(&self) -> Vec<ExprId> {
         [&self.h_x, &self.h_z, &self.h_u]

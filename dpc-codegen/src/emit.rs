@@ -14,8 +14,11 @@
 //! Each routine is one straight-line block: every root it needs (residual rows and Jacobian
 //! entries) is scheduled together, so subexpressions are shared across the residual and all
 //! Jacobians; structurally zero entries are never emitted, and the non-zero positions are
-//! exported as pattern constants. Function parameters use `__`-prefixed names, which the DSL
-//! forbids in user names, so user names can be bound as plain locals without shadowing.
+//! exported as pattern constants. `residual_and_iteration_matrix` schedules the residual and
+//! the iteration matrix together for Newton loops. Every slice a routine reads or writes is cut
+//! to its length once at the top, so the indexing inside compiles without bounds checks.
+//! Function parameters use `__`-prefixed names, which the DSL forbids in user names, so user
+//! names can be bound as plain locals without shadowing.
 
 use crate::derive::{
     Block, DaeDerivatives, Derived, Layout, ReferenceDerivatives, Source, TrackingDerivatives,
@@ -66,6 +69,17 @@ fn source_tokens(source: Source) -> TokenStream {
     }
 }
 
+/// Which slice argument a source reads (`__x`, `__xdot`, `__z`, `__u` in that order).
+fn slice_index(source: Source) -> Option<usize> {
+    match source {
+        Source::State(_) => Some(0),
+        Source::StateDot(_) => Some(1),
+        Source::Algebraic(_) => Some(2),
+        Source::Input(_) => Some(3),
+        _ => None,
+    }
+}
+
 fn routine(model: &Model, layout: &Layout, roots: &[ExprId]) -> Routine {
     let mut used: BTreeSet<Var> = BTreeSet::new();
     for &r in roots {
@@ -75,20 +89,36 @@ fn routine(model: &Model, layout: &Layout, roots: &[ExprId]) -> Routine {
     let mut symbols: Vec<Symbol> = used.iter().map(|v| model.symbols.symbol(*v)).collect();
     symbols.sort();
     let degrees = crate::hirschorn::w_degrees(model);
-    for s in symbols {
+    // Each slice read is cut to its layout's length once, so the reads below are proven in
+    // bounds and compile without checks.
+    let sources: Vec<Option<Source>> = symbols
+        .iter()
+        .map(|&s| layout.source(s, &degrees))
+        .collect();
+    let slices = [
+        (quote!(__x), layout.states.len()),
+        (quote!(__xdot), layout.states.len()),
+        (quote!(__z), layout.algebraic.len()),
+        (quote!(__u), layout.inputs.len()),
+    ];
+    for (k, (slice, len)) in slices.iter().enumerate() {
+        if sources.iter().flatten().any(|&s| slice_index(s) == Some(k)) {
+            prelude.extend(quote!(let #slice = &#slice[..#len];));
+        }
+    }
+    for (s, source) in symbols.into_iter().zip(sources) {
         let local = local_ident(model, s);
-        match layout.source(s, &degrees) {
-            Some(Source::Param(_)) => prelude.extend(quote!(let #local: f64 = self.params.#local;)),
-            Some(Source::WCoefficient(k)) => {
-                prelude.extend(quote!(let #local: f64 = self.w_coefficients[#k];));
-            }
-            Some(Source::IterationCoefficient) => {}
+        let binding = match source {
+            Some(Source::Param(_)) => quote!(let #local: f64 = self.params.#local;),
+            Some(Source::WCoefficient(k)) => quote!(let #local: f64 = self.w_coefficients[#k];),
+            Some(Source::IterationCoefficient) => continue,
             Some(source) => {
                 let src = source_tokens(source);
-                prelude.extend(quote!(let #local: f64 = #src;));
+                quote!(let #local: f64 = #src;)
             }
             None => unreachable!("symbol {s:?} has no place in this layout; the checks exclude it"),
-        }
+        };
+        prelude.extend(binding);
     }
     let code = model.graph.emit_rust_prefixed(
         roots,
@@ -398,7 +428,20 @@ pub fn emit_dae_type(
             .iter()
             .enumerate()
             .map(|(i, v)| quote!(__out[#i] = #v;));
-        quote!(#prelude #(#stmts)* #(#writes)*)
+        quote!(#prelude let __out = &mut __out[..#neq]; #(#stmts)* #(#writes)*)
+    };
+    let fused_code = {
+        let r = routine(model, layout, &ty.residual_and_iteration_roots());
+        let (prelude, stmts) = (r.prelude, r.statements);
+        let mut it = r.roots.into_iter();
+        let mut writes: Vec<TokenStream> = (0..neq)
+            .map(|i| {
+                let v = it.next().expect("one root per residual row");
+                quote!(__residual[#i] = #v;)
+            })
+            .collect();
+        writes.extend(sink_writes(&mut it, &[(quote!(__out), &ty.iteration)]));
+        quote!(#prelude let __residual = &mut __residual[..#neq]; #(#stmts)* #(#writes)*)
     };
     let evaluate_code = {
         let blocks = [
@@ -417,7 +460,7 @@ pub fn emit_dae_type(
             })
             .collect();
         writes.extend(sink_writes(&mut it, &blocks));
-        quote!(#prelude #(#stmts)* #(#writes)*)
+        quote!(#prelude let __residual = &mut __residual[..#neq]; #(#stmts)* #(#writes)*)
     };
     let iteration_code = {
         let roots: Vec<ExprId> = ty.iteration.exprs().collect();
@@ -439,7 +482,7 @@ pub fn emit_dae_type(
             .iter()
             .enumerate()
             .map(|(i, v)| quote!(__out[#i] = #v;));
-        quote!(#prelude #(#stmts)* #(#writes)*)
+        quote!(#prelude let __out = &mut __out[..#ny]; #(#stmts)* #(#writes)*)
     };
     let output_jac_code = {
         let blocks = [
@@ -706,6 +749,20 @@ pub fn emit_dae_type(
                 __out: &mut __S,
             ) {
                 #iteration_code
+            }
+
+            fn residual_and_iteration_matrix<__S: ::dpc::core::MatrixSink + ?Sized>(
+                &self,
+                __t: f64,
+                __x: &[f64],
+                __xdot: &[f64],
+                __z: &[f64],
+                __u: &[f64],
+                __c: f64,
+                __residual: &mut [f64],
+                __out: &mut __S,
+            ) {
+                #fused_code
             }
 
             fn outputs(&self, __t: f64, __x: &[f64], __z: &[f64], __u: &[f64], __out: &mut [f64]) {

@@ -30,6 +30,22 @@ pub trait ImplicitDae {
         out: &mut S,
     );
 
+    /// The residual into `residual` and the iteration matrix into `out` (zeroed by the
+    /// caller, as for [`iteration_matrix`](Self::iteration_matrix)) in one pass, for a Newton
+    /// iteration that needs both at the same point. The default calls the two routines.
+    fn residual_and_iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        c: f64,
+        residual: &mut [f64],
+        out: &mut S,
+    ) {
+        self.residual(t, y, yp, residual);
+        self.iteration_matrix(t, y, yp, c, out);
+    }
+
     /// Whether component `i` is differential (`y_i'` appears in `F`) rather than algebraic.
     ///
     /// Used by consistent initialisation (which keeps differential components and solves for
@@ -74,6 +90,17 @@ impl<T: ImplicitDae + ?Sized> ImplicitDae for &T {
         out: &mut S,
     ) {
         (**self).iteration_matrix(t, y, yp, c, out);
+    }
+    fn residual_and_iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        c: f64,
+        residual: &mut [f64],
+        out: &mut S,
+    ) {
+        (**self).residual_and_iteration_matrix(t, y, yp, c, residual, out);
     }
     fn is_differential(&self, i: usize) -> bool {
         (**self).is_differential(i)

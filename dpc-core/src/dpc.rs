@@ -22,7 +22,15 @@
 //! contain `X'`, whose residual is an `O(1/delta)` multiple of the others), not on the update
 //! size alone: the iteration matrix is badly conditioned (`cond` of `1e7`-`1e10` is normal
 //! here), so small updates do not prove a small residual. Newton is warm-started from the
-//! previous sample's solution at the same inner step.
+//! previous sample's solution at the same inner step, shifted to the new measurement.
+//!
+//! Newton is simplified: the factorised iteration matrix is kept across iterations, inner
+//! steps and samples (for the same `delta`) while it converges, and evaluated afresh, together
+//! with the residual in one pass, when the scaled residual falls by less than
+//! [`MATRIX_REUSE_RATE`] per iteration (going back to the better iterate if it grew). The
+//! stopping test is the same whatever matrix is used, so the controls agree with those of full
+//! Newton to within the tolerance. The tracking inputs `w` and, under a preliminary feedback,
+//! the nominal motion are evaluated once per inner step.
 //!
 //! All buffers are allocated at construction: with the fixed-size
 //! [`NalgebraLu`](crate::linalg::NalgebraLu) back end an update allocates nothing.
@@ -30,11 +38,18 @@
 use crate::consistent::ConstraintStructure;
 use crate::linalg::{FactorError, LinearSolver};
 use crate::numeric::{max_or_nan, Time};
-use crate::prefeedback::Prefeedback;
+use crate::prefeedback::{FeedbackChain, Prefeedback};
 use crate::reference::{Reference, ReferenceError};
 use crate::sink::MatrixSink;
 use crate::tracking::TrackingDae;
 use thiserror::Error;
+
+/// Simplified Newton keeps its factorised matrix while the scaled residual falls at least by
+/// this factor per iteration; slower convergence evaluates the matrix afresh. A reused
+/// iteration (residual and solve) costs about a tenth of a fresh matrix and its factorisation
+/// for the wheel, and a fresh matrix converges quadratically: below a hundredfold fall per
+/// iteration the fresh one is cheaper.
+pub const MATRIX_REUSE_RATE: f64 = 0.01;
 
 /// Which inner-integration value becomes the control.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -164,8 +179,11 @@ pub enum DpcError {
 /// What one update did.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct UpdateReport {
-    /// Newton iterations over all inner steps and retries.
+    /// Newton iterations over all inner steps and retries (residual evaluations).
     pub newton_iterations: usize,
+    /// Iteration matrices evaluated (each factorised once); Newton reuses the last one while
+    /// it converges, so this is usually below `newton_iterations`.
+    pub iteration_matrices: usize,
     /// Retries with a larger `delta`.
     pub retries: usize,
     /// The `delta` that succeeded.
@@ -181,15 +199,8 @@ pub struct UpdateReport {
 
 /// Outcome of one inner integration.
 enum Inner {
-    Converged {
-        iterations: usize,
-        residual: f64,
-    },
-    Failed {
-        step: usize,
-        iterations: usize,
-        residual: f64,
-    },
+    Converged { residual: f64 },
+    Failed { step: usize, residual: f64 },
 }
 
 /// The DPC controller for a generated tracking DAE `T`, a reference `R` and a linear solver
@@ -200,6 +211,8 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     solver: L,
     opts: DpcOptions,
     nu: usize,
+    /// Number of states of the model.
+    nx: usize,
     /// Whether each residual row contains `X'` (its residual is scaled by `delta` in the
     /// convergence test).
     dynamic_row: Vec<bool>,
@@ -209,13 +222,21 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     constraint_rows: Vec<(usize, i32)>,
     /// Per inner step `j = 1..=steps`: the last accepted `[X_j; Z_j]`, the warm start.
     warm: Vec<Vec<f64>>,
+    /// The previous sample's value at the last inner step done (replaced in `warm`).
+    warm_before: Vec<f64>,
     have_warm: bool,
+    /// The `delta` whose iteration matrix the solver holds factorised, if any.
+    factored_delta: Option<f64>,
+    /// Work counters of the update in progress.
+    iterations: usize,
+    matrices: usize,
     x_prev: Vec<f64>,
     y: Vec<f64>,
+    /// The iterate before the last Newton correction (where a reused matrix that stopped
+    /// converging goes back to).
+    y_last: Vec<f64>,
     xdot: Vec<f64>,
     res: Vec<f64>,
-    /// Residual written by `evaluate` while assembling a prefeedback Jacobian (discarded).
-    res_scratch: Vec<f64>,
     w: Vec<f64>,
     scratch: Vec<f64>,
     u_first: Vec<f64>,
@@ -225,14 +246,15 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
 
 /// Buffers for evaluating the tracking DAE under a preliminary feedback.
 struct PrefeedbackWork {
-    law: Prefeedback,
+    /// Shared with a closed loop that applies the law to the plant continuously.
+    law: std::sync::Arc<Prefeedback>,
+    /// The nominal `x0(t_j)`, `u0(t_j)` of the current inner step.
     x0: Vec<f64>,
+    u0: Vec<f64>,
     /// `[Z; u]`: the plant's algebraic unknowns and the actual input.
     z_eval: Vec<f64>,
-    f_xdot: nalgebra::DMatrix<f64>,
-    f_x: nalgebra::DMatrix<f64>,
-    f_z: nalgebra::DMatrix<f64>,
-    f_w: nalgebra::DMatrix<f64>,
+    /// `dG/du K_n` on the model's matrix.
+    chain: FeedbackChain,
 }
 
 impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
@@ -289,6 +311,10 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 found: reference.dimension(),
             });
         }
+        // Generated models write every structural entry of their matrix (zeros included) and
+        // nothing else, so the solver's matrix is zeroed here once.
+        let mut solver = solver;
+        solver.matrix_mut().fill_zero();
         let mut dynamic_row = vec![false; n];
         for &(i, _) in model.structure().pattern_f_xdot.iter() {
             dynamic_row[i] = true;
@@ -315,15 +341,20 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             solver,
             opts,
             nu,
+            nx,
             dynamic_row,
             constraint_rows,
             warm: vec![vec![0.0; n]; steps],
+            warm_before: vec![0.0; n],
             have_warm: false,
+            factored_delta: None,
+            iterations: 0,
+            matrices: 0,
             x_prev: vec![0.0; nx],
             y: vec![0.0; n],
+            y_last: vec![0.0; n],
             xdot: vec![0.0; nx],
             res: vec![0.0; n],
-            res_scratch: vec![0.0; n],
             w: vec![0.0; nw],
             scratch: vec![0.0; (order + 1) * ny],
             u_first: vec![0.0; n_inputs],
@@ -354,89 +385,113 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 found: law.k_n.len(),
             });
         }
-        let ne = self.model.structure().n_equations();
+        let structure = self.model.structure();
+        let (ne, nz_all) = (structure.n_equations(), structure.n_algebraic());
+        // The model's matrix: [F_x + c F_x' | F_z], with u the last m columns of F_z.
+        let u_start = n + nz_all - m;
+        let own: Vec<(usize, usize)> = structure
+            .pattern_f_x
+            .iter()
+            .chain(structure.pattern_f_xdot.iter())
+            .copied()
+            .collect();
+        let pattern_u = structure
+            .pattern_f_z
+            .iter()
+            .filter(|&&(_, k)| n + k >= u_start)
+            .map(|&(i, k)| (i, n + k - u_start));
+        let chain = FeedbackChain::new(&law, ne, u_start, pattern_u, &own);
         self.prefeedback = Some(PrefeedbackWork {
-            law,
+            law: std::sync::Arc::new(law),
             x0: vec![0.0; n],
-            z_eval: vec![0.0; self.model.structure().n_algebraic()],
-            f_xdot: nalgebra::DMatrix::zeros(ne, n),
-            f_x: nalgebra::DMatrix::zeros(ne, n),
-            f_z: nalgebra::DMatrix::zeros(ne, self.model.structure().n_algebraic()),
-            f_w: nalgebra::DMatrix::zeros(ne, self.model.structure().n_inputs()),
+            u0: vec![0.0; m],
+            z_eval: vec![0.0; nz_all],
+            chain,
         });
         self.have_warm = false;
+        self.factored_delta = None;
         Ok(self)
     }
 
     /// The preliminary feedback in use, if any.
     pub fn prefeedback(&self) -> Option<&Prefeedback> {
-        self.prefeedback.as_ref().map(|p| &p.law)
+        self.prefeedback.as_ref().map(|p| &*p.law)
+    }
+
+    /// The preliminary feedback in use, shared (for a closed loop that keeps it for a run
+    /// while the controller keeps updating).
+    pub(crate) fn shared_prefeedback(&self) -> Option<std::sync::Arc<Prefeedback>> {
+        self.prefeedback.as_ref().map(|p| p.law.clone())
     }
 
     /// With a preliminary feedback, the algebraic unknowns `[Z; u]` the plant sees for the
-    /// current iterate `[X; Z; v]`.
-    fn fill_plant_inputs(&mut self, t: f64) {
-        let nx = self.model.structure().n_states();
+    /// current iterate `[X; Z; v]` (about the nominal of the current inner step).
+    fn fill_plant_inputs(&mut self) {
+        let nx = self.nx;
         if let Some(pf) = self.prefeedback.as_mut() {
             let n_u = self.u_first.len();
-            let nz = self.model.structure().n_algebraic() - n_u;
+            let nz = pf.z_eval.len() - n_u;
             let (xs, zs) = self.y.split_at(nx);
             pf.z_eval[..nz].copy_from_slice(&zs[..nz]);
             pf.law
-                .input(t, xs, &zs[nz..], &mut pf.x0, &mut pf.z_eval[nz..]);
+                .input_about(xs, &zs[nz..], &pf.x0, &pf.u0, &mut pf.z_eval[nz..]);
         }
     }
 
-    fn evaluate_residual(&mut self, t: f64) {
-        let nx = self.model.structure().n_states();
-        self.fill_plant_inputs(t);
+    /// The residual at the current iterate into `res`; with `matrix`, also the Newton matrix
+    /// `dG/dY + c dG/dX'` for the unknowns `Y = [X; Z; U]` (or, under a preliminary feedback,
+    /// `Y = [X; Z; v]` with `dG/dX` gaining `dG/du K_n`), in the same pass, factorised.
+    fn evaluate(&mut self, t: f64, delta: f64, matrix: bool) -> Result<(), DpcError> {
+        let nx = self.nx;
+        for ((d, y), x) in self.xdot.iter_mut().zip(&self.y).zip(&self.x_prev) {
+            *d = (y - x) / delta;
+        }
+        self.fill_plant_inputs();
         let (xs, zs) = self.y.split_at(nx);
         let z_eval = match &self.prefeedback {
             Some(pf) => &pf.z_eval[..],
             None => zs,
         };
-        self.model
-            .residual(t, xs, &self.xdot, z_eval, &self.w, &mut self.res);
-    }
-
-    /// The Newton matrix `dG/dY + c dG/dX'` for the unknowns `Y = [X; Z; U]`, or, under a
-    /// preliminary feedback, `Y = [X; Z; v]` with `dG/dX` gaining `dG/du K_n`.
-    fn evaluate_iteration_matrix(&mut self, t: f64, c: f64) {
-        let nx = self.model.structure().n_states();
-        let (xs, zs) = self.y.split_at(nx);
-        let matrix = self.solver.matrix_mut();
-        matrix.fill_zero();
-        let Some(pf) = self.prefeedback.as_mut() else {
+        if !matrix {
             self.model
-                .iteration_matrix(t, xs, &self.xdot, zs, &self.w, c, matrix);
-            return;
-        };
-        // z_eval is current: fill_plant_inputs ran for this iterate in evaluate_residual.
-        for m in [&mut pf.f_xdot, &mut pf.f_x, &mut pf.f_z, &mut pf.f_w] {
-            m.fill(0.0);
+                .residual(t, xs, &self.xdot, z_eval, &self.w, &mut self.res);
+            return Ok(());
         }
-        self.model.evaluate(
-            t,
-            xs,
-            &self.xdot,
-            &pf.z_eval,
-            &self.w,
-            &mut self.res_scratch,
-            &mut pf.f_xdot,
-            &mut pf.f_x,
-            &mut pf.f_z,
-            &mut pf.f_w,
-        );
-        let nz_all = self.model.structure().n_algebraic();
-        let n_u = pf.law.k_n.nrows();
-        pf.law.iteration_matrix(
-            c,
-            &pf.f_x,
-            &pf.f_xdot,
-            pf.f_z.columns(nz_all - n_u, n_u),
-            pf.f_z.columns(0, nz_all),
-            matrix,
-        );
+        let c = 1.0 / delta;
+        let out = self.solver.matrix_mut();
+        match self.prefeedback.as_mut() {
+            None => self.model.residual_and_iteration_matrix(
+                t,
+                xs,
+                &self.xdot,
+                zs,
+                &self.w,
+                c,
+                &mut self.res,
+                out,
+            ),
+            Some(pf) => {
+                let mut capture = pf.chain.capture(out);
+                self.model.residual_and_iteration_matrix(
+                    t,
+                    xs,
+                    &self.xdot,
+                    &pf.z_eval,
+                    &self.w,
+                    c,
+                    &mut self.res,
+                    &mut capture,
+                );
+                pf.chain.apply(self.solver.matrix_mut());
+            }
+        }
+        self.matrices += 1;
+        self.factored_delta = None;
+        self.solver
+            .factor()
+            .map_err(|source| DpcError::Singular { t, source })?;
+        self.factored_delta = Some(delta);
+        Ok(())
     }
 
     /// The `nu` in use.
@@ -459,9 +514,11 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         &self.reference
     }
 
-    /// Forget the warm start (after a jump of the plant or the reference).
+    /// Forget the warm start and the factorised matrix (after a jump of the plant or the
+    /// reference).
     pub fn reset(&mut self) {
         self.have_warm = false;
+        self.factored_delta = None;
     }
 
     /// Compute the control `u` (length = the plant's inputs) at sample time `t` from the
@@ -490,13 +547,14 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         }
         let mut report = UpdateReport::default();
         let mut delta = self.opts.delta;
+        self.iterations = 0;
+        self.matrices = 0;
         for attempt in 0..=self.opts.max_retries {
-            match self.integrate(t, x, delta)? {
-                Inner::Converged {
-                    iterations,
-                    residual,
-                } => {
-                    report.newton_iterations += iterations;
+            let inner = self.integrate(t, x, delta);
+            report.newton_iterations = self.iterations;
+            report.iteration_matrices = self.matrices;
+            match inner? {
+                Inner::Converged { residual } => {
                     report.retries = attempt;
                     report.delta = delta;
                     report.residual = residual;
@@ -515,12 +573,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                     }
                     return Ok(report);
                 }
-                Inner::Failed {
-                    step,
-                    iterations,
-                    residual,
-                } => {
-                    report.newton_iterations += iterations;
+                Inner::Failed { step, residual } => {
                     // A failed attempt's iterates are no warm start for a larger delta.
                     self.have_warm = false;
                     if attempt == self.opts.max_retries || delta >= self.opts.max_delta {
@@ -550,89 +603,44 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             Extraction::Extrapolated => self.nu + 2,
         };
         self.x_prev.copy_from_slice(x);
-        let mut iterations = 0;
         let mut worst = 0.0_f64;
         for j in 1..=steps {
             let tj = t + j as f64 * delta;
             self.model
                 .tracking_inputs(&self.reference, tj, &mut self.scratch, &mut self.w)?;
-            // Initial guess: the previous sample's solution at this inner step, shifted to
-            // start from the new measurement; else the previous inner step.
+            if let Some(pf) = self.prefeedback.as_mut() {
+                pf.law.nominal.state(tj, &mut pf.x0);
+                pf.law.nominal.input(tj, &mut pf.u0);
+            }
+            // Initial guess: the previous sample's trajectory shifted to start from this
+            // sample's values: at the first step, the measured state with the previous
+            // sample's first algebraic unknowns and controls; later, this sample's previous
+            // step plus the previous sample's increment over the same step (all unknowns:
+            // the controls' large early moves repeat from sample to sample). Without a
+            // previous sample, the previous step.
             if self.have_warm {
-                let (prev_start, warm) = if j == 1 {
-                    (None, &self.warm[0])
+                if j == 1 {
+                    self.y[..nx].copy_from_slice(&self.x_prev);
+                    self.y[nx..].copy_from_slice(&self.warm[0][nx..]);
                 } else {
-                    (Some(&self.warm[j - 2]), &self.warm[j - 1])
-                };
-                for i in 0..nx {
-                    let base = prev_start.map_or(warm[i], |p| p[i]);
-                    self.y[i] = self.x_prev[i] + (warm[i] - base);
+                    // warm[j - 2] holds this sample's step by now; the previous sample's was
+                    // kept in warm_before.
+                    let (before, after) = (&self.warm_before, &self.warm[j - 1]);
+                    for ((y, a), b) in self.y.iter_mut().zip(after).zip(before) {
+                        *y += a - b;
+                    }
                 }
-                self.y[nx..].copy_from_slice(&warm[nx..]);
             } else {
                 self.y[..nx].copy_from_slice(&self.x_prev);
                 if j == 1 {
                     self.y[nx..].fill(0.0);
                 }
             }
-            let mut converged = false;
-            let mut residual = f64::INFINITY;
-            let mut last_constraint = f64::INFINITY;
-            for _ in 0..self.opts.max_newton_iterations {
-                iterations += 1;
-                for i in 0..nx {
-                    self.xdot[i] = (self.y[i] - self.x_prev[i]) / delta;
-                }
-                self.evaluate_residual(tj);
-                let scale = 1.0 + max_or_nan(self.y[..nx].iter().map(|v| v.abs()));
-                residual =
-                    max_or_nan(self.res.iter().zip(&self.dynamic_row).map(|(r, &dynamic)| {
-                        if dynamic {
-                            (r * delta).abs()
-                        } else {
-                            r.abs()
-                        }
-                    })) / scale;
-                if residual.is_nan() {
-                    break;
-                }
-                if residual <= self.opts.residual_tolerance {
-                    // A plant constraint's residual reaches the multipliers and the control
-                    // amplified by delta^-2 (position) or delta^-1 (velocity): it must meet the
-                    // tolerance after that amplification, or stop decreasing (round-off).
-                    let constraint = max_or_nan(
-                        self.constraint_rows
-                            .iter()
-                            .map(|&(i, k)| (self.res[i] / delta.powi(k)).abs()),
-                    ) / scale;
-                    if constraint <= self.opts.residual_tolerance
-                        || constraint >= 0.5 * last_constraint
-                    {
-                        converged = true;
-                        break;
-                    }
-                    last_constraint = constraint;
-                }
-                self.evaluate_iteration_matrix(tj, 1.0 / delta);
-                self.solver
-                    .factor()
-                    .map_err(|source| DpcError::Singular { t: tj, source })?;
-                for d in self.res.iter_mut() {
-                    *d = -*d;
-                }
-                self.solver.solve_in_place(&mut self.res);
-                for (yi, d) in self.y.iter_mut().zip(&self.res) {
-                    *yi += d;
-                }
+            match self.newton(tj, delta)? {
+                Ok(residual) => worst = worst.max(residual),
+                Err(residual) => return Ok(Inner::Failed { step: j, residual }),
             }
-            if !converged {
-                return Ok(Inner::Failed {
-                    step: j,
-                    iterations,
-                    residual,
-                });
-            }
-            worst = worst.max(residual);
+            std::mem::swap(&mut self.warm[j - 1], &mut self.warm_before);
             self.warm[j - 1].copy_from_slice(&self.y);
             let u_now = &self.y[n - n_u..];
             if j == self.nu + 1 {
@@ -642,10 +650,77 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             }
             self.x_prev.copy_from_slice(&self.y[..nx]);
         }
-        Ok(Inner::Converged {
-            iterations,
-            residual: worst,
-        })
+        Ok(Inner::Converged { residual: worst })
+    }
+
+    /// The residual in `res` scaled for the convergence test: dynamic rows times `delta`,
+    /// relative to `1 + |X|_inf`.
+    fn res_scaled(&self, delta: f64) -> f64 {
+        let nx = self.nx;
+        let scale = 1.0 + max_or_nan(self.y[..nx].iter().map(|v| v.abs()));
+        max_or_nan(self.res.iter().zip(&self.dynamic_row).map(|(r, &dynamic)| {
+            if dynamic {
+                (r * delta).abs()
+            } else {
+                r.abs()
+            }
+        })) / scale
+    }
+
+    /// Simplified Newton for one inner step from the guess in `y`: `Ok` with the scaled
+    /// residual it reached when it converged, `Err` with the last one when it did not within
+    /// [`DpcOptions::max_newton_iterations`].
+    fn newton(&mut self, tj: f64, delta: f64) -> Result<Result<f64, f64>, DpcError> {
+        self.y_last.copy_from_slice(&self.y);
+        let mut last = f64::INFINITY;
+        let mut last_constraint = f64::INFINITY;
+        let mut residual = f64::INFINITY;
+        for _ in 0..self.opts.max_newton_iterations {
+            self.iterations += 1;
+            let reused = self.factored_delta == Some(delta);
+            self.evaluate(tj, delta, !reused)?;
+            residual = self.res_scaled(delta);
+            if residual <= self.opts.residual_tolerance {
+                // A plant constraint's residual reaches the multipliers and the control
+                // amplified by delta^-2 (position) or delta^-1 (velocity): it must meet the
+                // tolerance after that amplification, or stop decreasing (round-off).
+                let scale = 1.0 + max_or_nan(self.y[..self.nx].iter().map(|v| v.abs()));
+                let constraint = max_or_nan(
+                    self.constraint_rows
+                        .iter()
+                        .map(|&(i, k)| (self.res[i] / delta.powi(k)).abs()),
+                ) / scale;
+                if constraint <= self.opts.residual_tolerance || constraint >= 0.5 * last_constraint
+                {
+                    return Ok(Ok(residual));
+                }
+                last_constraint = constraint;
+            }
+            // A NaN residual counts as no progress.
+            let falls_by = |factor: f64| residual <= factor * last;
+            if reused && !falls_by(MATRIX_REUSE_RATE) {
+                // The reused matrix converges too slowly or diverges: a fresh one, here or,
+                // if this iterate is worse, at the previous one.
+                if !falls_by(1.0) {
+                    self.y.copy_from_slice(&self.y_last);
+                }
+                self.evaluate(tj, delta, true)?;
+                residual = self.res_scaled(delta);
+            }
+            if residual.is_nan() {
+                return Ok(Err(residual));
+            }
+            self.y_last.copy_from_slice(&self.y);
+            last = residual;
+            for d in self.res.iter_mut() {
+                *d = -*d;
+            }
+            self.solver.solve_in_place(&mut self.res);
+            for (yi, d) in self.y.iter_mut().zip(&self.res) {
+                *yi += d;
+            }
+        }
+        Ok(Err(residual))
     }
 }
 

@@ -252,6 +252,11 @@ pub trait DaeModel {
 
     /// The BDF iteration matrix `[dF/dx + c dF/dx' | dF/dz]` (square, one row per equation) into a
     /// zeroed sink.
+    ///
+    /// Every structural entry (the union of the patterns of `dF/dx`, `dF/dx'` and `dF/dz`) is
+    /// written once with [`MatrixSink::set`], entries that evaluate to zero included, and
+    /// nothing else is written: a destination whose other entries were zeroed once stays
+    /// correct across calls, so Newton loops zero their matrix once, not per evaluation.
     #[allow(clippy::too_many_arguments)]
     fn iteration_matrix<S: MatrixSink + ?Sized>(
         &self,
@@ -263,6 +268,27 @@ pub trait DaeModel {
         c: f64,
         out: &mut S,
     );
+
+    /// The residual into `residual` and the iteration matrix into `out` (written as by
+    /// [`iteration_matrix`](Self::iteration_matrix): every structural entry set, nothing else)
+    /// in one pass: what one Newton iteration with a fresh matrix needs. Generated models
+    /// schedule both together, so their common subexpressions (and `sin`/`cos` of a shared
+    /// argument) are computed once; the default calls the two routines.
+    #[allow(clippy::too_many_arguments)]
+    fn residual_and_iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        x: &[f64],
+        xdot: &[f64],
+        z: &[f64],
+        u: &[f64],
+        c: f64,
+        residual: &mut [f64],
+        out: &mut S,
+    ) {
+        self.residual(t, x, xdot, z, u, residual);
+        self.iteration_matrix(t, x, xdot, z, u, c, out);
+    }
 
     /// Outputs `y = h(t, x, z, u)` into `out` (one entry per output).
     fn outputs(&self, t: f64, x: &[f64], z: &[f64], u: &[f64], out: &mut [f64]);

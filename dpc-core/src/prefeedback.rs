@@ -265,14 +265,27 @@ impl Prefeedback {
     pub fn input(&self, t: f64, x: &[f64], v: &[f64], x0: &mut [f64], u: &mut [f64]) {
         self.nominal.state(t, x0);
         self.nominal.input(t, u);
+        self.add_feedback(x, v, x0, u);
+    }
+
+    /// [`input`](Self::input) with the nominal `x0(t)`, `u0(t)` already evaluated (once per
+    /// time, where several iterates share it): `u = u0 + K_n (x - x0) + v`.
+    pub fn input_about(&self, x: &[f64], v: &[f64], x0: &[f64], u0: &[f64], u: &mut [f64]) {
+        u.copy_from_slice(u0);
+        self.add_feedback(x, v, x0, u);
+    }
+
+    /// `u += K_n (x - x0) + v`.
+    fn add_feedback(&self, x: &[f64], v: &[f64], x0: &[f64], u: &mut [f64]) {
         for (i, ui) in u.iter_mut().enumerate() {
             let mut s = v[i];
-            for (j, (xj, x0j)) in x.iter().zip(x0.iter()).enumerate() {
+            for (j, (xj, x0j)) in x.iter().zip(x0).enumerate() {
                 s += self.k_n[(i, j)] * (xj - x0j);
             }
             *ui += s;
         }
     }
+
     /// The iteration matrix `[F_x + c F_x' + F_u K_n | F_z]` of a DAE whose input `u` is
     /// given by this law (so `du/dx = K_n`), into the zeroed sink `out`; entries that are
     /// exactly zero are not written. `f_u` holds the columns of the input the law drives, `f_z`
@@ -308,6 +321,133 @@ impl Prefeedback {
                 }
             }
         }
+    }
+}
+
+/// The chain rule `dG/dX + dG/du K_n` on the iteration matrix of a DAE whose input `u` is
+/// one of its unknowns (the tracking DAE, where the plant's inputs are its last algebraic
+/// unknowns) and is replaced by the law's correction `v`: since `du/dX = K_n` and `du/dv = I`,
+/// the matrix in `[X; Z; v]` is the model's own matrix in `[X; Z; u]` with `(dG/du) K_n` added
+/// to the state columns.
+///
+/// The model writes its matrix through [`capture`](Self::capture), which records the entries
+/// of the `u` columns as they pass; [`apply`](Self::apply) then adds the products, only in the
+/// rows where `u` appears structurally. Each structural entry of the result is written every
+/// time (zeros included), so the destination's other entries can be zeroed once.
+#[derive(Debug, Clone)]
+pub struct FeedbackChain {
+    /// First column of `u` in the matrix.
+    u_start: usize,
+    n_u: usize,
+    n_x: usize,
+    /// `dG/du` as captured, `rows x n_u` row-major by matrix row.
+    f_u: Vec<f64>,
+    /// `K_n`, row-major.
+    k_n: Vec<f64>,
+    /// `(row, state column, whether the model's own matrix has the entry)`.
+    terms: Vec<(usize, usize, bool)>,
+}
+
+impl FeedbackChain {
+    /// The chain rule for `law` on a matrix of `rows` rows whose columns are the `n_x` states,
+    /// then the algebraic unknowns with `u` last, from `u_start` on; `pattern_u` holds the
+    /// structural `(row, k)` of `dG/du_k`, `pattern_model` the model's own structural entries.
+    pub fn new(
+        law: &Prefeedback,
+        rows: usize,
+        u_start: usize,
+        pattern_u: impl IntoIterator<Item = (usize, usize)>,
+        pattern_model: &[(usize, usize)],
+    ) -> Self {
+        let (n_u, n_x) = law.k_n.shape();
+        let mut u_rows: Vec<usize> = pattern_u.into_iter().map(|(i, _)| i).collect();
+        u_rows.sort_unstable();
+        u_rows.dedup();
+        let terms = u_rows
+            .iter()
+            .flat_map(|&i| (0..n_x).map(move |j| (i, j)))
+            .map(|(i, j)| (i, j, pattern_model.contains(&(i, j))))
+            .collect();
+        Self {
+            u_start,
+            n_u,
+            n_x,
+            f_u: vec![0.0; rows * n_u],
+            k_n: (0..n_u)
+                .flat_map(|k| (0..n_x).map(move |j| (k, j)))
+                .map(|(k, j)| law.k_n[(k, j)])
+                .collect(),
+            terms,
+        }
+    }
+
+    /// A sink for the model's matrix that forwards every entry to `out` and records those of
+    /// the `u` columns.
+    pub fn capture<'a, S: MatrixSink + ?Sized>(&'a mut self, out: &'a mut S) -> Capture<'a, S> {
+        Capture {
+            inner: out,
+            u_start: self.u_start,
+            n_u: self.n_u,
+            f_u: &mut self.f_u,
+        }
+    }
+
+    /// Add `(dG/du) K_n` (as captured) to the state columns of `out`, in the rows where `u`
+    /// appears: added to the model's own entries, set where the model has none.
+    pub fn apply<S: MatrixSink + ?Sized>(&self, out: &mut S) {
+        for &(i, j, structural) in &self.terms {
+            let f_u = &self.f_u[i * self.n_u..(i + 1) * self.n_u];
+            let v: f64 = f_u
+                .iter()
+                .enumerate()
+                .map(|(k, d)| d * self.k_n[k * self.n_x + j])
+                .sum();
+            if structural {
+                out.add(i, j, v);
+            } else {
+                out.set(i, j, v);
+            }
+        }
+    }
+
+    /// The positions `(row, state column)` the chain rule writes.
+    pub fn positions(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.terms.iter().map(|&(i, j, _)| (i, j))
+    }
+}
+
+/// The sink of [`FeedbackChain::capture`].
+pub struct Capture<'a, S: MatrixSink + ?Sized> {
+    inner: &'a mut S,
+    u_start: usize,
+    n_u: usize,
+    f_u: &'a mut [f64],
+}
+
+impl<S: MatrixSink + ?Sized> MatrixSink for Capture<'_, S> {
+    fn rows(&self) -> usize {
+        self.inner.rows()
+    }
+    fn cols(&self) -> usize {
+        self.inner.cols()
+    }
+    #[inline]
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        self.inner.set(row, col, value);
+        if col >= self.u_start {
+            self.f_u[row * self.n_u + col - self.u_start] = value;
+        }
+    }
+    #[inline]
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        self.inner.add(row, col, value);
+        if col >= self.u_start {
+            self.f_u[row * self.n_u + col - self.u_start] += value;
+        }
+    }
+    fn fill_zero(&mut self) {
+        self.inner.fill_zero();
+        self.f_u.fill(0.0);
     }
 }
 
@@ -458,6 +598,74 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn the_captured_chain_rule_agrees_with_the_blockwise_one() {
+        // Two states, one plant algebraic unknown, one input: columns [x0, x1, z, u].
+        let law = Prefeedback {
+            k_n: DMatrix::from_row_slice(1, 2, &[-2.0, -3.0]),
+            nominal: Box::new(Steady),
+        };
+        let f_x = DMatrix::from_row_slice(3, 2, &[0.0, -1.0, 1.0, 0.0, 0.0, 0.0]);
+        let f_xdot = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        let f_z = DMatrix::from_row_slice(3, 2, &[0.0, 0.0, 0.0, -1.0, 1.0, 4.0]);
+        let c = 0.5;
+        let mut want = DMatrix::zeros(3, 4);
+        law.iteration_matrix(
+            c,
+            &f_x,
+            &f_xdot,
+            f_z.columns(1, 1),
+            f_z.columns(0, 2),
+            &mut want,
+        );
+        // The model's own matrix [F_x + c F_x' | F_z | F_u], written entry by entry.
+        let model: Vec<(usize, usize, f64)> = vec![
+            (0, 0, c),
+            (0, 1, -1.0),
+            (1, 0, 1.0),
+            (1, 3, -1.0),
+            (2, 2, 1.0),
+            (2, 3, 4.0),
+        ];
+        let pattern: Vec<(usize, usize)> = model.iter().map(|&(i, j, _)| (i, j)).collect();
+        let mut chain = FeedbackChain::new(&law, 3, 3, [(1, 0), (2, 0)], &pattern);
+        let mut got = DMatrix::zeros(3, 4);
+        // Stale values where the chain rule writes without a model entry must be overwritten.
+        got[(2, 1)] = 99.0;
+        {
+            let mut sink = chain.capture(&mut got);
+            for &(i, j, v) in &model {
+                sink.set(i, j, v);
+            }
+        }
+        chain.apply(&mut got);
+        assert_eq!(got, want);
+        assert_eq!(
+            chain.positions().collect::<Vec<_>>(),
+            vec![(1, 0), (1, 1), (2, 0), (2, 1)]
+        );
+    }
+
+    #[test]
+    fn the_input_about_a_given_nominal_is_the_input() {
+        let law = Prefeedback {
+            k_n: DMatrix::from_row_slice(
+                2,
+                5,
+                &[1.0, 2.0, 3.0, 4.0, 5.0, -1.0, 0.5, 0.0, 2.0, 1.0],
+            ),
+            nominal: Box::new(Steady),
+        };
+        let (x, v, t) = ([1.1, -2.0, 0.3, 0.1, -5.5], [0.2, -0.1], 0.4);
+        let (mut x0, mut u) = ([0.0; 5], [0.0; 2]);
+        law.input(t, &x, &v, &mut x0, &mut u);
+        let mut u0 = [0.0; 2];
+        law.nominal.input(t, &mut u0);
+        let mut again = [0.0; 2];
+        law.input_about(&x, &v, &x0, &u0, &mut again);
+        assert_eq!(u, again);
     }
 
     #[test]

@@ -35,7 +35,7 @@
 
 use std::cell::RefCell;
 
-use crate::bdf::{consistent_initial_values, Bdf, BdfError, Options};
+use crate::bdf::{Bdf, BdfError, InitWorkspace, Options};
 use crate::consistent::{
     consistent_state, ConsistentError, ConsistentOptions, ConstraintStructure,
 };
@@ -309,6 +309,51 @@ pub struct ClosedLoop {
     /// For a constrained plant: its constraint structure and how far states were moved onto
     /// the constraint manifold; `None` for an ODE or index-1 plant.
     pub constraints: Option<ConstraintReport>,
+    /// The work of the plant integration between the samples.
+    pub plant_work: PlantWork,
+}
+
+/// The work of a run's plant integration: one integrator for the whole run, restarted at every
+/// sample (where the held input jumps) from a consistent point.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct PlantWork {
+    /// Sampling intervals integrated.
+    pub intervals: usize,
+    /// Accepted integrator steps.
+    pub steps: usize,
+    /// Rejected step attempts (local error test or Newton failures).
+    pub rejected_steps: usize,
+    /// Residual evaluations, consistent initialisation at the samples included.
+    pub residual_evaluations: usize,
+    /// Iteration-matrix evaluations, consistent initialisation included.
+    pub jacobian_evaluations: usize,
+    /// LU factorisations, consistent initialisation included.
+    pub factorisations: usize,
+}
+
+impl PlantWork {
+    /// Accepted steps per sampling interval (0 without intervals).
+    pub fn steps_per_interval(&self) -> f64 {
+        self.per_interval(self.steps)
+    }
+
+    /// Residual evaluations per sampling interval (0 without intervals).
+    pub fn residuals_per_interval(&self) -> f64 {
+        self.per_interval(self.residual_evaluations)
+    }
+
+    /// Factorisations per sampling interval (0 without intervals).
+    pub fn factorisations_per_interval(&self) -> f64 {
+        self.per_interval(self.factorisations)
+    }
+
+    fn per_interval(&self, count: usize) -> f64 {
+        if self.intervals == 0 {
+            0.0
+        } else {
+            count as f64 / self.intervals as f64
+        }
+    }
 }
 
 /// How a constrained plant was kept on its constraint manifold during a run.
@@ -365,15 +410,17 @@ impl ClosedLoop {
 }
 
 /// The plant with its inputs given by the hold: constant `u`, or the preliminary feedback
-/// `u0(t) + K_n (x - x0(t)) + v` with constant `v`.
-struct HeldPlant<'a, M: DaeModel> {
-    model: M,
-    held: Vec<f64>,
-    feedback: Option<&'a Prefeedback>,
+/// `u0(t) + K_n (x - x0(t)) + v` with constant `v`. One for the whole run: the held values
+/// change at every sample ([`hold`](Self::hold)), the plant and the law do not.
+struct HeldPlant<'p, M: DaeModel> {
+    model: &'p M,
+    feedback: Option<std::sync::Arc<Prefeedback>>,
     scratch: RefCell<HeldScratch>,
 }
 
 struct HeldScratch {
+    /// The held `u` (or `v` under the continuous feedback).
+    held: Vec<f64>,
     u: Vec<f64>,
     x0: Vec<f64>,
     f_xdot: DMatrix<f64>,
@@ -383,8 +430,8 @@ struct HeldScratch {
     res: Vec<f64>,
 }
 
-impl<'a, M: DaeModel> HeldPlant<'a, M> {
-    fn new(model: M, held: &[f64], feedback: Option<&'a Prefeedback>) -> Self {
+impl<'p, M: DaeModel> HeldPlant<'p, M> {
+    fn new(model: &'p M, feedback: Option<std::sync::Arc<Prefeedback>>) -> Self {
         let structure = model.structure();
         let (ne, nx, nz, nu) = (
             structure.n_equations(),
@@ -394,9 +441,9 @@ impl<'a, M: DaeModel> HeldPlant<'a, M> {
         );
         Self {
             model,
-            held: held.to_vec(),
             feedback,
             scratch: RefCell::new(HeldScratch {
+                held: vec![0.0; nu],
                 u: vec![0.0; nu],
                 x0: vec![0.0; nx],
                 f_xdot: DMatrix::zeros(ne, nx),
@@ -408,10 +455,15 @@ impl<'a, M: DaeModel> HeldPlant<'a, M> {
         }
     }
 
+    /// Hold `values` from now on.
+    fn hold(&self, values: &[f64]) {
+        self.scratch.borrow_mut().held.copy_from_slice(values);
+    }
+
     fn inputs(&self, t: f64, x: &[f64], s: &mut HeldScratch) {
-        match self.feedback {
-            Some(pf) => pf.input(t, x, &self.held, &mut s.x0, &mut s.u),
-            None => s.u.copy_from_slice(&self.held),
+        match &self.feedback {
+            Some(pf) => pf.input(t, x, &s.held, &mut s.x0, &mut s.u),
+            None => s.u.copy_from_slice(&s.held),
         }
     }
 }
@@ -442,7 +494,7 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
         let xdot = &yp[..nx];
         let s = &mut *self.scratch.borrow_mut();
         self.inputs(t, x, s);
-        let Some(pf) = self.feedback else {
+        let Some(pf) = &self.feedback else {
             self.model.iteration_matrix(t, x, xdot, z, &s.u, c, out);
             return;
         };
@@ -471,6 +523,28 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
             s.f_z.columns(0, s.f_z.ncols()),
             out,
         );
+    }
+
+    fn residual_and_iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        c: f64,
+        residual: &mut [f64],
+        out: &mut S,
+    ) {
+        if self.feedback.is_some() {
+            self.residual(t, y, yp, residual);
+            self.iteration_matrix(t, y, yp, c, out);
+            return;
+        }
+        let nx = self.model.structure().n_states();
+        let (x, z) = y.split_at(nx);
+        let s = &mut *self.scratch.borrow_mut();
+        self.inputs(t, x, s);
+        self.model
+            .residual_and_iteration_matrix(t, x, &yp[..nx], z, &s.u, c, residual, out);
     }
 
     fn is_differential(&self, i: usize) -> bool {
@@ -644,7 +718,7 @@ pub fn simulate<P, T, R, L>(
     opts: &ClosedLoopOptions,
 ) -> Result<ClosedLoop, SimulateError>
 where
-    P: DaeModel + Clone,
+    P: DaeModel,
     T: TrackingDae,
     R: Reference,
     L: LinearSolver,
@@ -712,6 +786,7 @@ where
         events: Vec::new(),
         max_roundoff: 0.0,
         constraints: None,
+        plant_work: PlantWork::default(),
     };
     let mut y = vec![0.0; nx + nz];
     y[..nx].copy_from_slice(x0);
@@ -741,6 +816,16 @@ where
         });
     }
     let steps = (opts.t_end / opts.h).round() as usize;
+    // One plant with its hold and one integrator for the whole run.
+    let held_plant = HeldPlant::new(
+        plant,
+        match opts.hold {
+            Hold::Input => None,
+            Hold::Correction => dpc.shared_prefeedback(),
+        },
+    );
+    let mut integrator = PlantIntegrator::new(&held_plant, bdf_opts);
+    result.samples.reserve(steps + 1);
     for k in 0..=steps {
         let t = k as f64 * opts.h;
         if let Some(cause) = state_divergence(plant, &y[..nx], &opts.state_bounds) {
@@ -851,12 +936,13 @@ where
             break;
         }
         // Integrate the plant over [t, t + h] with the hold.
-        let held_plant = match opts.hold {
-            Hold::Input => HeldPlant::new(plant.clone(), &applied, None),
-            Hold::Correction => HeldPlant::new(plant.clone(), &control, dpc.prefeedback()),
-        };
+        held_plant.hold(match opts.hold {
+            Hold::Input => &applied,
+            Hold::Correction => &control,
+        });
         let integrated = match &constrained {
-            None => integrate_interval(&held_plant, &bdf_opts, t, t + opts.h, &mut y, &mut yp)
+            None => integrator
+                .interval(t, t + opts.h, &mut y, &mut yp)
                 .map_err(DivergenceCause::Plant),
             Some(c) => c
                 .integrate(&held_plant, t, t + opts.h, &mut y, &mut yp)
@@ -867,7 +953,86 @@ where
             break;
         }
     }
+    result.plant_work = integrator.work();
     Ok(result)
+}
+
+/// The plant's integrator for a whole run: created at the first sampling interval, restarted
+/// ([`Bdf::reinit`]) at each later one after the state is made consistent for the new held
+/// input, so that a sample allocates nothing.
+struct PlantIntegrator<'h, 'p, M: DaeModel> {
+    held: &'h HeldPlant<'p, M>,
+    opts: Options,
+    /// The solver and work vectors of the consistent initialisation.
+    init_solver: FaerDenseLu,
+    init: InitWorkspace,
+    bdf: Option<Bdf<&'h HeldPlant<'p, M>, FaerDenseLu>>,
+    /// Work of the initialisations (the integrator counts its own).
+    init_work: crate::bdf::Stats,
+    intervals: usize,
+}
+
+impl<'h, 'p, M: DaeModel> PlantIntegrator<'h, 'p, M> {
+    fn new(held: &'h HeldPlant<'p, M>, opts: Options) -> Self {
+        let n = held.dimension();
+        Self {
+            held,
+            opts,
+            init_solver: FaerDenseLu::new(n),
+            init: InitWorkspace::new(n),
+            bdf: None,
+            init_work: crate::bdf::Stats::default(),
+            intervals: 0,
+        }
+    }
+
+    /// Make the plant consistent at `t0` (the input may have jumped) and integrate to `t1`.
+    fn interval(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        y: &mut [f64],
+        yp: &mut [f64],
+    ) -> Result<(), BdfError> {
+        let init = self.init.consistent_initial_values(
+            self.held,
+            &mut self.init_solver,
+            &self.opts,
+            t0,
+            y,
+            yp,
+        )?;
+        let w = &mut self.init_work;
+        w.residual_evaluations += init.residual_evaluations;
+        w.jacobian_evaluations += init.jacobian_evaluations;
+        w.factorisations += init.factorisations;
+        self.intervals += 1;
+        let bdf = match &mut self.bdf {
+            Some(bdf) => {
+                bdf.reinit(t0, y, yp)?;
+                bdf
+            }
+            None => {
+                let ls = FaerDenseLu::new(self.held.dimension());
+                self.bdf
+                    .insert(Bdf::new(self.held, ls, self.opts.clone(), t0, y, yp)?)
+            }
+        };
+        bdf.set_stop_time(t1)?;
+        bdf.solve_to(t1, y, Some(yp)).map(|_| ())
+    }
+
+    fn work(&self) -> PlantWork {
+        let s = self.bdf.as_ref().map(|b| b.stats()).unwrap_or_default();
+        PlantWork {
+            intervals: self.intervals,
+            steps: s.steps,
+            rejected_steps: s.error_test_failures + s.newton_failures,
+            residual_evaluations: s.residual_evaluations + self.init_work.residual_evaluations,
+            jacobian_evaluations: s.jacobian_evaluations + self.init_work.jacobian_evaluations,
+            factorisations: s.factorisations + self.init_work.factorisations,
+        }
+    }
 }
 
 /// What the closed loop needs to run a constrained plant.
@@ -1133,21 +1298,4 @@ fn record_reference<T: TrackingDae, R: Reference, L: LinearSolver>(
     out: &mut [f64],
 ) -> bool {
     dpc.reference().derivatives(t, 0, out).is_ok()
-}
-
-/// Make the plant consistent at `t0` (the input may have jumped) and integrate to `t1`.
-fn integrate_interval<D: ImplicitDae>(
-    dae: &D,
-    opts: &Options,
-    t0: f64,
-    t1: f64,
-    y: &mut [f64],
-    yp: &mut [f64],
-) -> Result<(), BdfError> {
-    let n = dae.dimension();
-    let mut ls = FaerDenseLu::new(n);
-    consistent_initial_values(dae, &mut ls, opts, t0, y, yp)?;
-    let mut bdf = Bdf::new(dae, ls, opts.clone(), t0, y, yp)?;
-    bdf.set_stop_time(t1)?;
-    bdf.solve_to(t1, y, Some(yp)).map(|_| ())
 }

@@ -6,7 +6,7 @@ use std::io::Write;
 use std::path::Path;
 
 use dpc::core::numeric::max_or_nan;
-use dpc::core::simulate::{ConstraintReport, ControllerEvent};
+use dpc::core::simulate::{ConstraintReport, ControllerEvent, PlantWork};
 use serde::Serialize;
 
 use crate::cli::run::{DesignReport, ModelInUse, RunResult};
@@ -55,6 +55,10 @@ pub struct Summary {
     pub roundoff_level: f64,
     /// Wall-clock time of the simulation, in seconds.
     pub wall_time_s: f64,
+    /// The work of the plant integration between the samples (one integrator per run,
+    /// restarted at each sample): intervals, steps, rejected steps, residual and matrix
+    /// evaluations, factorisations, with the per-sample figures.
+    pub plant_integration: PlantIntegration,
     /// The parameters of the plant and of the controller, and the controller's `W`, as run.
     pub in_use: ModelInUse,
     /// The linear analysis of the controller's model, when the scenario has a `[design]`.
@@ -66,6 +70,32 @@ pub struct Summary {
     pub constraints: Option<ConstraintReport>,
     /// The scenario as run.
     pub scenario: Scenario,
+}
+
+/// The plant integration's work over a run, in `summary.json`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PlantIntegration {
+    /// The totals over the run.
+    #[serde(flatten)]
+    pub work: PlantWork,
+    /// Accepted steps per sampling interval.
+    pub steps_per_sample: f64,
+    /// Residual evaluations per sampling interval.
+    pub residuals_per_sample: f64,
+    /// Factorisations per sampling interval.
+    pub factorisations_per_sample: f64,
+}
+
+impl PlantIntegration {
+    /// The totals of `work` with the per-sample figures.
+    pub fn of(work: &PlantWork) -> Self {
+        Self {
+            work: *work,
+            steps_per_sample: work.steps_per_interval(),
+            residuals_per_sample: work.residuals_per_interval(),
+            factorisations_per_sample: work.factorisations_per_interval(),
+        }
+    }
 }
 
 impl Summary {
@@ -101,6 +131,7 @@ impl Summary {
             controller_events: cl.events.clone(),
             roundoff_level: cl.max_roundoff,
             wall_time_s: run.wall_time,
+            plant_integration: PlantIntegration::of(&cl.plant_work),
             in_use: run.model.clone(),
             linear_design: run.design.clone(),
             constraints: cl.constraints.clone(),

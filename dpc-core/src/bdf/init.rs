@@ -100,6 +100,91 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
     y: &mut [f64],
     yp: &mut [f64],
 ) -> Result<Stats, BdfError> {
+    InitWorkspace::new(dae.dimension()).consistent_initial_values(dae, ls, opts, t0, y, yp)
+}
+
+/// The work vectors of [`consistent_initial_values`], allocated once, for a caller that makes
+/// a DAE consistent again and again (a closed loop at every sample) without allocating.
+#[derive(Debug, Clone)]
+pub struct InitWorkspace {
+    differential: Vec<bool>,
+    res: Vec<f64>,
+    delta: Vec<f64>,
+    w: Vec<f64>,
+    y_try: Vec<f64>,
+    yp_try: Vec<f64>,
+}
+
+impl InitWorkspace {
+    /// Work vectors for a DAE of dimension `n`.
+    pub fn new(n: usize) -> Self {
+        Self {
+            differential: vec![false; n],
+            res: vec![0.0; n],
+            delta: vec![0.0; n],
+            w: vec![0.0; n],
+            y_try: vec![0.0; n],
+            yp_try: vec![0.0; n],
+        }
+    }
+
+    /// [`consistent_initial_values`] in these work vectors (which must have the DAE's
+    /// dimension: [`BdfError::DimensionMismatch`] otherwise).
+    ///
+    /// # Errors
+    /// As [`consistent_initial_values`].
+    pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
+        &mut self,
+        dae: &D,
+        ls: &mut L,
+        opts: &Options,
+        t0: f64,
+        y: &mut [f64],
+        yp: &mut [f64],
+    ) -> Result<Stats, BdfError> {
+        let n = dae.dimension();
+        if self.res.len() != n {
+            return Err(BdfError::DimensionMismatch {
+                what: "initialisation workspace",
+                expected: n,
+                found: self.res.len(),
+            });
+        }
+        let InitWorkspace {
+            differential,
+            res,
+            delta,
+            w,
+            y_try,
+            yp_try,
+        } = self;
+        for (i, d) in differential.iter_mut().enumerate() {
+            *d = dae.is_differential(i);
+        }
+        solve(
+            dae,
+            ls,
+            opts,
+            t0,
+            y,
+            yp,
+            differential,
+            [res, delta, w, y_try, yp_try],
+        )
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn solve<D: ImplicitDae, L: LinearSolver>(
+    dae: &D,
+    ls: &mut L,
+    opts: &Options,
+    t0: f64,
+    y: &mut [f64],
+    yp: &mut [f64],
+    differential: &[bool],
+    [res, delta, w, y_try, yp_try]: [&mut Vec<f64>; 5],
+) -> Result<Stats, BdfError> {
     let n = dae.dimension();
     for (what, found) in [
         ("y", y.len()),
@@ -115,12 +200,6 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
         }
     }
     opts.validate(n)?;
-    let differential: Vec<bool> = (0..n).map(|i| dae.is_differential(i)).collect();
-    let mut res = vec![0.0; n];
-    let mut delta = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    let mut y_try = vec![0.0; n];
-    let mut yp_try = vec![0.0; n];
     let mut stats = Stats::default();
     let eval =
         |y: &[f64], yp: &[f64], res: &mut [f64], stats: &mut Stats| -> Result<f64, BdfError> {
@@ -134,24 +213,24 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
             }
             Ok(res.iter().map(|r| r * r).sum::<f64>().sqrt())
         };
-    let mut fnorm = eval(y, yp, &mut res, &mut stats)?;
+    let mut fnorm = eval(y, yp, &mut *res, &mut stats)?;
     for _ in 0..20 {
         // Each unknown is measured in its own tolerance units: y_a by |y_a|, y'_d by |y'_d|.
         for i in 0..n {
             y_try[i] = if differential[i] { yp[i] } else { y[i] };
         }
-        error_weights(opts, &y_try, &mut w)?;
+        error_weights(opts, y_try, &mut *w)?;
         {
             let m = ls.matrix_mut();
             m.fill_zero();
             let mut first = FirstPass {
                 inner: &mut *m,
-                differential: &differential,
+                differential,
             };
             dae.iteration_matrix(t0, y, yp, C_BIG, &mut first);
             let mut second = SecondPass {
                 inner: m,
-                differential: &differential,
+                differential,
             };
             dae.iteration_matrix(t0, y, yp, 0.0, &mut second);
         }
@@ -178,10 +257,10 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
                 )));
             }
         }
-        delta.copy_from_slice(&res);
-        ls.solve_in_place(&mut delta);
+        delta.copy_from_slice(res);
+        ls.solve_in_place(&mut *delta);
         stats.newton_iterations += 1;
-        let dnorm = wrms(&delta, &w);
+        let dnorm = wrms(delta, w);
         let mut lambda = 1.0;
         loop {
             for i in 0..n {
@@ -193,7 +272,7 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
                     y_try[i] -= lambda * delta[i];
                 }
             }
-            match eval(&y_try, &yp_try, &mut res, &mut stats) {
+            match eval(y_try, yp_try, &mut *res, &mut stats) {
                 Ok(f) if f <= (1.0 - 1e-4 * lambda) * fnorm || lambda < 1.0 / 64.0 || f == 0.0 => {
                     fnorm = f;
                     break;
@@ -208,8 +287,8 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
                 Err(e) => return Err(e),
             }
         }
-        y.copy_from_slice(&y_try);
-        yp.copy_from_slice(&yp_try);
+        y.copy_from_slice(y_try);
+        yp.copy_from_slice(yp_try);
         if lambda * dnorm <= 1e-3 * opts.newton_tolerance || fnorm == 0.0 {
             return Ok(stats);
         }

@@ -30,7 +30,7 @@ mod variable;
 
 pub use error::BdfError;
 pub use fixed::FixedBdf;
-pub use init::consistent_initial_values;
+pub use init::{consistent_initial_values, InitWorkspace};
 pub use options::{HigherIndexControl, Options, Tolerance};
 pub use stats::Stats;
 pub use variable::Bdf;

@@ -68,7 +68,10 @@ pub trait LinearSolver {
     /// Size `n` of the `n x n` system.
     fn dimension(&self) -> usize;
 
-    /// The matrix storage, to be zeroed and filled before [`factor`](Self::factor).
+    /// The matrix storage, to be zeroed and filled before [`factor`](Self::factor). Every
+    /// implementation keeps its factors apart from this storage, so its contents survive a
+    /// factorisation: a caller whose model writes every structural entry on each call can zero
+    /// it once (the controller does).
     fn matrix_mut(&mut self) -> &mut Self::Matrix;
 
     /// Factorise the matrix currently held in [`matrix_mut`](Self::matrix_mut).

@@ -104,6 +104,7 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
         if !self.factored {
             return;
         }
+        let b = &mut b[..N];
         let mut x = [0.0; N];
         for (xi, &p) in x.iter_mut().zip(&self.perm) {
             *xi = b[p];
