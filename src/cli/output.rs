@@ -159,6 +159,31 @@ impl Staging {
         self.previous
     }
 
+    /// `cause` as the failure of a run whose results never reached the target (which keeps
+    /// its earlier results, if any).
+    pub fn not_written(&self, cause: crate::cli::ScenarioError) -> crate::cli::ScenarioError {
+        crate::cli::ScenarioError::NotWritten {
+            target: self.target().display().to_string(),
+            previous: self.had_previous(),
+            cause: Box::new(cause),
+        }
+    }
+
+    /// The directory `name` inside the staging directory, created.
+    ///
+    /// # Errors
+    /// [`crate::cli::ScenarioError::NotWritten`] when it cannot be created.
+    pub fn subdirectory(&self, name: &str) -> Result<PathBuf, crate::cli::ScenarioError> {
+        let dir = self.path().join(name);
+        std::fs::create_dir_all(&dir).map_err(|e| {
+            self.not_written(crate::cli::ScenarioError::Write {
+                path: dir.display().to_string(),
+                message: e.to_string(),
+            })
+        })?;
+        Ok(dir)
+    }
+
     /// Move the written results into place, replacing the earlier ones.
     ///
     /// # Errors

@@ -145,13 +145,8 @@ pub fn sweep(
             limit: max_runs,
         })?;
     let staging = Staging::new(out, "summary.csv")?;
-    let not_written = |cause: ScenarioError| ScenarioError::NotWritten {
-        target: staging.target().display().to_string(),
-        previous: staging.had_previous(),
-        cause: Box::new(cause),
-    };
-    let runs_dir = staging.path().join("runs");
-    std::fs::create_dir_all(&runs_dir).map_err(|e| not_written(write_error(&runs_dir, &e)))?;
+    let not_written = |cause| staging.not_written(cause);
+    let runs_dir = staging.subdirectory("runs")?;
     // Names over every combination, so that each shard names its runs as a single run would.
     let names = unique_names((0..count).map(|i| combination(axes, i).label()));
     let indices: Vec<usize> = (0..count).filter(|i| shard.contains(*i)).collect();
@@ -433,13 +428,8 @@ pub fn merge(dirs: &[std::path::PathBuf], out: &Path) -> Result<Vec<SweepRow>, S
         })
         .collect();
     let staging = Staging::new(out, "summary.csv")?;
-    let not_written = |cause: ScenarioError| ScenarioError::NotWritten {
-        target: staging.target().display().to_string(),
-        previous: staging.had_previous(),
-        cause: Box::new(cause),
-    };
-    let runs_dir = staging.path().join("runs");
-    std::fs::create_dir_all(&runs_dir).map_err(|e| not_written(write_error(&runs_dir, &e)))?;
+    let not_written = |cause| staging.not_written(cause);
+    let runs_dir = staging.subdirectory("runs")?;
     let mut rows: Vec<SweepRow> = Vec::with_capacity(first.combinations);
     for (dir, m) in &parts {
         for row in &m.rows {

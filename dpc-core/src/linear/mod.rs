@@ -28,7 +28,7 @@
 //! .unwrap();
 //! let opts = AnalysisOptions { w: Some(vec![vec![2.0]]), ..Default::default() };
 //! let report = analyze(&sys, &opts).unwrap();
-//! assert_eq!(report.index, 1);
+//! assert_eq!(report.nu, 1);
 //! assert!((report.transmission_zeros[0].re + 2.0).abs() < 1e-9); // the root of W
 //! // Plain DPC has eig(Abar_4) = {2}: unstable; the preliminary feedback fixes it.
 //! assert!(!report.dpc_stable);

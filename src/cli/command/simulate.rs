@@ -129,11 +129,7 @@ pub fn simulate(registry: &Registry, args: &SimulateArgs) -> Result<(), Scenario
             );
             Ok(())
         }
-        Err(cause) => Err(ScenarioError::NotWritten {
-            target: args.out.display().to_string(),
-            previous: staging.had_previous(),
-            cause: Box::new(cause),
-        }),
+        Err(cause) => Err(staging.not_written(cause)),
     }
 }
 
