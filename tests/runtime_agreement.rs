@@ -89,6 +89,12 @@ fn same_structure(a: &Structure, b: &Structure) {
     ] {
         assert_eq!(x.to_vec(), y.to_vec(), "{} {what}", a.name);
     }
+    assert_eq!(
+        a.units.iter().collect::<Vec<_>>(),
+        b.units.iter().collect::<Vec<_>>(),
+        "{} units",
+        a.name
+    );
     assert_eq!(a.pattern_f_xdot, b.pattern_f_xdot, "{}", a.name);
     assert_eq!(a.pattern_f_x, b.pattern_f_x, "{}", a.name);
     assert_eq!(a.pattern_f_z, b.pattern_f_z, "{}", a.name);

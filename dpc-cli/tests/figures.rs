@@ -78,20 +78,29 @@ fn the_closed_loop_figure_has_titles_labels_legends_and_the_divergence() {
         "Rolling wheel",
         "with preliminary feedback, no divergence",
         "without preliminary feedback, diverged at t = ",
-        // Axis labels and panel titles.
+        // Axis labels (with the units the model declares) and panel titles.
         "t [s]",
+        "theta [rad]",
+        "psi [rad]",
         "theta and its reference",
         "tracking errors y - reference (symmetric log scale)",
         "control inputs (held between samples)",
         // Legends.
         "reference",
-        "e_theta",
-        "u1",
+        "e_theta [rad]",
+        "u1 [N m]",
         // Decade ticks of the error axis.
         "1e-4",
     ] {
         assert!(svg.contains(text), "closed-loop.svg lacks {text:?}");
     }
+    // The same units in the header of the trajectory.
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let header = csv.lines().next().unwrap_or_default();
+    assert!(
+        header.starts_with("t [s],theta [rad],psi [rad],dphi [rad/s]"),
+        "{header}"
+    );
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -76,7 +76,7 @@ fn the_wheel_scenario_writes_summary_trajectory_and_plots() {
     let header = csv.lines().next().unwrap();
     assert_eq!(
         header,
-        "t [s],theta,psi,dphi,dtheta,dpsi,u1,u2,ref_theta,ref_psi,err_theta,err_psi"
+        "t [s],theta [rad],psi [rad],dphi [rad/s],dtheta [rad/s],dpsi [rad/s],u1 [N m],u2 [N m],ref_theta [rad],ref_psi [rad],err_theta [rad],err_psi [rad]"
     );
     assert_eq!(csv.lines().count(), 42);
     for f in ["closed-loop.svg", "closed-loop.png"] {

@@ -260,13 +260,13 @@ pub fn listing(model: &Model) -> String {
         let ps: Vec<String> = model
             .params
             .iter()
-            .map(|p| format!("{} = {:?}", p.label, p.default))
+            .map(|p| format!("{}{} = {:?}", p.label, unit_suffix(&p.unit), p.default))
             .collect();
         s += &format!("  params     {}\n", ps.join(", "));
     }
     let names = |d: &[crate::ir::Decl]| {
         d.iter()
-            .map(|x| x.label.clone())
+            .map(|x| format!("{}{}", x.label, unit_suffix(&x.unit)))
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -287,10 +287,15 @@ pub fn listing(model: &Model) -> String {
     if !model.outputs.is_empty() {
         s += "  outputs\n";
         for o in &model.outputs {
-            s += &format!("    {} = {}\n", o.label, o.text);
+            s += &format!("    {}{} = {}\n", o.label, unit_suffix(&o.unit), o.text);
         }
     }
     s
+}
+
+/// ` [unit]` after a name in the listing, or nothing.
+fn unit_suffix(unit: &Option<String>) -> String {
+    unit.as_ref().map(|u| format!(" [{u}]")).unwrap_or_default()
 }
 
 /// Derive everything for a lowered, checked model; `rows` are the tracking rows from

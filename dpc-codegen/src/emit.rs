@@ -504,6 +504,7 @@ pub fn emit_dae_type(
     let output_names = str_list(ty.outputs.iter().map(|o| o.0.clone()));
     let param_names = str_list(model.params.iter().map(|p| p.label.clone()));
     let equations = str_list(ty.equation_texts.iter().cloned());
+    let units = model.units().into_iter().map(|(n, u)| quote!((#n, #u)));
     let (p_xdot, p_x, p_z, p_u, p_hx) = (
         pattern(f_xdot),
         pattern(f_x),
@@ -682,6 +683,7 @@ pub fn emit_dae_type(
                     outputs: ::dpc::core::model::Names::Static(#output_names),
                     params: ::dpc::core::model::Names::Static(#param_names),
                     equations: ::dpc::core::model::Names::Static(#equations),
+                    units: ::dpc::core::model::Units::Static(&[#(#units),*]),
                     pattern_f_xdot: ::std::borrow::Cow::Borrowed(#p_xdot),
                     pattern_f_x: ::std::borrow::Cow::Borrowed(#p_x),
                     pattern_f_z: ::std::borrow::Cow::Borrowed(#p_z),

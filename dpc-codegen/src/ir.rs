@@ -82,6 +82,8 @@ pub struct Decl {
     pub name: Ident,
     /// The name as the user writes it (`q`, `q[2]`), for listings, structures and messages.
     pub label: String,
+    /// Its unit as declared (`"rad"`), if any.
+    pub unit: Option<String>,
     /// Doc comments attached to it.
     pub docs: Vec<Attribute>,
 }
@@ -94,6 +96,8 @@ pub struct Param {
     pub name: Ident,
     /// The name as the user writes it (`m`, `m[2]`).
     pub label: String,
+    /// Its unit as declared, if any.
+    pub unit: Option<String>,
     /// Its default value.
     pub default: f64,
     /// Doc comments attached to it.
@@ -120,6 +124,8 @@ pub struct Output {
     pub name: Ident,
     /// The output's name as the user writes it (`y`, `y[2]`).
     pub label: String,
+    /// Its unit: as declared, or for a bare output that of its variable; if any.
+    pub unit: Option<String>,
     /// Its expression.
     pub expr: ExprId,
     /// Its expression as written.
@@ -227,6 +233,40 @@ impl Model {
                 format!("W_{}[{power}]", self.outputs[output].label)
             }
         }
+    }
+
+    /// The unit of every parameter, state, algebraic unknown, input and output that has one,
+    /// as `(name as written, unit)` in declaration order (an output of the same name as its
+    /// variable appears with it once).
+    pub fn units(&self) -> Vec<(String, String)> {
+        let decls = |d: &[Decl]| {
+            d.iter()
+                .map(|x| (x.label.clone(), x.unit.clone()))
+                .collect::<Vec<_>>()
+        };
+        let mut all = Vec::new();
+        all.extend(
+            self.params
+                .iter()
+                .map(|p| (p.label.clone(), p.unit.clone())),
+        );
+        all.extend(decls(&self.states));
+        all.extend(decls(&self.algebraic));
+        all.extend(decls(&self.inputs));
+        all.extend(
+            self.outputs
+                .iter()
+                .map(|o| (o.label.clone(), o.unit.clone())),
+        );
+        let mut out: Vec<(String, String)> = Vec::new();
+        for (name, unit) in all {
+            if let Some(unit) = unit {
+                if !out.iter().any(|(n, _)| *n == name) {
+                    out.push((name, unit));
+                }
+            }
+        }
+        out
     }
 
     /// Readable text of an expression of the graph.

@@ -278,6 +278,7 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                 params.push(Param {
                                     name: p.name.clone(),
                                     label: p.name.unraw().to_string(),
+                                    unit: unit_text(p.unit.as_ref()),
                                     default,
                                     docs,
                                 });
@@ -302,6 +303,7 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                     params.push(Param {
                                         name,
                                         label,
+                                        unit: unit_text(p.unit.as_ref()),
                                         default,
                                         docs: docs.clone(),
                                     });
@@ -340,9 +342,19 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                     );
                                     continue;
                                 }
+                                let unit = match &o.expr {
+                                    Some(_) => unit_text(o.unit.as_ref()),
+                                    None => lw.bare_output_unit(
+                                        o,
+                                        &text,
+                                        [&states, &algebraic, &inputs],
+                                        &params,
+                                    ),
+                                };
                                 outputs.push(Output {
                                     name,
                                     label,
+                                    unit,
                                     expr,
                                     text,
                                     docs: docs.clone(),
@@ -1277,6 +1289,11 @@ impl Lowerer<'_> {
     }
 }
 
+/// The text of a unit as declared (checked by the parser), without surrounding blanks.
+fn unit_text(unit: Option<&syn::LitStr>) -> Option<String> {
+    unit.map(|u| u.value().trim().to_string())
+}
+
 fn call_name(c: &syn::ExprCall) -> Option<String> {
     path_ident(&c.func).map(|i| i.to_string())
 }
@@ -1696,6 +1713,7 @@ impl Lowerer<'_> {
                 out.push(Decl {
                     name: n.name.clone(),
                     label: n.name.unraw().to_string(),
+                    unit: unit_text(n.unit.as_ref()),
                     docs,
                 });
                 continue;
@@ -1712,6 +1730,7 @@ impl Lowerer<'_> {
                     out.push(Decl {
                         name,
                         label,
+                        unit: unit_text(n.unit.as_ref()),
                         docs: docs.clone(),
                     });
                     Some(binding(out.len() - 1))
@@ -2010,6 +2029,45 @@ impl Lowerer<'_> {
             }
         }
         Some(out)
+    }
+
+    /// The unit of the bare output `o` for the variable `variable` (its label): the
+    /// variable's, or the one written on the output if the variable has none; a different
+    /// unit on both is an error on the output's unit.
+    fn bare_output_unit(
+        &mut self,
+        o: &crate::parse::OutputDef,
+        variable: &str,
+        decls: [&[Decl]; 3],
+        params: &[Param],
+    ) -> Option<String> {
+        let declared = decls
+            .iter()
+            .flat_map(|d| d.iter())
+            .find(|d| d.label == variable)
+            .map(|d| d.unit.clone())
+            .or_else(|| {
+                params
+                    .iter()
+                    .find(|p| p.label == variable)
+                    .map(|p| p.unit.clone())
+            })
+            .flatten();
+        let written = unit_text(o.unit.as_ref());
+        match (declared, written) {
+            (Some(d), Some(w)) if d != w => {
+                if let Some(lit) = &o.unit {
+                    self.cx.error_spanned_by(
+                        lit,
+                        format!(
+                            "output `{variable}` is the variable `{variable}`, declared in `{d}`, but is given the unit `{w}`; leave the unit out here"
+                        ),
+                    );
+                }
+                Some(d)
+            }
+            (d, w) => d.or(w),
+        }
     }
 
     /// One output, or one per element of an output family: `(label, code name, expression,

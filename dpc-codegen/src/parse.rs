@@ -8,13 +8,14 @@
 //! model      := attr* vis Ident '{' item* '}'
 //! item       := section | 'let' Ident binder* '=' expr ';'
 //! section    := 'consts' '{' (Ident '=' expr),* '}'
-//!             | 'params' '{' (attr* Ident dims '=' expr),* '}'
-//!             | ('states' | 'algebraic' | 'inputs') '{' (attr* Ident dims),* '}'
+//!             | 'params' '{' (attr* Ident dims unit? '=' expr),* '}'
+//!             | ('states' | 'algebraic' | 'inputs') '{' (attr* Ident dims unit?),* '}'
 //!             | 'equations' '{' equation* '}'
-//!             | 'outputs' '{' (attr* target ('=' expr)?),* '}'
+//!             | 'outputs' '{' (attr* target unit? ('=' expr)?),* '}'
 //!             | 'references' '{' (target '=' expr),* '}'
 //!             | 'tracking' Ident '{' (target ':' '[' expr,* ']'),* '}'
 //! dims       := ('[' expr ']')*                      lengths of an indexed family
+//! unit       := ':' StrLit                           e.g. `theta: "rad"`; for every element
 //! binder     := '[' Ident 'in' expr ']'              an index ranging over `a..b`
 //! target     := Ident ('[' (Ident 'in' expr | expr) ']')*
 //! equation   := expr ';' | 'for' Ident 'in' expr '{' equation* '}'
@@ -24,7 +25,7 @@ use proc_macro2::{Span, TokenStream, TokenTree};
 use syn::ext::IdentExt;
 use syn::parse::{Parse, ParseStream};
 use syn::punctuated::Punctuated;
-use syn::{braced, bracketed, Attribute, Expr, Ident, Token, Visibility};
+use syn::{braced, bracketed, Attribute, Expr, Ident, LitStr, Token, Visibility};
 
 /// The sections a model may contain, in the order they must appear.
 pub const SECTION_ORDER: &[&str] = &[
@@ -122,6 +123,8 @@ pub struct NameDef {
     pub name: Ident,
     /// The lengths of an indexed family (`q[N]`, `a[2][3]`); empty for a scalar.
     pub dims: Vec<Expr>,
+    /// The unit written after the name (`theta: "rad"`), for every element of a family.
+    pub unit: Option<LitStr>,
 }
 
 /// `name = default` in `params`.
@@ -132,6 +135,8 @@ pub struct ParamDef {
     pub name: Ident,
     /// The lengths of an indexed family; empty for a scalar.
     pub dims: Vec<Expr>,
+    /// The unit written after the name (`m: "kg" = 1.0`).
+    pub unit: Option<LitStr>,
     /// Default value as written (checked to be numeric by the lowering).
     pub default: Expr,
 }
@@ -178,6 +183,9 @@ pub struct OutputDef {
     pub name: Ident,
     /// Subscripts of an output family (`y[i in 0..N] = ...`); empty for a scalar.
     pub subscripts: Vec<Subscript>,
+    /// The unit written after the name (`y: "m" = ...`); a bare output without one takes
+    /// the unit of its variable.
+    pub unit: Option<LitStr>,
     /// Its expression; `None` means the declared variable of the same name.
     pub expr: Option<Expr>,
 }
@@ -547,11 +555,50 @@ fn subscripts(input: ParseStream) -> syn::Result<Vec<Subscript>> {
     Ok(out)
 }
 
+/// The unit `: "rad"` after a declared name, if there is one: a non-empty string literal of
+/// one line without `[` or `]` (it is shown as `theta [rad]`).
+fn unit(input: ParseStream, name: &Ident) -> syn::Result<Option<LitStr>> {
+    if !input.peek(Token![:]) {
+        return Ok(None);
+    }
+    input.parse::<Token![:]>()?;
+    if !input.peek(LitStr) {
+        return Err(input.error(format!(
+            "expected the unit of `{name}` as a string literal, e.g. `{name}: \"rad\"`"
+        )));
+    }
+    let lit: LitStr = input.parse()?;
+    let text = lit.value();
+    let problem = if text.trim().is_empty() {
+        Some("is empty")
+    } else if text.contains(['\n', '\r']) {
+        Some("spans more than one line")
+    } else if text.contains(['[', ']']) {
+        Some("contains `[` or `]`, which delimit units in listings and figures")
+    } else if !lit.suffix().is_empty() {
+        Some("has a suffix")
+    } else {
+        None
+    };
+    match problem {
+        Some(p) => Err(syn::Error::new(
+            lit.span(),
+            format!("the unit of `{name}` {p}; write one such as `{name}: \"rad\"`"),
+        )),
+        None => Ok(Some(lit)),
+    }
+}
+
 fn parse_name(input: ParseStream, what: &str) -> syn::Result<NameDef> {
+    let attrs = input.call(Attribute::parse_outer)?;
+    let name = user_ident(input, what)?;
+    let dims = dims(input)?;
+    let unit = unit(input, &name)?;
     Ok(NameDef {
-        attrs: input.call(Attribute::parse_outer)?,
-        name: user_ident(input, what)?,
-        dims: dims(input)?,
+        attrs,
+        name,
+        dims,
+        unit,
     })
 }
 
@@ -559,6 +606,7 @@ fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
     let attrs = input.call(Attribute::parse_outer)?;
     let name: Ident = user_ident(input, "a parameter")?;
     let dims = dims(input)?;
+    let unit = unit(input, &name)?;
     input.parse::<Token![=]>().map_err(|e| {
         syn::Error::new(
             e.span(),
@@ -569,6 +617,7 @@ fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
         attrs,
         name,
         dims,
+        unit,
         default: input.parse()?,
     })
 }
@@ -577,6 +626,7 @@ fn parse_output(input: ParseStream) -> syn::Result<OutputDef> {
     let attrs = input.call(Attribute::parse_outer)?;
     let name: Ident = user_ident(input, "an output")?;
     let subscripts = subscripts(input)?;
+    let unit = unit(input, &name)?;
     let expr = if input.peek(Token![=]) {
         input.parse::<Token![=]>()?;
         Some(input.parse()?)
@@ -587,6 +637,7 @@ fn parse_output(input: ParseStream) -> syn::Result<OutputDef> {
         attrs,
         name,
         subscripts,
+        unit,
         expr,
     })
 }

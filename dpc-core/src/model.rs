@@ -97,6 +97,46 @@ impl<S: AsRef<str>, const N: usize> PartialEq<[S; N]> for Names {
     }
 }
 
+/// The units of a model's variables, as declared in its DSL (`theta: "rad"`): pairs of a
+/// name as written (`theta`, `q[2]` for an element of a family) and its unit. Variables
+/// without a unit are not listed. `'static` for generated models, owned for models built at
+/// run time.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Units {
+    /// Units known at compile time.
+    Static(&'static [(&'static str, &'static str)]),
+    /// Units built at run time.
+    Owned(Vec<(String, String)>),
+}
+
+impl Units {
+    /// The unit of the variable `name`, if it has one.
+    pub fn get(&self, name: &str) -> Option<&str> {
+        self.iter().find(|(n, _)| *n == name).map(|(_, u)| u)
+    }
+
+    /// The `(name, unit)` pairs in declaration order.
+    pub fn iter(&self) -> impl Iterator<Item = (&str, &str)> + '_ {
+        (0..self.len()).filter_map(move |i| match self {
+            Units::Static(s) => s.get(i).copied(),
+            Units::Owned(v) => v.get(i).map(|(n, u)| (n.as_str(), u.as_str())),
+        })
+    }
+
+    /// Number of variables with a unit.
+    pub fn len(&self) -> usize {
+        match self {
+            Units::Static(s) => s.len(),
+            Units::Owned(v) => v.len(),
+        }
+    }
+
+    /// Whether no variable has a unit.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
 /// Names, dimensions and structural sparsity of a model: everything about it that does not
 /// depend on the point of evaluation. Generated models return a `static` one; models read at
 /// run time build theirs when they are parsed.
@@ -117,6 +157,9 @@ pub struct Structure {
     /// The equations as readable text, normalised to `lhs == rhs` form, one per residual row
     /// (so there are `states + algebraic` of them).
     pub equations: Names,
+    /// The units of the parameters, states, algebraic unknowns, inputs and outputs that
+    /// declare one (see [`Structure::unit`]).
+    pub units: Units,
     /// Structural pattern of `dF/dx'` (equations x states).
     pub pattern_f_xdot: Pattern,
     /// Structural pattern of `dF/dx` (equations x states).
@@ -186,6 +229,12 @@ impl Structure {
             self.algebraic.get(i - nx)
         };
         name.map_or_else(|| format!("y[{i}]"), str::to_string)
+    }
+
+    /// The unit of the variable `name` (a parameter, state, algebraic unknown, input or
+    /// output, named as in the lists above, e.g. `q[2]`), if the model declares one.
+    pub fn unit(&self, name: &str) -> Option<&str> {
+        self.units.get(name)
     }
 
     /// The index of parameter `name`.

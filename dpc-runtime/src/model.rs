@@ -7,7 +7,7 @@ use std::sync::Arc;
 use dpc_codegen::derive::{Block, DaeDerivatives, Derived, Layout};
 use dpc_codegen::hirschorn::RelativeDegree;
 use dpc_codegen::ir::{Model, Symbol};
-use dpc_core::model::{Names, Structure};
+use dpc_core::model::{Names, Structure, Units};
 use dpc_core::reference::{check_buffer, Reference, ReferenceError};
 use dpc_core::tracking::{check_w_coefficients, TrackingError};
 use dpc_core::{DaeModel, MatrixSink, TrackingDae};
@@ -60,6 +60,7 @@ impl DaeTapes {
                 outputs: Names::Owned(d.outputs.iter().map(|o| o.0.clone()).collect()),
                 params: Names::Owned(model.params.iter().map(|p| p.label.clone()).collect()),
                 equations: Names::Owned(d.equation_texts.clone()),
+                units: Units::Owned(model.units()),
                 pattern_f_xdot: pattern(&d.f_xdot),
                 pattern_f_x: pattern(&d.f_x),
                 pattern_f_z: pattern(&d.f_z),
@@ -92,6 +93,7 @@ impl DaeTapes {
                 outputs: none(),
                 params: none(),
                 equations: none(),
+                units: Units::Owned(Vec::new()),
                 pattern_f_xdot: empty(),
                 pattern_f_x: empty(),
                 pattern_f_z: empty(),

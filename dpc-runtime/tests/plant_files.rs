@@ -320,3 +320,35 @@ mod mutations {
         }
     }
 }
+
+#[test]
+fn units_reach_the_structure_of_the_plant_and_its_tracking_dae() {
+    let model = dpc_runtime::parse(
+        "cart.dpc",
+        r#"Cart {
+            params { m: "kg" = 2.0, k = 0.5 }
+            states { x: "m", v: "m/s" }
+            inputs { f: "N" }
+            equations { der(x) = v; m * der(v) == -k * x + f; }
+            outputs { x }
+            tracking CartTracking { x: [1.0, 2.0] }
+        }"#,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let plant = model.plant();
+    let s = dpc_core::DaeModel::structure(&plant);
+    assert_eq!(s.unit("m"), Some("kg"));
+    assert_eq!(s.unit("x"), Some("m"));
+    assert_eq!(s.unit("v"), Some("m/s"));
+    assert_eq!(s.unit("f"), Some("N"));
+    assert_eq!(s.unit("k"), None);
+    assert_eq!(s.units.len(), 4, "the bare output `x` is listed once");
+    let tracking = model.tracking().expect("the model has a tracking section");
+    let t = dpc_core::DaeModel::structure(&tracking);
+    assert_eq!(t.unit("f"), Some("N"));
+    assert!(
+        model.listing().contains("states     x [m], v [m/s]"),
+        "{}",
+        model.listing()
+    );
+}

@@ -40,8 +40,8 @@ dpc::model! {
             /// Gravity.
             g = 9.81
         }
-        states { q[N], w[N], th[N], wm[N] }
-        inputs { u[N] }
+        states { q[N]: "rad", w[N]: "rad/s", th[N]: "rad", wm[N]: "rad/s" }
+        inputs { u[N]: "N m" }
         // Absolute angle, angular velocity and angular acceleration of each link.
         let phi[a in 0..N] = sum(0..=a, |j| q[j]);
         let om[a in 0..N] = sum(0..=a, |j| w[j]);
@@ -90,8 +90,8 @@ dpc::model! {
             /// Gravity.
             g = 9.81
         }
-        states { q[N], w[N], th[N], wm[N] }
-        inputs { u[N] }
+        states { q[N]: "rad", w[N]: "rad/s", th[N]: "rad", wm[N]: "rad/s" }
+        inputs { u[N]: "N m" }
         // Absolute angle, angular velocity and angular acceleration of each link.
         let phi[a in 0..N] = sum(0..=a, |j| q[j]);
         let om[a in 0..N] = sum(0..=a, |j| w[j]);
@@ -140,8 +140,8 @@ dpc::model! {
             /// Gravity.
             g = 9.81
         }
-        states { q[N], w[N], th[N], wm[N] }
-        inputs { u[N] }
+        states { q[N]: "rad", w[N]: "rad/s", th[N]: "rad", wm[N]: "rad/s" }
+        inputs { u[N]: "N m" }
         // Absolute angle, angular velocity and angular acceleration of each link.
         let phi[a in 0..N] = sum(0..=a, |j| q[j]);
         let om[a in 0..N] = sum(0..=a, |j| w[j]);

@@ -12,9 +12,9 @@ dpc::model! {
     /// index 3. The load hanging at rest below the cart is an equilibrium for `f = 0`.
     pub CartPendulum {
         params { mc = 1.0, m = 0.5, l = 0.5, g = 9.81, b = 0.1, c = 0.2 }
-        states { s, xb, yb, vs, vx, vy }
+        states { s: "m", xb: "m", yb: "m", vs: "m/s", vx: "m/s", vy: "m/s" }
         algebraic { lambda }
-        inputs { f }
+        inputs { f: "N" }
         equations {
             der(s) = vs;
             der(xb) = vx;
@@ -24,7 +24,7 @@ dpc::model! {
             m * der(vy) == -lambda * yb - c * vy - m * g;
             0.0 == 0.5 * ((xb - s).powi(2) + yb.powi(2) - l.powi(2));
         }
-        outputs { cart = s }
+        outputs { cart: "m" = s }
         references { cart = 0.5 * (1.0 - cos(t)) }
         tracking CartPendulumTracking { cart: [2.0] }
     }
@@ -36,8 +36,8 @@ dpc::model! {
     /// enters as generalised forces).
     pub CartPendulumJoint {
         params { mc = 1.0, m = 0.5, l = 0.5, g = 9.81, b = 0.1, c = 0.2 }
-        states { s, phi, vs, om }
-        inputs { f }
+        states { s: "m", phi: "rad", vs: "m/s", om: "rad/s" }
+        inputs { f: "N" }
         equations {
             der(s) = vs;
             der(phi) = om;
@@ -46,7 +46,7 @@ dpc::model! {
             m * l * cos(phi) * der(vs) + m * l.powi(2) * der(om)
                 == -m * g * l * sin(phi) - c * l * (cos(phi) * vs + l * om);
         }
-        outputs { cart = s }
+        outputs { cart: "m" = s }
         references { cart = 0.5 * (1.0 - cos(t)) }
         tracking CartPendulumJointTracking { cart: [2.0] }
     }

@@ -9,8 +9,8 @@ dpc::model! {
     /// stabilised Hirschorn steps, `W(s) = (s + 2)(s + 3)`.
     pub FlexibleJoint {
         params { i_link = 1.0, j_motor = 0.5, k = 40.0, m = 1.0, l = 0.5, g = 9.81 }
-        states { q_link, w_link, q_motor, w_motor }
-        inputs { u }
+        states { q_link: "rad", w_link: "rad/s", q_motor: "rad", w_motor: "rad/s" }
+        inputs { u: "N m" }
         equations {
             der(q_link) = w_link;
             der(w_link) = (-m * g * l * sin(q_link) - k * (q_link - q_motor)) / i_link;

@@ -10,9 +10,9 @@ dpc::model! {
     /// index 3.
     pub SliderCrank {
         params { j = 0.05, ms = 2.0, r = 0.3, l = 1.0, k = 50.0, x0 = 1.0, c = 0.5, bt = 0.1 }
-        states { th, xs, om, vs }
+        states { th: "rad", xs: "m", om: "rad/s", vs: "m/s" }
         algebraic { lambda }
-        inputs { tau }
+        inputs { tau: "N m" }
         equations {
             der(th) = om;
             der(xs) = vs;
@@ -20,7 +20,7 @@ dpc::model! {
             ms * der(vs) == -k * (xs - x0) - c * vs - lambda * (xs - r * cos(th));
             0.0 == 0.5 * ((xs - r * cos(th)).powi(2) + (r * sin(th)).powi(2) - l.powi(2));
         }
-        outputs { angle = th }
+        outputs { angle: "rad" = th }
         references { angle = 1.0 + 0.3 * (1.0 - cos(t)) }
         tracking SliderCrankTracking { angle: [4.0] }
     }
@@ -31,8 +31,8 @@ dpc::model! {
     /// the closed-form geometry, Lagrange's equation with `X'` and `X''` written out.
     pub SliderCrankJoint {
         params { j = 0.05, ms = 2.0, r = 0.3, l = 1.0, k = 50.0, x0 = 1.0, c = 0.5, bt = 0.1 }
-        states { th, om }
-        inputs { tau }
+        states { th: "rad", om: "rad/s" }
+        inputs { tau: "N m" }
         let sn = sin(th);
         let cs = cos(th);
         let q = sqrt(l.powi(2) - (r * sn).powi(2));
@@ -46,7 +46,7 @@ dpc::model! {
                 == tau - bt * om - c * dx.powi(2) * om - k * (xs - x0) * dx
                     - ms * dx * ddx * om.powi(2);
         }
-        outputs { angle = th }
+        outputs { angle: "rad" = th }
         references { angle = 1.0 + 0.3 * (1.0 - cos(t)) }
         tracking SliderCrankJointTracking { angle: [4.0] }
     }

@@ -9,22 +9,22 @@ dpc::model! {
     pub Wheel {
         params {
             /// Mass of the wheel [kg].
-            m = 1.0,
+            m: "kg" = 1.0,
             /// Radius [m].
-            r = 1.0,
+            r: "m" = 1.0,
             /// Radial moment of inertia [kg m^2].
-            i_r = 0.5,
+            i_r: "kg m^2" = 0.5,
             /// Normal moment of inertia [kg m^2].
-            i_n = 0.25,
+            i_n: "kg m^2" = 0.25,
             /// Gravity [m/s^2].
-            g = 9.81,
+            g: "m/s^2" = 9.81,
         }
-        states { theta, psi, dphi, dtheta, dpsi }
+        states { theta: "rad", psi: "rad", dphi: "rad/s", dtheta: "rad/s", dpsi: "rad/s" }
         inputs {
             /// Steering torque.
-            u1,
+            u1: "N m",
             /// Pedalling torque.
-            u2,
+            u2: "N m",
         }
         let a1 = i_n + m * r.powi(2);
         let a2 = i_r + m * r.powi(2);

@@ -508,7 +508,11 @@ where
             states: structure.states.to_vec(),
             inputs: structure.inputs.to_vec(),
             outputs: structure.outputs.to_vec(),
-            units: BTreeMap::new(),
+            units: structure
+                .units
+                .iter()
+                .map(|(n, u)| (n.to_string(), u.to_string()))
+                .collect(),
         },
         model: in_use,
         design: design.map(|(report, _)| report),
