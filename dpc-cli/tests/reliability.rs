@@ -596,3 +596,19 @@ fn a_system_beyond_max_states_is_refused_before_the_analysis() {
     );
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
 }
+
+#[test]
+fn a_closed_standard_output_is_no_panic() {
+    // `dpc model wheel | head -0`: the reader is gone before the listing is written.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dpc"))
+        .args(["model", "wheel"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = stderr(&out);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(out.status.success(), "{err}");
+}

@@ -407,6 +407,15 @@ fn labelled(name: &str, unit: Option<&str>) -> String {
     }
 }
 
+/// The unit every one of `names` has, if they share one.
+fn common_unit<'a>(names: &[String], unit: impl Fn(&str) -> Option<&'a str>) -> Option<&'a str> {
+    let first = unit(names.first()?)?;
+    names
+        .iter()
+        .all(|n| unit(n) == Some(first))
+        .then_some(first)
+}
+
 /// Pixel height of the figure title band.
 const TITLE_HEIGHT: u32 = 34;
 
@@ -475,7 +484,7 @@ fn draw_closed_loop<DB: DrawingBackend>(
         panel(
             &panels[outputs.len()],
             "tracking errors y - reference (symmetric log scale)",
-            "error",
+            &labelled("error", common_unit(outputs, unit)),
             t_end,
             &errors,
             Scale::SymLog {
@@ -498,7 +507,7 @@ fn draw_closed_loop<DB: DrawingBackend>(
             .collect();
         let input_label = match run.names.inputs.as_slice() {
             [one] => labelled(one, unit(one)),
-            _ => "input".to_string(),
+            all => labelled("input", common_unit(all, unit)),
         };
         panel(
             &panels[outputs.len() + 1],
