@@ -102,6 +102,21 @@ fn describe(summary: &Digest) -> String {
     )
 }
 
+/// A period found by bisection, to the four significant digits it is known to (the bisection
+/// stops far below the sampling period's own precision): `0.02065`, not `0.020653320312499997`.
+fn significant(h: f64) -> String {
+    if !(h.is_finite() && h > 0.0) {
+        return Num(h).to_string();
+    }
+    let decimals = (3.0 - h.log10().floor()).clamp(0.0, 15.0) as usize;
+    let text = format!("{h:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
 /// Run `dpc simulate`: the scenario and its comparison runs, written into a staging
 /// directory that replaces `--out` only when everything is written.
 pub fn simulate(registry: &Registry, args: &SimulateArgs) -> Result<(), ScenarioError> {
@@ -199,8 +214,10 @@ fn write_all(
                 .join(", ")
         );
         let critical = match d.sampled.critical_period {
-            CriticalPeriod::At(h) => format!("loses stability at h = {}", Num(h)),
-            CriticalPeriod::StableUpTo(h) => format!("stable for every h up to {}", Num(h)),
+            CriticalPeriod::At(h) => format!("loses stability at h = {}", significant(h)),
+            CriticalPeriod::StableUpTo(h) => {
+                format!("stable for every h up to {}", significant(h))
+            }
             CriticalPeriod::UnstableAtAnyPeriod => "unstable at every period".to_string(),
         };
         sayln!(
