@@ -37,7 +37,7 @@
 
 use crate::consistent::ConstraintStructure;
 use crate::linalg::{FactorError, LinearSolver};
-use crate::numeric::{max_or_nan, Time};
+use crate::numeric::{max_or_nan, Readable, Time};
 use crate::prefeedback::{FeedbackChain, Prefeedback};
 use crate::reference::{Reference, ReferenceError};
 use crate::sink::MatrixSink;
@@ -145,7 +145,7 @@ pub enum DpcError {
     Reference(#[from] ReferenceError),
     /// The tracking DAE could not be integrated from the measured state, even after retries
     /// with larger `delta`.
-    #[error("no control at t = {}: inner step {step} did not converge (scaled residual {residual:e}) with delta up to {delta:e} after {retries} retries", Time(*t))]
+    #[error("no control at t = {}: inner step {step} did not converge (scaled residual {residual:.3e}) with delta up to {} after {retries} retries", Time(*t), Readable(*delta))]
     NoSolution {
         /// Sample time.
         t: f64,
