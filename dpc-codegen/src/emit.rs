@@ -430,8 +430,9 @@ pub fn emit_dae_type(
             .map(|(i, v)| quote!(__out[#i] = #v;));
         quote!(#prelude let __out = &mut __out[..#neq]; #(#stmts)* #(#writes)*)
     };
-    let fused_code = {
-        let r = routine(model, layout, &ty.residual_and_iteration_roots());
+    // A routine whose roots are the residual rows followed by the entries of `blocks`.
+    let residual_and_blocks = |roots: &[ExprId], blocks: &[(TokenStream, &Block)]| {
+        let r = routine(model, layout, roots);
         let (prelude, stmts) = (r.prelude, r.statements);
         let mut it = r.roots.into_iter();
         let mut writes: Vec<TokenStream> = (0..neq)
@@ -440,28 +441,22 @@ pub fn emit_dae_type(
                 quote!(__residual[#i] = #v;)
             })
             .collect();
-        writes.extend(sink_writes(&mut it, &[(quote!(__out), &ty.iteration)]));
+        writes.extend(sink_writes(&mut it, blocks));
         quote!(#prelude let __residual = &mut __residual[..#neq]; #(#stmts)* #(#writes)*)
     };
-    let evaluate_code = {
-        let blocks = [
+    let fused_code = residual_and_blocks(
+        &ty.residual_and_iteration_roots(),
+        &[(quote!(__out), &ty.iteration)],
+    );
+    let evaluate_code = residual_and_blocks(
+        &ty.evaluate_roots(),
+        &[
             (quote!(__f_xdot), f_xdot),
             (quote!(__f_x), f_x),
             (quote!(__f_z), f_z),
             (quote!(__f_u), f_u),
-        ];
-        let r = routine(model, layout, &ty.evaluate_roots());
-        let (prelude, stmts) = (r.prelude, r.statements);
-        let mut it = r.roots.into_iter();
-        let mut writes: Vec<TokenStream> = (0..neq)
-            .map(|i| {
-                let v = it.next().expect("one root per residual row");
-                quote!(__residual[#i] = #v;)
-            })
-            .collect();
-        writes.extend(sink_writes(&mut it, &blocks));
-        quote!(#prelude let __residual = &mut __residual[..#neq]; #(#stmts)* #(#writes)*)
-    };
+        ],
+    );
     let iteration_code = {
         let roots: Vec<ExprId> = ty.iteration.exprs().collect();
         let r = routine(model, layout, &roots);
