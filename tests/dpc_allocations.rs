@@ -4,7 +4,6 @@
 //! test's allocations are not counted in another's).
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use std::sync::{Arc, Mutex};
 
@@ -16,18 +15,31 @@ use dpc_models::{Wheel, WheelReference, WheelTracking};
 
 struct Counting;
 
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    /// Allocations made by this thread: the harness and other tests allocate on their own
+    /// threads at the same time, so a global count is not this test's count.
+    static ALLOCATIONS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(|c| c.get())
+}
+
+fn count_one() {
+    // During thread teardown the slot may be gone: such allocations are not a test's.
+    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        count_one();
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        count_one();
         unsafe { System.realloc(ptr, layout, new_size) }
     }
 }
@@ -85,14 +97,14 @@ fn wheel_control_updates_do_not_allocate() {
         let mut x = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, -6.0];
         // The first update warms up; every later one must not allocate.
         dpc.control(0.0, &x, &mut u).expect("first update");
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        let before = allocations();
         for k in 1..50 {
             let t = k as f64 * 0.05;
             x[1] = -6.0 * t;
             x[0] += 0.001;
             dpc.control(t, &x, &mut u).expect("update");
         }
-        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        let after = allocations();
         assert_eq!(
             after - before,
             0,
@@ -121,9 +133,9 @@ fn closed_loop_allocations(hold: Hold, t_end: f64) -> (usize, usize) {
         ..ClosedLoopOptions::default()
     };
     let x0 = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, -6.0];
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = allocations();
     let run = simulate(&Wheel::default(), &mut dpc, &x0, &opts).expect("run starts");
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    let after = allocations();
     assert!(run.divergence.is_none(), "{:?}", run.divergence);
     assert!(run.events.is_empty(), "{:?}", run.events);
     (after - before, run.samples.len())
