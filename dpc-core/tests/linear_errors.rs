@@ -127,6 +127,14 @@ fn bad_w() {
         analyze(&sys, &wrong_count),
         Err(LinearError::DimensionMismatch { .. })
     ));
+    // A malformed W is reported as such even when one of its roots is far beyond the plant's
+    // scale (only numerical failures are blamed on that scale).
+    let wrong_count_far = AnalysisOptions {
+        w: Some(vec![vec![1e9], vec![1.0]]),
+        ..Default::default()
+    };
+    let e = analyze(&sys, &wrong_count_far).unwrap_err();
+    assert!(matches!(e, LinearError::DimensionMismatch { .. }), "{e}");
     // Degree equal to the relative degree, and a zero entry (plain differentiation), are fine.
     let ok = AnalysisOptions {
         w: Some(vec![vec![0.0, 3.0]]),

@@ -443,13 +443,15 @@ pub fn dpc_law(sys: &LinearSystem, tol_factor: f64) -> Result<DpcLaw, LinearErro
 /// `opts.prefeedback`) the preliminary feedback and the analysis of the pre-fed-back system.
 pub fn analyze(sys: &LinearSystem, opts: &AnalysisOptions) -> Result<Analysis, LinearError> {
     analyze_as_given(sys, opts).map_err(|cause| match w_out_of_scale(sys, opts) {
-        Some((output, root, scale)) => LinearError::WOutOfScale {
+        // Only a numerical failure can be blamed on W's scale; a malformed system or option
+        // is reported as it is.
+        Some((output, root, scale)) if cause.is_numerical() => LinearError::WOutOfScale {
             output,
             root,
             scale,
             cause: Box::new(cause),
         },
-        None => cause,
+        _ => cause,
     })
 }
 

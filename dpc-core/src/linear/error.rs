@@ -105,3 +105,18 @@ pub enum LinearError {
         cause: Box<LinearError>,
     },
 }
+
+impl LinearError {
+    /// A failure of the numerics that the partial stabilisation `W` can cause (a singular
+    /// pencil, an uncontrollable pair, a decomposition that did not converge), as opposed to a
+    /// malformed system or option or a property of the plant alone.
+    pub fn is_numerical(&self) -> bool {
+        matches!(
+            self,
+            Self::SingularPencil { .. }
+                | Self::Uncontrollable { .. }
+                | Self::NoConvergence { .. }
+                | Self::WOutOfScale { .. }
+        )
+    }
+}
