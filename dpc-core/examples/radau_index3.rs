@@ -1,5 +1,6 @@
 //! The Radau IIA integrator on the index-3 Test Set problems (Andrews' squeezing mechanism and
-//! the car axis) as the Test Set scores them: per tolerance, the median significant correct
+//! the car axis), as declared and in the GGL-stabilised index-2 form
+//! ([`dpc_core::stabilised::Stabilised`]), as the Test Set scores them: per tolerance, the median significant correct
 //! digits (scd) over the tolerance jitter `tol * {0.9, 1, 1.1}`, the steps and the work.
 //!
 //! ```sh
@@ -12,43 +13,101 @@
 #[path = "../tests/common/testset_index3.rs"]
 mod testset;
 
-use dpc_core::linalg::{FaerDenseLu, NalgebraLu};
+use dpc_core::linalg::FaerDenseLu;
 use dpc_core::radau::{Options, Radau, Stats};
+use dpc_core::stabilised::Stabilised;
+use dpc_core::ImplicitDae;
 use testset::*;
 
-fn andrews(tol: f64) -> Option<([f64; 27], Stats)> {
-    let (y0, yp0) = Andrews::initial();
+/// How the index-3 problem is integrated.
+#[derive(Clone, Copy, PartialEq)]
+enum Form {
+    /// As declared, with the index-dependent error weights.
+    Index3,
+    /// In the GGL-stabilised index-2 form ([`Stabilised`]).
+    Stabilised,
+}
+
+/// Integrate `dae` from `(y0, yp0)` to `t_end`; the first `y0.len()` components at `t_end`.
+fn run<D: ImplicitDae>(
+    dae: D,
+    index: Vec<u8>,
+    (y0, yp0): (&[f64], &[f64]),
+    t_end: f64,
+    tol: f64,
+    what: &str,
+) -> Option<(Vec<f64>, Stats)> {
     let opts = Options {
-        index: andrews_index(),
+        index,
         ..Options::with_tolerances(tol, tol)
     };
-    let mut r = Radau::new(Andrews, FaerDenseLu::new(27), opts, 0.0, &y0, &yp0).ok()?;
-    r.set_stop_time(ANDREWS_T_END).ok()?;
-    let mut y = [0.0; 27];
-    match r.solve_to(ANDREWS_T_END, &mut y, None) {
-        Ok(_) => Some((y, r.stats())),
+    let n = dae.dimension();
+    let result = (|| {
+        let mut r = Radau::new(dae, FaerDenseLu::new(n), opts, 0.0, y0, yp0)?;
+        r.set_stop_time(t_end)?;
+        let mut y = vec![0.0; n];
+        r.solve_to(t_end, &mut y, None)?;
+        Ok::<_, dpc_core::radau::RadauError>((y, r.stats()))
+    })();
+    match result {
+        Ok(r) => Some(r),
         Err(e) => {
-            eprintln!("Andrews at tol {tol:e}: {e}");
+            eprintln!("{what} at tol {tol:e}: {e}");
             None
         }
     }
 }
 
-fn car_axis(tol: f64) -> Option<([f64; 10], Stats)> {
+/// The index of every unknown of a stabilised form: 1 for the first `differential`
+/// unknowns, 2 for the rest.
+fn stabilised_index(differential: usize, n: usize) -> Vec<u8> {
+    (0..n)
+        .map(|i| if i < differential { 1 } else { 2 })
+        .collect()
+}
+
+fn andrews(tol: f64, form: Form) -> Option<(Vec<f64>, Stats)> {
+    let (y0, yp0) = Andrews::initial();
+    match form {
+        Form::Index3 => run(
+            Andrews,
+            andrews_index(),
+            (&y0, &yp0),
+            ANDREWS_T_END,
+            tol,
+            "Andrews",
+        ),
+        Form::Stabilised => {
+            let s = Stabilised::new(
+                Andrews,
+                (21..27).collect(),
+                (0..7).map(|j| (j, j)).collect(),
+            )
+            .ok()?;
+            let (y, yp) = s.extend(&y0, &yp0);
+            let index = stabilised_index(14, 33);
+            run(s, index, (&y, &yp), ANDREWS_T_END, tol, "Andrews (GGL)")
+        }
+    }
+}
+
+fn car_axis(tol: f64, form: Form) -> Option<(Vec<f64>, Stats)> {
     let p = CarAxis::default();
     let (y0, yp0) = p.initial();
-    let opts = Options {
-        index: CAR_AXIS_INDEX.to_vec(),
-        ..Options::with_tolerances(tol, tol)
-    };
-    let mut r = Radau::new(p, NalgebraLu::<10>::new(), opts, 0.0, &y0, &yp0).ok()?;
-    r.set_stop_time(CAR_AXIS_T_END).ok()?;
-    let mut y = [0.0; 10];
-    match r.solve_to(CAR_AXIS_T_END, &mut y, None) {
-        Ok(_) => Some((y, r.stats())),
-        Err(e) => {
-            eprintln!("car axis at tol {tol:e}: {e}");
-            None
+    match form {
+        Form::Index3 => run(
+            p,
+            CAR_AXIS_INDEX.to_vec(),
+            (&y0, &yp0),
+            CAR_AXIS_T_END,
+            tol,
+            "car axis",
+        ),
+        Form::Stabilised => {
+            let s = Stabilised::new(p, vec![8, 9], (0..4).map(|j| (j, j)).collect()).ok()?;
+            let (y, yp) = s.extend(&y0, &yp0);
+            let index = stabilised_index(8, 12);
+            run(s, index, (&y, &yp), CAR_AXIS_T_END, tol, "car axis (GGL)")
         }
     }
 }
@@ -63,58 +122,63 @@ fn main() {
     let components = std::env::args().any(|a| a == "--components");
     println!("| problem | tol | scd (median of tol x 0.9, 1, 1.1) | steps | rejected | Newton failures | Jacobians |");
     println!("|---|---|---|---|---|---|---|");
-    for k in [4, 5, 6, 7, 8, 9, 10] {
-        let tol = 10f64.powi(-k);
-        let d = median(
-            [0.9, 1.0, 1.1]
-                .iter()
-                .map(|f| {
-                    andrews(tol * f)
-                        .map_or(f64::NAN, |(y, _)| scd(&y, &ANDREWS_REF, &ANDREWS_SCORED))
-                })
-                .collect(),
-        );
-        let Some((y, s)) = andrews(tol) else {
-            println!("| Andrews (y1..y7) | 1e-{k} | failed | | | | |");
-            continue;
-        };
-        println!(
-            "| Andrews (y1..y7) | 1e-{k} | {d:.2} | {} | {} | {} | {} |",
-            s.steps, s.error_test_failures, s.newton_failures, s.jacobian_evaluations
-        );
-        if components {
-            let e: Vec<String> = (0..27)
-                .map(|i| format!("{:.1}", scd(&y, &ANDREWS_REF, &[i])))
-                .collect();
-            println!("|   digits per component: {} |", e.join(" "));
+    for (form, label) in [(Form::Index3, "index 3"), (Form::Stabilised, "GGL")] {
+        for k in [4, 5, 6, 7, 8, 9, 10] {
+            let tol = 10f64.powi(-k);
+            let d = median(
+                [0.9, 1.0, 1.1]
+                    .iter()
+                    .map(|f| {
+                        andrews(tol * f, form)
+                            .map_or(f64::NAN, |(y, _)| scd(&y, &ANDREWS_REF, &ANDREWS_SCORED))
+                    })
+                    .collect(),
+            );
+            let Some((y, s)) = andrews(tol, form) else {
+                println!("| Andrews {label} (y1..y7) | 1e-{k} | failed | | | | |");
+                continue;
+            };
+            println!(
+                "| Andrews {label} (y1..y7) | 1e-{k} | {d:.2} | {} | {} | {} | {} |",
+                s.steps, s.error_test_failures, s.newton_failures, s.jacobian_evaluations
+            );
+            if components {
+                let e: Vec<String> = (0..27)
+                    .map(|i| format!("{:.1}", scd(&y, &ANDREWS_REF, &[i])))
+                    .collect();
+                println!("|   digits per component: {} |", e.join(" "));
+            }
         }
-    }
-    let all: Vec<usize> = (0..10).collect();
-    for k in [4, 5, 6, 7, 8, 9, 10] {
-        let tol = 10f64.powi(-k);
-        let d = median(
-            [0.9, 1.0, 1.1]
-                .iter()
-                .map(|f| car_axis(tol * f).map_or(f64::NAN, |(y, _)| scd(&y, &CAR_AXIS_REF, &all)))
-                .collect(),
-        );
-        let Some((y, s)) = car_axis(tol) else {
-            println!("| car axis (all) | 1e-{k} | failed | | | | |");
-            continue;
-        };
-        println!(
-            "| car axis (all; positions {:.2}) | 1e-{k} | {d:.2} | {} | {} | {} | {} |",
-            scd(&y, &CAR_AXIS_REF, &[0, 1, 2, 3]),
-            s.steps,
-            s.error_test_failures,
-            s.newton_failures,
-            s.jacobian_evaluations
-        );
-        if components {
-            let e: Vec<String> = (0..10)
-                .map(|i| format!("{:.1}", scd(&y, &CAR_AXIS_REF, &[i])))
-                .collect();
-            println!("|   digits per component: {} |", e.join(" "));
+        let all: Vec<usize> = (0..10).collect();
+        for k in [4, 5, 6, 7, 8, 9, 10] {
+            let tol = 10f64.powi(-k);
+            let d = median(
+                [0.9, 1.0, 1.1]
+                    .iter()
+                    .map(|f| {
+                        car_axis(tol * f, form)
+                            .map_or(f64::NAN, |(y, _)| scd(&y, &CAR_AXIS_REF, &all))
+                    })
+                    .collect(),
+            );
+            let Some((y, s)) = car_axis(tol, form) else {
+                println!("| car axis {label} (all) | 1e-{k} | failed | | | | |");
+                continue;
+            };
+            println!(
+                "| car axis {label} (all; positions {:.2}) | 1e-{k} | {d:.2} | {} | {} | {} | {} |",
+                scd(&y, &CAR_AXIS_REF, &[0, 1, 2, 3]),
+                s.steps,
+                s.error_test_failures,
+                s.newton_failures,
+                s.jacobian_evaluations
+            );
+            if components {
+                let e: Vec<String> = (0..10)
+                    .map(|i| format!("{:.1}", scd(&y, &CAR_AXIS_REF, &[i])))
+                    .collect();
+                println!("|   digits per component: {} |", e.join(" "));
+            }
         }
     }
 }

@@ -21,6 +21,7 @@
 //! * [`prefeedback`]: the preliminary feedback law and the nominal motions it acts about;
 //! * [`reference`](mod@reference): reference trajectories with exact derivatives;
 //! * [`tracking`]: the tracking DAE of stabilised Hirschorn steps generated from a model;
+//! * [`stabilised`]: the index-2 (GGL) stabilised form of an index-3 mechanical DAE;
 //! * [`simulate`]: the sampled closed loop, with the plant integrated accurately between samples.
 #![warn(missing_docs)]
 
@@ -39,6 +40,7 @@ pub mod radau;
 pub mod reference;
 pub mod simulate;
 pub mod sink;
+pub mod stabilised;
 pub mod tracking;
 
 pub use dae::ImplicitDae;
