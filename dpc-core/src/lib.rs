@@ -10,6 +10,7 @@
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
 //! * [`design`]: the design chain of a preliminary feedback (trim, linearise, analyse, `K_n`)
 //!   and the check of the relative degrees at the nominal;
+//! * [`error`]: errors shared by the layers (an option out of range);
 //! * [`dpc`]: one sampled update of the Descriptor Predictive Controller;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
 //! * [`radau`]: the Radau IIA integrator (order 5) for DAEs of index up to 3 as declared;
@@ -30,6 +31,7 @@ pub mod consistent;
 pub mod dae;
 pub mod design;
 pub mod dpc;
+pub mod error;
 pub mod linalg;
 pub mod linear;
 pub mod linearize;
@@ -44,6 +46,7 @@ pub mod stabilised;
 pub mod tracking;
 
 pub use dae::ImplicitDae;
+pub use error::InvalidOption;
 pub use model::{DaeModel, Structure};
 pub use reference::Reference;
 pub use sink::MatrixSink;

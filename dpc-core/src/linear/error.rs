@@ -84,7 +84,7 @@ pub enum LinearError {
     },
     /// An argument is out of range (a non-positive sampling period, tolerance or count).
     #[error("invalid argument: {0}")]
-    InvalidOption(String),
+    InvalidOption(#[from] crate::error::InvalidOption),
     /// An iterative decomposition (SVD, Schur) did not converge.
     #[error("{what} did not converge")]
     NoConvergence {

@@ -22,6 +22,7 @@
 
 use nalgebra::DMatrix;
 
+use crate::error::InvalidOption;
 use crate::linear::{eigenvalues, Analysis, LinearError, LinearSystem};
 pub use crate::simulate::Hold;
 
@@ -182,11 +183,7 @@ impl SampledLoop {
     /// # Errors
     /// As [`SampledLoop::discretize`]; [`LinearError::InvalidOption`] for `h <= 0` or NaN.
     pub fn transition(&self, h: f64) -> Result<DMatrix<f64>, LinearError> {
-        if !(h.is_finite() && h > 0.0) {
-            return Err(LinearError::InvalidOption(format!(
-                "sampling period h = {h} must be positive and finite"
-            )));
-        }
+        InvalidOption::positive("h", h)?;
         let (phi, gamma) = self.discretize(h)?;
         Ok(phi + gamma * &self.k_held)
     }
@@ -215,10 +212,10 @@ impl SampledLoop {
         samples: usize,
         rel_tol: f64,
     ) -> Result<CriticalPeriod, LinearError> {
-        if !(h_max.is_finite() && h_max > 0.0 && rel_tol > 0.0 && samples > 0) {
-            return Err(LinearError::InvalidOption(format!(
-                "critical_period needs h_max > 0 ({h_max}), rel_tol > 0 ({rel_tol}) and samples > 0 ({samples})"
-            )));
+        InvalidOption::positive("h_max", h_max)?;
+        InvalidOption::positive("rel_tol", rel_tol)?;
+        if samples == 0 {
+            return Err(InvalidOption::new("samples", 0.0, "at least 1").into());
         }
         let stable = |h: f64| self.spectral_radius(h).map(|r| r < STABLE_RADIUS);
         let mut previous = None;
@@ -343,7 +340,7 @@ mod tests {
         let l = SampledLoop::new(&a, &b, None, &k, Hold::Input).unwrap();
         assert!(matches!(
             l.transition(0.0),
-            Err(LinearError::InvalidOption(_))
+            Err(LinearError::InvalidOption(InvalidOption { name: "h", .. }))
         ));
     }
 }

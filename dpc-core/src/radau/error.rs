@@ -2,38 +2,8 @@
 
 use core::fmt;
 
+use crate::error::InvalidOption;
 use crate::numeric::{Readable, Time};
-
-/// An option outside its range: which one, its value and what it must satisfy.
-#[derive(Debug, Clone, PartialEq)]
-pub struct InvalidOption {
-    /// Field or argument name as written in [`super::Options`] or the method signature.
-    pub name: &'static str,
-    /// The value given.
-    pub value: f64,
-    /// What the value must satisfy.
-    pub requirement: &'static str,
-}
-
-impl InvalidOption {
-    pub(crate) fn new(name: &'static str, value: f64, requirement: &'static str) -> Self {
-        Self {
-            name,
-            value,
-            requirement,
-        }
-    }
-}
-
-impl fmt::Display for InvalidOption {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{} = {} must be {}",
-            self.name, self.value, self.requirement
-        )
-    }
-}
 
 /// Which of the two linear systems of the transformed stage equations failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -65,7 +65,8 @@ mod options;
 mod stats;
 mod tableau;
 
-pub use error::{InvalidOption, RadauError, StageSystem, StepFailure};
+use crate::error::InvalidOption;
+pub use error::{RadauError, StageSystem, StepFailure};
 pub use options::Options;
 pub use stats::Stats;
 

@@ -1,7 +1,8 @@
 //! Options of the Radau IIA integrator, in the style of [`crate::bdf::Options`].
 
-use super::error::{InvalidOption, RadauError};
+use super::error::RadauError;
 use crate::bdf::Tolerance;
+use crate::error::InvalidOption;
 
 /// Options of [`super::Radau`]. Field names shared with [`crate::bdf::Options`] mean the same.
 ///
