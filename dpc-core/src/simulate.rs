@@ -1446,7 +1446,7 @@ impl DenseGrid {
 
     /// Times within this of a sample instant are that sample.
     fn tolerance(step: f64) -> f64 {
-        1e-9 * step
+        1e-6 * step
     }
 
     fn time(&self) -> f64 {
