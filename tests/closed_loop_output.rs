@@ -114,6 +114,17 @@ fn an_output_step_that_does_not_divide_the_period_keeps_its_own_grid() {
     let sparse = wheel_run(Hold::Input, 0.5, Some(0.12));
     assert_same_samples(&without, &sparse, "0.12");
     assert_eq!(sparse.dense.len(), 4);
+    // The count made before a run (for the reservation and the command line's row limit)
+    // is the number of points the run records.
+    for (step, run) in [(0.03, &with), (0.12, &sparse)] {
+        let opts = ClosedLoopOptions {
+            h: 0.05,
+            t_end: 0.5,
+            output_step: Some(step),
+            ..ClosedLoopOptions::default()
+        };
+        assert_eq!(opts.dense_points(), run.dense.len(), "{step}");
+    }
 }
 
 /// The plant with its input held constant, as an implicit DAE in `(x, z)`.

@@ -53,7 +53,7 @@ impl RunProgress {
     /// A run starting now; `visible`: whether it may draw (see [`on_terminal`]).
     pub fn new(visible: bool) -> Self {
         Self {
-            bar: bar(RUN_STEPS, "{percent:>3}% of the simulated time", false),
+            bar: bar(RUN_STEPS, "{percent:>3}% simulated", false),
             visible,
             started: Instant::now(),
             shown: false,
