@@ -92,6 +92,16 @@ fn the_samples_are_bit_identical_with_and_without_dense_output() {
             assert_eq!(p.sample, j % 5 == 0, "point {j} at t = {}", p.t);
             assert!((p.t - 0.01 * j as f64).abs() < 1e-12, "{j}: {}", p.t);
         }
+        // Between samples the input is the held one, or under the correction hold the
+        // preliminary feedback of the moving state (only v is held).
+        let moving = points
+            .windows(2)
+            .filter(|w| !w[1].sample && w[0].u != w[1].u)
+            .count();
+        match hold {
+            Hold::Input => assert_eq!(moving, 0),
+            Hold::Correction => assert_eq!(moving, 160),
+        }
     }
 }
 

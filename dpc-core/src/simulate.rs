@@ -1121,9 +1121,11 @@ where
         plant_work: PlantWork::default(),
         dense,
     };
-    let mut dense_u = vec![0.0; nu];
-    let mut dense_y = vec![0.0; ny];
-    let mut dense_reference = vec![0.0; ny];
+    // The dense output's work vectors (empty, unallocated, without it).
+    let dense_size = |n: usize| if grid.is_some() { n } else { 0 };
+    let mut dense_u = vec![0.0; dense_size(nu)];
+    let mut dense_y = vec![0.0; dense_size(ny)];
+    let mut dense_reference = vec![0.0; dense_size(ny)];
     let mut y = vec![0.0; nx + nz];
     y[..nx].copy_from_slice(x0);
     let mut yp = vec![0.0; nx + nz];
