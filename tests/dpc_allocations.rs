@@ -1,7 +1,7 @@
 //! A DPC control update for a fixed-size generated model allocates nothing on the heap
 //! after setup, and a closed-loop run allocates per sample only the vectors of the sample it
-//! records: counted with a global allocator wrapper (the tests take a lock, so that one
-//! test's allocations are not counted in another's).
+//! records (and for its dense output between samples nothing per point): counted with a
+//! thread-local counting allocator (the tests take a lock as well).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 
@@ -115,8 +115,12 @@ fn wheel_control_updates_do_not_allocate() {
 }
 
 /// Allocations of one closed-loop run of the paper's wheel (preliminary feedback about the
-/// nominal, `h = 0.05`) to `t_end`, and the number of samples it recorded.
-fn closed_loop_allocations(hold: Hold, t_end: f64) -> (usize, usize) {
+/// nominal, `h = 0.05`) to `t_end`, and the numbers of samples and dense points it recorded.
+fn closed_loop_allocations(
+    hold: Hold,
+    t_end: f64,
+    output_step: Option<f64>,
+) -> (usize, usize, usize) {
     let mut dpc = Dpc::new(
         WheelTracking::default(),
         WheelReference::default(),
@@ -130,6 +134,7 @@ fn closed_loop_allocations(hold: Hold, t_end: f64) -> (usize, usize) {
         h: 0.05,
         t_end,
         hold,
+        output_step,
         ..ClosedLoopOptions::default()
     };
     let x0 = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, -6.0];
@@ -138,7 +143,7 @@ fn closed_loop_allocations(hold: Hold, t_end: f64) -> (usize, usize) {
     let after = allocations();
     assert!(run.divergence.is_none(), "{:?}", run.divergence);
     assert!(run.events.is_empty(), "{:?}", run.events);
-    (after - before, run.samples.len())
+    (after - before, run.samples.len(), run.dense.len())
 }
 
 #[test]
@@ -148,13 +153,42 @@ fn a_closed_loop_sample_allocates_only_its_record() {
     // the hold, the consistent initialisation and the plant integrator allocate once per run,
     // so a run twice as long allocates exactly five more per extra sample.
     for hold in [Hold::Input, Hold::Correction] {
-        let (short, n_short) = closed_loop_allocations(hold, 2.0);
-        let (long, n_long) = closed_loop_allocations(hold, 4.0);
+        let (short, n_short, _) = closed_loop_allocations(hold, 2.0, None);
+        let (long, n_long, _) = closed_loop_allocations(hold, 4.0, None);
         assert_eq!((n_short, n_long), (41, 81));
         assert_eq!(
             long - short,
             5 * (n_long - n_short),
             "allocations: {short} for {n_short} samples, {long} for {n_long} ({hold:?})"
+        );
+    }
+}
+
+#[test]
+fn dense_output_allocates_nothing_per_point() {
+    let _counting = COUNTING.lock().unwrap_or_else(|e| e.into_inner());
+    // The dense output is stored flat in arrays reserved before the run (and one work vector):
+    // a run that records points allocates a fixed number more than one that does not, however
+    // many points it records; a longer run still allocates only its samples' records.
+    for hold in [Hold::Input, Hold::Correction] {
+        let (plain, n_plain, _) = closed_loop_allocations(hold, 2.0, None);
+        let (short, n_short, d_short) = closed_loop_allocations(hold, 2.0, Some(0.01));
+        let (long, n_long, d_long) = closed_loop_allocations(hold, 4.0, Some(0.01));
+        assert_eq!((n_plain, n_short, n_long), (41, 41, 81));
+        assert_eq!((d_short, d_long), (160, 320));
+        // Its six arrays (times, states, inputs, outputs, references, errors), the vector
+        // the integrator interpolates into and three for a point's input, outputs and
+        // references.
+        assert_eq!(
+            short - plain,
+            10,
+            "dense output of {d_short} points: {} allocations more ({hold:?})",
+            short - plain
+        );
+        assert_eq!(
+            long - short,
+            5 * (n_long - n_short),
+            "allocations: {short} for {n_short} samples and {d_short} points, {long} for {n_long} and {d_long} ({hold:?})"
         );
     }
 }

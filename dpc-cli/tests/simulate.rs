@@ -109,3 +109,108 @@ fn what_cannot_change_gives_one_error_line() {
     let err = one_error_line(&simulate(&out_dir("output"), &["w.phi=[1.0]"]));
     assert!(err.contains("no output `phi`"), "{err}");
 }
+
+/// The rows of `trajectory.csv` after its header.
+fn rows(dir: &Path) -> (String, Vec<String>) {
+    let text = std::fs::read_to_string(dir.join("trajectory.csv")).expect("trajectory.csv");
+    let mut lines = text.lines().map(str::to_string);
+    let header = lines.next().expect("a header");
+    (header, lines.collect())
+}
+
+#[test]
+fn output_step_writes_the_motion_between_samples_with_a_sample_column() {
+    let plain_dir = out_dir("plain");
+    let out = simulate(&plain_dir, &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (plain_header, plain) = rows(&plain_dir);
+    let _ = std::fs::remove_dir_all(&plain_dir);
+
+    let dense_dir = out_dir("dense");
+    let out = simulate(&dense_dir, &["output_step=0.01"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Not a terminal: no progress bar, nothing at all on stderr.
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (header, dense) = rows(&dense_dir);
+    let _ = std::fs::remove_dir_all(&dense_dir);
+
+    assert_eq!(header, format!("{plain_header},sample"));
+    // 41 samples at k * 0.05 and the four points between each two.
+    assert_eq!(plain.len(), 41);
+    assert_eq!(dense.len(), 201);
+    let samples: Vec<&str> = dense.iter().filter_map(|r| r.strip_suffix(",1")).collect();
+    assert_eq!(samples.len(), 41);
+    assert_eq!(dense.iter().filter(|r| r.ends_with(",0")).count(), 160);
+    // The sample rows are those of the run without an output step, digit for digit.
+    assert_eq!(
+        samples,
+        plain.iter().map(String::as_str).collect::<Vec<_>>()
+    );
+    let times: Vec<f64> = dense
+        .iter()
+        .map(|r| r.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    for (j, t) in times.iter().enumerate() {
+        assert!((t - 0.01 * j as f64).abs() < 1e-12, "row {j}: t = {t}");
+    }
+}
+
+#[test]
+fn a_bad_output_step_or_too_many_rows_is_one_located_error_line() {
+    let err = one_error_line(&simulate(&out_dir("zero"), &["output_step=0"]));
+    assert!(err.contains("(--set output_step)"), "{err}");
+    assert!(
+        err.contains("`output_step` must be a positive finite number, found 0"),
+        "{err}"
+    );
+
+    let err = one_error_line(&simulate(&out_dir("tiny"), &["output_step=1e-15"]));
+    assert!(
+        err.contains("`output_step` (1e-15) must be at least 1e-12 times `t_end` (2)"),
+        "{err}"
+    );
+
+    // 2 s every 1e-6: two million rows, over the default limit of a million.
+    let err = one_error_line(&simulate(&out_dir("rows"), &["output_step=1e-6"]));
+    assert!(err.contains("2000001 rows of trajectory.csv"), "{err}");
+    assert!(err.contains("`limits.rows` = 1000000"), "{err}");
+    assert!(err.contains("--set limits.rows=N"), "{err}");
+
+    // Written in the file: its line and column.
+    let dir = out_dir("file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let wheel = std::fs::read_to_string(wheel_scenario()).unwrap();
+    let text = wheel.replacen("h = ", "output_step = -0.5\nh = ", 1);
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("output_step"))
+        .unwrap()
+        + 1;
+    let path = dir.join("bad-step.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_dpc"))
+        .arg("simulate")
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .expect("dpc runs");
+    let err = one_error_line(&out);
+    let at = format!(
+        "bad-step.toml:{line}:15: `output_step` must be a positive finite number, found -0.5"
+    );
+    assert!(err.contains(&at), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -26,6 +26,17 @@
 //!   [`ClosedLoopOptions::constraint_tolerance`] stops the run with
 //!   [`DivergenceCause::ConstraintViolated`], naming the equation.
 //!
+//! # Dense output and progress
+//! With [`ClosedLoopOptions::output_step`] set, the plant's continuous motion between the
+//! samples is recorded as well ([`ClosedLoop::dense`], and merged with the samples by
+//! [`ClosedLoop::trajectory`]): at every `t = j * output_step` the interpolating polynomial of
+//! the integrator step that covers it is evaluated (BDF's or Radau's dense output), so no
+//! extra step is taken and the samples are bit for bit those of a run without it. The points
+//! are stored in flat arrays reserved before the run: recording them allocates nothing per
+//! point. [`simulate_with_progress`] reports the run's advance after each sample to a
+//! [`Progress`] (a closure `FnMut(t, t_final)` is one); [`simulate`] reports to nobody, at no
+//! cost.
+//!
 //! The loop reports divergence with its time and a typed [`DivergenceCause`] (a tracking
 //! error beyond its bound, a bounded state leaving its domain, a non-finite state, a
 //! controller failing on consecutive samples, the plant integrator failing), and stops there,
@@ -94,6 +105,42 @@ pub struct ClosedLoopOptions {
     /// sum_j |dg_i/dx_j| |x_j|` the size of its terms. Default `1e-6`, well above the drift of an
     /// integration at the default tolerances.
     pub constraint_tolerance: f64,
+    /// When set, the plant's motion between the samples is recorded every `output_step` time
+    /// units, at `t = j * output_step` (a time on a sample instant is the sample), in
+    /// [`ClosedLoop::dense`]: interpolated inside the plant integrator's steps, so the samples
+    /// are bit for bit those of a run without it. It must be positive, finite and at least
+    /// [`MIN_OUTPUT_STEP_RATIO`] times the run's length. `None` (default): the samples only.
+    pub output_step: Option<f64>,
+}
+
+/// The smallest [`ClosedLoopOptions::output_step`] relative to the run's length `t_end`:
+/// below it the times `j * output_step` are no longer resolved apart from the samples'.
+pub const MIN_OUTPUT_STEP_RATIO: f64 = 1e-12;
+
+impl ClosedLoopOptions {
+    /// The number of points the dense output of a run to `t_end` records: the times
+    /// `j * output_step` strictly between samples (0 without an output step, or with an
+    /// invalid one).
+    pub fn dense_points(&self) -> usize {
+        match self.output_step {
+            Some(step) if step.is_finite() && step > 0.0 && self.h > 0.0 => {
+                let steps = (self.t_end / self.h).round();
+                if !steps.is_finite() {
+                    return 0;
+                }
+                let tolerance = DenseGrid::tolerance(step);
+                (0..steps as u64)
+                    .map(|k| {
+                        let (t0, t1) = (k as f64 * self.h, (k + 1) as f64 * self.h);
+                        let first = ((t0 + tolerance) / step).floor() + 1.0;
+                        let last = ((t1 - tolerance) / step).ceil() - 1.0;
+                        (last - first + 1.0).max(0.0) as usize
+                    })
+                    .fold(0, usize::saturating_add)
+            }
+            _ => 0,
+        }
+    }
 }
 
 impl Default for ClosedLoopOptions {
@@ -108,6 +155,7 @@ impl Default for ClosedLoopOptions {
             tracking_bounds: Vec::new(),
             max_consecutive_failures: 3,
             constraint_tolerance: 1e-6,
+            output_step: None,
         }
     }
 }
@@ -154,6 +202,16 @@ pub enum SimulateError {
     /// projection does not handle.
     #[error("constrained plant at the initial state: {0}")]
     Consistent(ConsistentError),
+    /// [`ClosedLoopOptions::output_step`] is not a positive finite number, is below
+    /// [`MIN_OUTPUT_STEP_RATIO`] times the run's length, or asks for more points than memory
+    /// can hold.
+    #[error("output step {}: {problem}", Readable(*step))]
+    OutputStep {
+        /// The step given.
+        step: f64,
+        /// What is wrong with it.
+        problem: OutputStepProblem,
+    },
     /// The plant and the controller disagree on the number of inputs or outputs.
     #[error("plant has {plant} {what}, controller {controller}")]
     Mismatch {
@@ -163,6 +221,23 @@ pub enum SimulateError {
         plant: usize,
         /// The controller's count.
         controller: usize,
+    },
+}
+
+/// What is wrong with an [`ClosedLoopOptions::output_step`] ([`SimulateError::OutputStep`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
+pub enum OutputStepProblem {
+    /// Zero, negative, NaN or infinite.
+    #[error("it must be a positive finite number")]
+    NotPositive,
+    /// Below [`MIN_OUTPUT_STEP_RATIO`] times the run's length.
+    #[error("it is below {MIN_OUTPUT_STEP_RATIO:e} times the run's length, where the output times are no longer resolved")]
+    TooSmall,
+    /// The points it asks for do not fit in memory.
+    #[error("the {points} points it asks for do not fit in memory")]
+    TooManyPoints {
+        /// The number of points.
+        points: usize,
     },
 }
 
@@ -311,7 +386,183 @@ pub struct ClosedLoop {
     pub constraints: Option<ConstraintReport>,
     /// The work of the plant integration between the samples.
     pub plant_work: PlantWork,
+    /// The plant's motion between the samples at [`ClosedLoopOptions::output_step`] (empty
+    /// without it); [`trajectory`](Self::trajectory) merges it with the samples.
+    pub dense: DenseOutput,
 }
+
+/// The plant's motion between the samples, recorded every
+/// [`ClosedLoopOptions::output_step`]: per point its time, the plant state, the input applied
+/// at that time (the held one, or under [`Hold::Correction`] the continuous preliminary
+/// feedback), the outputs, the references and the tracking errors. Stored flat, one array per
+/// quantity, reserved before the run; read it point by point with [`point`](Self::point) or
+/// [`points`](Self::points).
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct DenseOutput {
+    n_states: usize,
+    n_inputs: usize,
+    n_outputs: usize,
+    t: Vec<f64>,
+    x: Vec<f64>,
+    u: Vec<f64>,
+    y: Vec<f64>,
+    reference: Vec<f64>,
+    error: Vec<f64>,
+}
+
+/// One point of a run's trajectory ([`ClosedLoop::trajectory`]): a sample, or a point of the
+/// dense output between samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrajectoryPoint<'a> {
+    /// Time.
+    pub t: f64,
+    /// Plant state.
+    pub x: &'a [f64],
+    /// Plant input applied at `t` (at a sample: from the sample on).
+    pub u: &'a [f64],
+    /// Plant outputs.
+    pub y: &'a [f64],
+    /// References at `t`.
+    pub reference: &'a [f64],
+    /// Tracking errors `y - xi`.
+    pub error: &'a [f64],
+    /// Whether this is a sample instant (where the controller measured and acted) rather than
+    /// a point of the dense output between samples.
+    pub sample: bool,
+}
+
+impl DenseOutput {
+    /// Empty, for points of these sizes, with room for `points` points.
+    fn with_capacity(
+        n_states: usize,
+        n_inputs: usize,
+        n_outputs: usize,
+        points: usize,
+    ) -> Result<Self, std::collections::TryReserveError> {
+        let mut dense = Self {
+            n_states,
+            n_inputs,
+            n_outputs,
+            ..Self::default()
+        };
+        dense.t.try_reserve_exact(points)?;
+        for (v, per_point) in [
+            (&mut dense.x, n_states),
+            (&mut dense.u, n_inputs),
+            (&mut dense.y, n_outputs),
+            (&mut dense.reference, n_outputs),
+            (&mut dense.error, n_outputs),
+        ] {
+            v.try_reserve_exact(points.saturating_mul(per_point))?;
+        }
+        Ok(dense)
+    }
+
+    /// The number of points.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Whether there are no points (a run without an output step).
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// The times of the points, increasing.
+    pub fn times(&self) -> &[f64] {
+        &self.t
+    }
+
+    /// Point `i`, if there is one.
+    pub fn point(&self, i: usize) -> Option<TrajectoryPoint<'_>> {
+        let t = *self.t.get(i)?;
+        let (nx, nu, ny) = (self.n_states, self.n_inputs, self.n_outputs);
+        Some(TrajectoryPoint {
+            t,
+            x: &self.x[i * nx..(i + 1) * nx],
+            u: &self.u[i * nu..(i + 1) * nu],
+            y: &self.y[i * ny..(i + 1) * ny],
+            reference: &self.reference[i * ny..(i + 1) * ny],
+            error: &self.error[i * ny..(i + 1) * ny],
+            sample: false,
+        })
+    }
+
+    /// Every point in time order.
+    pub fn points(&self) -> impl Iterator<Item = TrajectoryPoint<'_>> + '_ {
+        (0..self.len()).filter_map(|i| self.point(i))
+    }
+
+    /// Append a point (within the reserved room: no allocation).
+    fn push(&mut self, t: f64, x: &[f64], u: &[f64], y: &[f64], reference: &[f64], ref_ok: bool) {
+        self.t.push(t);
+        self.x.extend_from_slice(x);
+        self.u.extend_from_slice(u);
+        self.y.extend_from_slice(y);
+        self.reference.extend_from_slice(reference);
+        self.error.extend(
+            y.iter()
+                .zip(reference)
+                .map(|(a, b)| if ref_ok { a - b } else { f64::NAN }),
+        );
+    }
+}
+
+impl Sample {
+    /// This sample as a point of the trajectory.
+    pub fn as_point(&self) -> TrajectoryPoint<'_> {
+        TrajectoryPoint {
+            t: self.t,
+            x: &self.x,
+            u: &self.u,
+            y: &self.y,
+            reference: &self.reference,
+            error: &self.error,
+            sample: true,
+        }
+    }
+}
+
+/// The samples and the dense output of a run merged in time order
+/// ([`ClosedLoop::trajectory`]).
+#[derive(Debug, Clone)]
+pub struct Trajectory<'a> {
+    samples: &'a [Sample],
+    dense: &'a DenseOutput,
+    next_sample: usize,
+    next_dense: usize,
+}
+
+impl<'a> Iterator for Trajectory<'a> {
+    type Item = TrajectoryPoint<'a>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let sample = self.samples.get(self.next_sample);
+        let dense_t = self.dense.t.get(self.next_dense);
+        match (sample, dense_t) {
+            (Some(s), Some(&t)) if t < s.t => {
+                self.next_dense += 1;
+                self.dense.point(self.next_dense - 1)
+            }
+            (Some(s), _) => {
+                self.next_sample += 1;
+                Some(s.as_point())
+            }
+            (None, Some(_)) => {
+                self.next_dense += 1;
+                self.dense.point(self.next_dense - 1)
+            }
+            (None, None) => None,
+        }
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let left = self.samples.len() - self.next_sample + self.dense.len() - self.next_dense;
+        (left, Some(left))
+    }
+}
+
+impl ExactSizeIterator for Trajectory<'_> {}
 
 /// The work of a run's plant integration: one integrator for the whole run, restarted at every
 /// sample (where the held input jumps) from a consistent point.
@@ -376,6 +627,18 @@ pub struct ConstraintReport {
 }
 
 impl ClosedLoop {
+    /// The samples and the points of the dense output, in time order (only the samples
+    /// without [`ClosedLoopOptions::output_step`]); [`TrajectoryPoint::sample`] tells them
+    /// apart.
+    pub fn trajectory(&self) -> Trajectory<'_> {
+        Trajectory {
+            samples: &self.samples,
+            dense: &self.dense,
+            next_sample: 0,
+            next_dense: 0,
+        }
+    }
+
     /// Per output, the largest `|y - xi|` over the samples at `t >= from` (NaN if one is
     /// NaN, 0 without samples).
     pub fn max_abs_error_since(&self, from: f64) -> Vec<f64> {
@@ -458,6 +721,13 @@ impl<'p, M: DaeModel> HeldPlant<'p, M> {
     /// Hold `values` from now on.
     fn hold(&self, values: &[f64]) {
         self.scratch.borrow_mut().held.copy_from_slice(values);
+    }
+
+    /// The plant input at `(t, x)` under the hold, as the integrator sees it.
+    fn input_at(&self, t: f64, x: &[f64], u: &mut [f64]) {
+        let s = &mut *self.scratch.borrow_mut();
+        self.inputs(t, x, s);
+        u.copy_from_slice(&s.u);
     }
 
     fn inputs(&self, t: f64, x: &[f64], s: &mut HeldScratch) {
@@ -705,6 +975,28 @@ impl<M: DaeModel> ImplicitDae for Stabilised<'_, '_, M> {
     }
 }
 
+/// Told how far a closed-loop run has come ([`simulate_with_progress`]).
+pub trait Progress {
+    /// The run has recorded its sample at `t`; it ends at `t_final` (the last sample's time,
+    /// unless it stops early).
+    fn sample(&mut self, t: f64, t_final: f64);
+}
+
+/// A [`Progress`] that ignores the reports ([`simulate`]'s).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    #[inline]
+    fn sample(&mut self, _t: f64, _t_final: f64) {}
+}
+
+impl<F: FnMut(f64, f64)> Progress for F {
+    fn sample(&mut self, t: f64, t_final: f64) {
+        self(t, t_final)
+    }
+}
+
 /// Run the closed loop of `dpc` on `plant` from the state `x0` (algebraic unknowns of the
 /// plant are initialised consistently at every sample).
 ///
@@ -722,6 +1014,28 @@ where
     T: TrackingDae,
     R: Reference,
     L: LinearSolver,
+{
+    simulate_with_progress(plant, dpc, x0, opts, &mut NoProgress)
+}
+
+/// [`simulate`], telling `progress` of each sample as it is recorded (for a progress bar; a
+/// closure `|t, t_final| ...` will do). The guide's closed-loop page has an example.
+///
+/// # Errors
+/// As [`simulate`].
+pub fn simulate_with_progress<P, T, R, L, G>(
+    plant: &P,
+    dpc: &mut Dpc<T, R, L>,
+    x0: &[f64],
+    opts: &ClosedLoopOptions,
+    progress: &mut G,
+) -> Result<ClosedLoop, SimulateError>
+where
+    P: DaeModel,
+    T: TrackingDae,
+    R: Reference,
+    L: LinearSolver,
+    G: Progress + ?Sized,
 {
     let (nx, nz, nu, ny) = (
         plant.structure().n_states(),
@@ -777,6 +1091,24 @@ where
             opts.constraint_tolerance
         )));
     }
+    let steps = (opts.t_end / opts.h).round() as usize;
+    let t_final = steps as f64 * opts.h;
+    let mut grid = match opts.output_step {
+        Some(step) => Some(DenseGrid::new(step, t_final, nx + nz)?),
+        None => None,
+    };
+    let dense = match &grid {
+        Some(g) => {
+            let points = opts.dense_points();
+            DenseOutput::with_capacity(nx, nu, ny, points).map_err(|_| {
+                SimulateError::OutputStep {
+                    step: g.step,
+                    problem: OutputStepProblem::TooManyPoints { points },
+                }
+            })?
+        }
+        None => DenseOutput::default(),
+    };
     let bdf_opts = Options::with_tolerances(opts.rtol, opts.atol);
     let mut result = ClosedLoop {
         samples: Vec::new(),
@@ -787,7 +1119,13 @@ where
         max_roundoff: 0.0,
         constraints: None,
         plant_work: PlantWork::default(),
+        dense,
     };
+    // The dense output's work vectors (empty, unallocated, without it).
+    let dense_size = |n: usize| if grid.is_some() { n } else { 0 };
+    let mut dense_u = vec![0.0; dense_size(nu)];
+    let mut dense_y = vec![0.0; dense_size(ny)];
+    let mut dense_reference = vec![0.0; dense_size(ny)];
     let mut y = vec![0.0; nx + nz];
     y[..nx].copy_from_slice(x0);
     let mut yp = vec![0.0; nx + nz];
@@ -815,7 +1153,6 @@ where
             max_residual: 0.0,
         });
     }
-    let steps = (opts.t_end / opts.h).round() as usize;
     // One plant with its hold and one integrator for the whole run.
     let held_plant = HeldPlant::new(
         plant,
@@ -932,6 +1269,7 @@ where
             result.divergence = Some(Divergence { t, cause });
             break;
         }
+        progress.sample(t, t_final);
         if k == steps {
             break;
         }
@@ -940,12 +1278,27 @@ where
             Hold::Input => &applied,
             Hold::Correction => &control,
         });
+        // The dense output between t and t + h: the state the integrator interpolates, with
+        // the input, outputs and references there.
+        let dense = &mut result.dense;
+        let held = &held_plant;
+        let mut record = |td: f64, yd: &[f64]| {
+            let (xd, zd) = yd.split_at(nx);
+            held.input_at(td, xd, &mut dense_u);
+            plant.outputs(td, xd, zd, &dense_u, &mut dense_y);
+            let ok = record_reference(dpc, td, &mut dense_reference);
+            dense.push(td, xd, &dense_u, &dense_y, &dense_reference, ok);
+        };
+        let dense_interval = grid.as_mut().map(|g| {
+            g.start(t);
+            (g, &mut record as &mut dyn FnMut(f64, &[f64]))
+        });
         let integrated = match &constrained {
             None => integrator
-                .interval(t, t + opts.h, &mut y, &mut yp)
+                .interval(t, t + opts.h, &mut y, &mut yp, dense_interval)
                 .map_err(DivergenceCause::Plant),
             Some(c) => c
-                .integrate(&held_plant, t, t + opts.h, &mut y, &mut yp)
+                .integrate(&held_plant, t, t + opts.h, &mut y, &mut yp, dense_interval)
                 .map_err(DivergenceCause::ConstrainedPlant),
         };
         if let Err(cause) = integrated {
@@ -986,13 +1339,15 @@ impl<'h, 'p, M: DaeModel> PlantIntegrator<'h, 'p, M> {
         }
     }
 
-    /// Make the plant consistent at `t0` (the input may have jumped) and integrate to `t1`.
+    /// Make the plant consistent at `t0` (the input may have jumped) and integrate to `t1`;
+    /// with `dense`, record each of its times in `(t0, t1)` from inside the steps.
     fn interval(
         &mut self,
         t0: f64,
         t1: f64,
         y: &mut [f64],
         yp: &mut [f64],
+        dense: Option<DenseInterval<'_, '_>>,
     ) -> Result<(), BdfError> {
         let init = self.init.consistent_initial_values(
             self.held,
@@ -1019,7 +1374,29 @@ impl<'h, 'p, M: DaeModel> PlantIntegrator<'h, 'p, M> {
             }
         };
         bdf.set_stop_time(t1)?;
-        bdf.solve_to(t1, y, Some(yp)).map(|_| ())
+        let Some((grid, record)) = dense else {
+            return bdf.solve_to(t1, y, Some(yp)).map(|_| ());
+        };
+        // The steps of `solve_to(t1)` (the first one sized for the stop time t1, every one
+        // ending at or before it), one at a time, the grid's times interpolated after each.
+        let mut steps = 0;
+        while bdf.t() < t1 {
+            if steps >= self.opts.max_steps {
+                return Err(BdfError::TooManySteps {
+                    max_steps: self.opts.max_steps,
+                    tout: t1,
+                    t: bdf.t(),
+                });
+            }
+            bdf.step()?;
+            steps += 1;
+            while let Some(td) = grid.due(bdf.t(), t1) {
+                bdf.interpolate(td, &mut grid.y, None)?;
+                record(td, &grid.y);
+                grid.advance();
+            }
+        }
+        bdf.interpolate(t1, y, Some(yp))
     }
 
     fn work(&self) -> PlantWork {
@@ -1032,6 +1409,67 @@ impl<'h, 'p, M: DaeModel> PlantIntegrator<'h, 'p, M> {
             jacobian_evaluations: s.jacobian_evaluations + self.init_work.jacobian_evaluations,
             factorisations: s.factorisations + self.init_work.factorisations,
         }
+    }
+}
+
+/// The times of the dense output, `j * step`, and the work vector they are interpolated into.
+struct DenseGrid {
+    step: f64,
+    /// The index `j` of the next time.
+    next: u64,
+    /// Times within this of a sample instant are that sample.
+    tolerance: f64,
+    /// The plant's `(x, z)` at a time of the grid.
+    y: Vec<f64>,
+}
+
+/// The grid and where its points go, for one sampling interval.
+type DenseInterval<'g, 'r> = (&'g mut DenseGrid, &'r mut dyn FnMut(f64, &[f64]));
+
+impl DenseGrid {
+    fn new(step: f64, t_final: f64, dimension: usize) -> Result<Self, SimulateError> {
+        let problem = if !(step.is_finite() && step > 0.0) {
+            Some(OutputStepProblem::NotPositive)
+        } else if step < MIN_OUTPUT_STEP_RATIO * t_final {
+            Some(OutputStepProblem::TooSmall)
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
+            return Err(SimulateError::OutputStep { step, problem });
+        }
+        Ok(Self {
+            step,
+            next: 1,
+            tolerance: Self::tolerance(step),
+            y: vec![0.0; dimension],
+        })
+    }
+
+    /// Times within this of a sample instant are that sample.
+    fn tolerance(step: f64) -> f64 {
+        1e-6 * step
+    }
+
+    fn time(&self) -> f64 {
+        self.next as f64 * self.step
+    }
+
+    /// Skip the times at or next to the sample `t0`.
+    fn start(&mut self, t0: f64) {
+        while self.time() <= t0 + self.tolerance {
+            self.next += 1;
+        }
+    }
+
+    /// The next time, if it lies before the sample `t1` and at or before `reached`.
+    fn due(&self, reached: f64, t1: f64) -> Option<f64> {
+        let t = self.time();
+        (t <= reached && t < t1 - self.tolerance).then_some(t)
+    }
+
+    fn advance(&mut self) {
+        self.next += 1;
     }
 }
 
@@ -1147,7 +1585,8 @@ impl Constrained {
     }
 
     /// Integrate the plant over `[t0, t1]` in its stabilised form ([`Stabilised`]) from the
-    /// consistent `(y, yp)`, with `mu = 0`.
+    /// consistent `(y, yp)`, with `mu = 0`; with `dense`, record each of its times in
+    /// `(t0, t1)` from inside the steps.
     fn integrate<M: DaeModel>(
         &self,
         held: &HeldPlant<'_, M>,
@@ -1155,6 +1594,7 @@ impl Constrained {
         t1: f64,
         y: &mut [f64],
         yp: &mut [f64],
+        dense: Option<DenseInterval<'_, '_>>,
     ) -> Result<(), RadauError> {
         let dae = Stabilised {
             held,
@@ -1169,7 +1609,35 @@ impl Constrained {
         let ls = FaerDenseLu::new(dae.dimension());
         let mut radau = Radau::new(&dae, ls, self.radau.clone(), t0, &ys, &yps)?;
         radau.set_stop_time(t1)?;
-        radau.solve_to(t1, &mut ys, Some(&mut yps))?;
+        match dense {
+            None => {
+                radau.solve_to(t1, &mut ys, Some(&mut yps))?;
+            }
+            Some((grid, record)) => {
+                // The steps of `solve_to(t1)` one at a time (Radau sizes the first for the
+                // stop time), the grid's times interpolated after each.
+                let mut all = vec![0.0; ys.len()];
+                let mut steps = 0;
+                while radau.t() < t1 {
+                    if steps >= self.radau.max_steps {
+                        return Err(RadauError::TooManySteps {
+                            max_steps: self.radau.max_steps,
+                            tout: t1,
+                            t: radau.t(),
+                        });
+                    }
+                    radau.step()?;
+                    steps += 1;
+                    while let Some(td) = grid.due(radau.t(), t1) {
+                        radau.interpolate(td, &mut all, None)?;
+                        grid.y.copy_from_slice(&all[..n]);
+                        record(td, &grid.y);
+                        grid.advance();
+                    }
+                }
+                radau.interpolate(t1, &mut ys, Some(&mut yps))?;
+            }
+        }
         y.copy_from_slice(&ys[..n]);
         yp.copy_from_slice(&yps[..n]);
         Ok(())

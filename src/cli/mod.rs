@@ -33,6 +33,7 @@ pub mod location;
 pub mod output;
 pub mod plant_file;
 pub mod plot;
+pub mod progress;
 pub mod registry;
 pub mod report;
 pub mod run;

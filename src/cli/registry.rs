@@ -32,6 +32,7 @@ use dpc::core::TrackingDae;
 use crate::cli::run::RunResult;
 use crate::cli::scenario::Scenario;
 use crate::cli::ScenarioError;
+use dpc::core::simulate::{NoProgress, Progress};
 
 /// A model a scenario can name: what `dpc models` lists, what `dpc model NAME` prints and
 /// how a scenario is run on it. Implemented by [`Entry`]; other implementations (a plant read
@@ -53,6 +54,21 @@ pub trait ScenarioModel: Send + Sync {
     /// [`ScenarioError`] for a scenario that does not fit the model or a controller that
     /// cannot be set up; a run that starts and then diverges is not an error.
     fn run(&self, scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError>;
+
+    /// [`run`](Self::run), telling `progress` of each sample of the closed loop as it is
+    /// recorded (for a progress bar). The default runs without telling it.
+    ///
+    /// # Errors
+    /// As [`run`](Self::run).
+    fn run_with_progress(
+        &self,
+        scenario: &Scenario,
+        label: &str,
+        progress: &mut dyn Progress,
+    ) -> Result<RunResult, ScenarioError> {
+        let _ = progress;
+        self.run(scenario, label)
+    }
 }
 
 /// A linear-solver factory: one solver per run (runs of a sweep go in parallel).
@@ -148,6 +164,15 @@ where
 
     fn run(&self, scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError> {
         crate::cli::run::run(self, scenario, label)
+    }
+
+    fn run_with_progress(
+        &self,
+        scenario: &Scenario,
+        label: &str,
+        progress: &mut dyn Progress,
+    ) -> Result<RunResult, ScenarioError> {
+        crate::cli::run::run_with_progress(self, scenario, label, progress)
     }
 }
 
@@ -351,17 +376,31 @@ impl Registry {
     /// [`ScenarioError::UnknownModel`], the errors of [`crate::cli::plant_file::load`] and those
     /// of [`ScenarioModel::run`].
     pub fn run(&self, scenario: &Scenario, label: &str) -> Result<RunResult, ScenarioError> {
+        self.run_with_progress(scenario, label, &mut NoProgress)
+    }
+
+    /// [`run`](Self::run), telling `progress` of each sample of the closed loop (`dpc
+    /// simulate` draws its bar from it, [`crate::cli::progress::RunProgress`]).
+    ///
+    /// # Errors
+    /// As [`run`](Self::run).
+    pub fn run_with_progress(
+        &self,
+        scenario: &Scenario,
+        label: &str,
+        progress: &mut dyn Progress,
+    ) -> Result<RunResult, ScenarioError> {
         match crate::cli::plant_file::scenario_path(scenario) {
             Some(path) => self
                 .plant_file(&path, &scenario.model)?
-                .run(scenario, label),
+                .run_with_progress(scenario, label, progress),
             None => self
                 .get(&scenario.model)
                 .map_err(|cause| ScenarioError::UnknownModel {
                     origin: scenario.locate("model"),
                     cause,
                 })?
-                .run(scenario, label),
+                .run_with_progress(scenario, label, progress),
         }
     }
 

@@ -1,5 +1,5 @@
 //! What a run leaves on disk: `summary.json` (the verdict and the numbers a user compares)
-//! and `trajectory.csv` (every sample).
+//! and `trajectory.csv` (every sample, and with `output_step` the motion between them).
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -242,8 +242,10 @@ fn column(name: String, unit: Option<&str>) -> String {
 }
 
 /// Write the samples as CSV: `t [s]`, states, inputs, `ref_<output>`, `err_<output>`, each
-/// with its unit where the model gives one. Numbers are written plainly, in the shortest
-/// decimal form that reads back to the same `f64` (no exponent: `0.05`, `0`,
+/// with its unit where the model gives one. With the scenario's `output_step`, the rows of
+/// the dense output between the samples are interleaved in time order and a last column
+/// `sample` is 1 on the samples and 0 between them. Numbers are written plainly, in the
+/// shortest decimal form that reads back to the same `f64` (no exponent: `0.05`, `0`,
 /// `0.000001`).
 ///
 /// # Errors
@@ -268,16 +270,27 @@ pub fn write_trajectory(path: &Path, run: &RunResult) -> Result<(), ScenarioErro
             .iter()
             .map(|o| column(format!("err_{o}"), names.unit(o))),
     );
+    let dense = run.scenario.output_step.is_some();
+    if dense {
+        header.push("sample".into());
+    }
     writeln!(out, "{}", header.join(",")).map_err(|e| write_error(path, e))?;
-    for s in &run.closed_loop.samples {
-        let row: Vec<String> = std::iter::once(s.t)
-            .chain(s.x.iter().copied())
-            .chain(s.u.iter().copied())
-            .chain(s.reference.iter().copied())
-            .chain(s.error.iter().copied())
-            .map(|v| v.to_string())
-            .collect();
-        writeln!(out, "{}", row.join(",")).map_err(|e| write_error(path, e))?;
+    for p in run.closed_loop.trajectory() {
+        let numbers = std::iter::once(p.t)
+            .chain(p.x.iter().copied())
+            .chain(p.u.iter().copied())
+            .chain(p.reference.iter().copied())
+            .chain(p.error.iter().copied());
+        let mut first = true;
+        for v in numbers {
+            let separator = if first { "" } else { "," };
+            first = false;
+            write!(out, "{separator}{v}").map_err(|e| write_error(path, e))?;
+        }
+        if dense {
+            write!(out, ",{}", u8::from(p.sample)).map_err(|e| write_error(path, e))?;
+        }
+        writeln!(out).map_err(|e| write_error(path, e))?;
     }
     out.flush().map_err(|e| write_error(path, e))
 }

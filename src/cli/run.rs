@@ -24,7 +24,10 @@ use dpc::core::linear::AnalysisOptions;
 use dpc::core::model::{self, set_parameter_by_name, DaeModel, Structure};
 use dpc::core::prefeedback::{ReferenceNominal, ReferenceState, SteadyMotion};
 use dpc::core::reference::{Components, Reference, ReferenceError};
-use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions, Sample};
+use dpc::core::simulate::{
+    simulate_with_progress, ClosedLoop, ClosedLoopOptions, NoProgress, Progress, Sample,
+    SimulateError,
+};
 use dpc::core::tracking::{negated_real_roots, TrackingError};
 use dpc::core::TrackingDae;
 use serde::Serialize;
@@ -390,6 +393,24 @@ where
     T: TrackingDae<Plant = P> + Clone + Send + Sync + 'static,
     L: LinearSolver + Send + 'static,
 {
+    run_with_progress(entry, scenario, label, &mut NoProgress)
+}
+
+/// [`run`], telling `progress` of each sample of the closed loop as it is recorded.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with_progress<P, T, L>(
+    entry: &Entry<P, T, L>,
+    scenario: &Scenario,
+    label: &str,
+    progress: &mut dyn Progress,
+) -> Result<RunResult, ScenarioError>
+where
+    P: DaeModel + Clone + Send + Sync + 'static,
+    T: TrackingDae<Plant = P> + Clone + Send + Sync + 'static,
+    L: LinearSolver + Send + 'static,
+{
     let runner = Runner { scenario };
     let model = entry;
     let s = runner.scenario;
@@ -489,11 +510,15 @@ where
         state_bounds: runner.state_bounds(&structure.states)?,
         tracking_bounds: runner.tracking_bounds(outputs)?,
         max_consecutive_failures: s.plant.max_consecutive_failures,
+        output_step: s.output_step,
         ..ClosedLoopOptions::default()
     };
     let start = Instant::now();
-    let mut closed_loop =
-        simulate(&plant, &mut dpc, &s.x0, &options).map_err(ScenarioError::Simulation)?;
+    let mut closed_loop = simulate_with_progress(&plant, &mut dpc, &s.x0, &options, progress)
+        .map_err(|e| match e {
+            SimulateError::OutputStep { .. } => runner.invalid("output_step", e.to_string()),
+            e => ScenarioError::Simulation(e),
+        })?;
     if closed_loop.samples.is_empty() {
         closed_loop
             .samples

@@ -7,6 +7,7 @@
 //! h = 0.05                        # sampling period
 //! t_end = 20.0
 //! delta = 1e-3                    # inner implicit-Euler step of the controller
+//! output_step = 0.01              # optional: trajectory.csv also between samples
 //! extraction = "extrapolated"     # or "first-usable"
 //! hold = "input"                  # or "correction": prefeedback continuous, only v held
 //! prefeedback = true
@@ -34,6 +35,7 @@
 //!
 //! [limits]                        # the work of one run, checked before it starts
 //! samples = 100000                # t_end / h + 1 (default 100000)
+//! rows = 1000000                  # rows of trajectory.csv (default 1000000)
 //! nu = 20                         # largest nu (default 20)
 //! retries = 100                   # retry-ladder steps per sample (default 100)
 //! ```
@@ -54,7 +56,7 @@ use std::path::Path;
 
 use dpc::core::dpc::Extraction;
 use dpc::core::reference::{AtanIntegral, Constant, Polynomial, ScalarReference, Sinusoid, Sum};
-use dpc::core::simulate::Hold;
+use dpc::core::simulate::{ClosedLoopOptions, Hold, MIN_OUTPUT_STEP_RATIO};
 use dpc::nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -82,6 +84,12 @@ pub struct Scenario {
     /// Inner implicit-Euler step `delta` of the controller.
     #[serde(default = "default_delta")]
     pub delta: f64,
+    /// When set, `trajectory.csv` records the plant's motion between the samples too, every
+    /// `output_step` time units (interpolated inside the plant integrator's steps; the samples
+    /// are unchanged), with a `sample` column telling sample rows (1) from the rows between
+    /// them (0). See [`ClosedLoopOptions::output_step`](dpc::core::simulate::ClosedLoopOptions::output_step).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_step: Option<f64>,
     /// How the control is extracted from the inner integration.
     #[serde(default)]
     pub extraction: Extraction,
@@ -145,6 +153,10 @@ pub struct Limits {
     /// The most retries of the retry ladder per sample (default 100).
     #[serde(default = "default_max_retries")]
     pub retries: usize,
+    /// The most rows of `trajectory.csv` (default 1000000): the samples and, with
+    /// `output_step`, the points between them, all kept in memory until written.
+    #[serde(default = "default_max_rows")]
+    pub rows: u64,
 }
 
 fn default_max_samples() -> u64 {
@@ -156,6 +168,9 @@ fn default_max_nu() -> usize {
 fn default_max_retries() -> usize {
     100
 }
+fn default_max_rows() -> u64 {
+    1_000_000
+}
 
 impl Default for Limits {
     fn default() -> Self {
@@ -163,6 +178,7 @@ impl Default for Limits {
             samples: default_max_samples(),
             nu: default_max_nu(),
             retries: default_max_retries(),
+            rows: default_max_rows(),
         }
     }
 }
@@ -871,6 +887,19 @@ impl Scenario {
         positive("h", self.h)?;
         positive("t_end", self.t_end)?;
         positive("delta", self.delta)?;
+        if let Some(step) = self.output_step {
+            positive("output_step", step)?;
+            let least = MIN_OUTPUT_STEP_RATIO * self.t_end;
+            if step < least {
+                return Err(ValueError::Order {
+                    key: "output_step",
+                    value: step,
+                    relation: "at least 1e-12 times",
+                    other: "t_end",
+                    other_value: self.t_end,
+                });
+            }
+        }
         positive("plant.rtol", self.plant.rtol)?;
         if !(f64::EPSILON..1.0).contains(&self.plant.rtol) {
             return Err(ValueError::Tolerance {
@@ -995,6 +1024,40 @@ impl Scenario {
                 ),
                 limit_key: "samples",
                 limit: limits.samples,
+            });
+        }
+        let options = ClosedLoopOptions {
+            h: self.h,
+            t_end: self.t_end,
+            output_step: self.output_step,
+            ..ClosedLoopOptions::default()
+        };
+        let rows = samples + options.dense_points() as f64;
+        if rows > limits.rows as f64 {
+            let what = match self.output_step {
+                Some(step) => format!(
+                    "`output_step` = {} over `t_end` = {} gives {} rows of trajectory.csv ({} samples and the points between them), which",
+                    Num(step),
+                    Num(self.t_end),
+                    count(rows),
+                    count(samples)
+                ),
+                None => format!(
+                    "`t_end` / `h` = {} / {} gives {} rows of trajectory.csv, which",
+                    Num(self.t_end),
+                    Num(self.h),
+                    count(rows)
+                ),
+            };
+            return Err(ValueError::Limit {
+                key: if self.output_step.is_some() {
+                    "output_step"
+                } else {
+                    "t_end"
+                },
+                what,
+                limit_key: "rows",
+                limit: limits.rows,
             });
         }
         if let Some(nu) = self.nu {

@@ -4,7 +4,6 @@
 use std::io::Write;
 use std::path::Path;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use crate::cli::output::{unique_names, Staging};
@@ -150,15 +149,7 @@ pub fn sweep(
     // Names over every combination, so that each shard names its runs as a single run would.
     let names = unique_names((0..count).map(|i| combination(axes, i).label()));
     let indices: Vec<usize> = (0..count).filter(|i| shard.contains(*i)).collect();
-    let bar = if progress {
-        ProgressBar::new(indices.len() as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} elapsed, eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = crate::cli::progress::bar(indices.len() as u64, "{pos}/{len} runs", progress);
     let rows: Vec<SweepRow> = indices
         .into_par_iter()
         .map(|index| {

@@ -345,7 +345,10 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         Ok(tout)
     }
 
-    /// Take one step; returns the new time.
+    /// Take one step; returns the new time. The first step after [`new`](Self::new) or
+    /// [`reinit`](Self::reinit) is sized for the distance to the stop time when one is set,
+    /// so that stepping to it takes the steps [`solve_to`](Self::solve_to) would (as Radau's
+    /// `step` does).
     ///
     /// # Errors
     /// [`BdfError::NewtonFailed`], [`BdfError::ErrorTestFailed`], [`BdfError::SingularMatrix`],
@@ -353,7 +356,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// step size; [`BdfError::InvalidTolerance`] when an error weight becomes non-positive.
     pub fn step(&mut self) -> Result<f64, BdfError> {
         if !self.h_initialised {
-            let t = self.tn;
+            let t = self.tstop.unwrap_or(self.tn);
             self.init_step(t);
         }
         self.step_internal()?;

@@ -1,10 +1,10 @@
 //! `dpc simulate SCENARIO.toml --out DIR` and `dpc sweep SCENARIO.toml --set k=v1,v2 --out DIR`.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use crate::cli::output::{unique_names, Staging};
 use crate::cli::plot::closed_loop_figure;
+use crate::cli::progress::{on_terminal, RunProgress};
 use crate::cli::registry::Registry;
 use crate::cli::report::{write_run, Digest};
 use crate::cli::run::RunResult;
@@ -162,7 +162,11 @@ fn write_all(
     } else {
         overrides.label()
     };
-    runs.push(registry.run(scenario, &main_label)?);
+    runs.push(registry.run_with_progress(
+        scenario,
+        &main_label,
+        &mut RunProgress::new(on_terminal()),
+    )?);
     let summary = write_run(dir, &runs[0])?;
     if let Some(d) = &summary.linear_design {
         let n = &d.nominal;
@@ -239,7 +243,7 @@ fn write_all(
     sayln!("{}", describe(&summary.digest()));
     let names = unique_names(compared.iter().map(|(_, label)| label.clone()));
     for ((s, label), name) in compared.iter().zip(names) {
-        let r = registry.run(s, label)?;
+        let r = registry.run_with_progress(s, label, &mut RunProgress::new(on_terminal()))?;
         let summary = write_run(&dir.join("compare").join(name), &r)?;
         sayln!("{}", describe(&summary.digest()));
         runs.push(r);
@@ -282,7 +286,7 @@ pub fn sweep(registry: &Registry, args: &SweepArgs) -> Result<(), ScenarioError>
         &axes,
         out,
         args.max_runs,
-        std::io::stderr().is_terminal(),
+        on_terminal(),
         shard,
     )?;
     report_rows(&rows);
