@@ -5,6 +5,8 @@
 //! DAEs must control the plant exactly as those of the explicit `FlexibleJoint` with the same
 //! steps do.
 
+mod common;
+
 use dpc::core::design::{design, DesignOptions};
 use dpc::core::dpc::{Dpc, DpcOptions};
 use dpc::core::linalg::{LinearSolver, NalgebraLu};
@@ -320,5 +322,87 @@ fn the_derivative_rows_vanish_along_a_plant_trajectory() {
     let scale = 1.0 + d3.abs();
     for (row, value) in g.iter().enumerate().take(6) {
         assert!(value.abs() < 1e-12 * scale, "row {row}: {value}");
+    }
+}
+
+/// The two-link arm of `models/src/arm.rs` (`Arm2`) with `steps` roots `4.0` in `W` per joint,
+/// read at run time, in the closed loop of `scenarios/arm2.toml` over 6 s (with the preliminary
+/// feedback, poles at -40, where the steps leave a relative degree): the largest tracking
+/// error over `t` in `[4, 6]`. Two steps keep the mass matrix implicit (index 3); three and
+/// four differentiate the link equations once and twice (index 2 and 1).
+fn arm2_late_error(steps: usize) -> f64 {
+    use dpc::core::linalg::FaerDenseLu;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/src/arm.rs");
+    let source = std::fs::read_to_string(path).unwrap();
+    let body = common::model_text::invocations(&source)
+        .into_iter()
+        .map(|m| m.body)
+        .find(|b| b.contains("pub Arm2 {"))
+        .expect("Arm2 in models/src/arm.rs");
+    let roots = vec!["4.0"; steps].join(", ");
+    let text = body.replace("q: [4.0, 4.0]", &format!("q: [{roots}]"));
+    assert!(steps == 2 || text != body, "the template changed");
+    let model = dpc::runtime::parse("arm2", &text).unwrap();
+    let plant = model.plant();
+    let tracking = model.tracking().unwrap();
+    let n = tracking.structure().n_equations();
+    let remaining = tracking.remaining_relative_degree().unwrap();
+    let nx = plant.structure().n_states();
+    let mut dpc = Dpc::new(
+        tracking,
+        model.reference().unwrap(),
+        FaerDenseLu::new(n),
+        DpcOptions::default(),
+    )
+    .unwrap();
+    if remaining > 0 {
+        let rest = SteadyMotion {
+            state: vec![0.0; nx],
+            rate: vec![0.0; nx],
+            algebraic: vec![],
+            input: vec![0.0; 2],
+        };
+        let designed = design(
+            &plant,
+            &rest,
+            &DesignOptions {
+                analysis: AnalysisOptions {
+                    w: Some(vec![vec![4.0; steps]; 2]),
+                    poles: Some(vec![Complex::new(-40.0, 0.0); 2 * remaining]),
+                    ..AnalysisOptions::default()
+                },
+                horizon: 6.0,
+                relative_degrees: vec![Some(4); 2],
+            },
+        )
+        .unwrap();
+        dpc = dpc
+            .with_prefeedback(designed.prefeedback().unwrap())
+            .unwrap();
+    }
+    let run = simulate(
+        &plant,
+        &mut dpc,
+        &vec![0.0; nx],
+        &ClosedLoopOptions {
+            h: 0.01,
+            t_end: 6.0,
+            ..ClosedLoopOptions::default()
+        },
+    )
+    .unwrap();
+    assert!(run.divergence.is_none(), "{:?}", run.divergence);
+    run.max_abs_error_since(4.0).into_iter().fold(0.0, f64::max)
+}
+
+/// The measurement of `docs/arms.md` (two, three and four steps per joint on the two-link
+/// arm): `cargo test --test implicit_steps -- --nocapture arm2`. Each loop tracks; the errors
+/// grow with the number of steps (see there).
+#[test]
+fn arm2_with_two_three_and_four_steps_per_joint() {
+    for steps in [2, 3, 4] {
+        let error = arm2_late_error(steps);
+        println!("arm2, {steps} steps per joint: max error over t in [4, 6] {error:.1e}");
+        assert!(error < 0.05, "{steps} steps: {error}");
     }
 }
