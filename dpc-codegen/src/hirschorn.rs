@@ -7,6 +7,11 @@
 //! equations are differentiated through. Each step lowers the index of the tracking DAE by one,
 //! so the integrator has to resolve less.
 //!
+//! Where a step needs the derivative of `x_j'` of a state whose equation is implicit
+//! (`M(q) der(w) == ...`), the higher derivative `x_j''` becomes an unknown of the tracking DAE
+//! and the implicit equations are differentiated until they determine it, as index reduction
+//! does ([`tracking_rows`]): the mass matrix is never inverted.
+//!
 //! The relative degree of an output (the number of differentiations after which an input
 //! appears) is computed exactly along explicit equations and, once implicit equations are
 //! reached, structurally: the derivatives of implicitly defined states and the algebraic
