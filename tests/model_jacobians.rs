@@ -6,7 +6,8 @@ mod common;
 
 use common::{check_model, dims};
 use dpc_models::{
-    FlexibleJoint, FlexibleJointTracking, Pendulum, Wheel, WheelLinear, WheelTracking,
+    FlexibleJoint, FlexibleJointMass4Tracking, FlexibleJointTracking, Pendulum, Wheel, WheelLinear,
+    WheelTracking,
 };
 use proptest::prelude::*;
 
@@ -36,6 +37,11 @@ proptest! {
     #[test]
     fn two_step_tracking_dae_jacobians_match_central_differences(v in prop::collection::vec(-3.0..3.0f64, dims::<FlexibleJointTracking>())) {
         check_model::<FlexibleJointTracking>(&v);
+    }
+
+    #[test]
+    fn steps_through_implicit_equations_jacobians_match_central_differences(v in prop::collection::vec(-3.0..3.0f64, dims::<FlexibleJointMass4Tracking>())) {
+        check_model::<FlexibleJointMass4Tracking>(&v);
     }
 
     #[test]

@@ -16,9 +16,12 @@ use dpc_models::{
     Arm1, Arm1Reference, Arm1Tracking, Arm2, Arm2Reference, Arm2Tracking, Arm6, Arm6Reference,
     Arm6Tracking, CartPendulum, CartPendulumJoint, CartPendulumJointReference,
     CartPendulumJointTracking, CartPendulumReference, CartPendulumTracking, FlexibleJoint,
-    FlexibleJointReference, FlexibleJointTracking, Pendulum, SliderCrank, SliderCrankJoint,
-    SliderCrankJointReference, SliderCrankJointTracking, SliderCrankReference, SliderCrankTracking,
-    Wheel, WheelLinear, WheelLinearTracking, WheelReference, WheelTracking,
+    FlexibleJointMass, FlexibleJointMass3, FlexibleJointMass3Reference, FlexibleJointMass3Tracking,
+    FlexibleJointMass4, FlexibleJointMass4Reference, FlexibleJointMass4Tracking,
+    FlexibleJointMassReference, FlexibleJointMassTracking, FlexibleJointReference,
+    FlexibleJointTracking, Pendulum, SliderCrank, SliderCrankJoint, SliderCrankJointReference,
+    SliderCrankJointTracking, SliderCrankReference, SliderCrankTracking, Wheel, WheelLinear,
+    WheelLinearTracking, WheelReference, WheelTracking,
 };
 use proptest::prelude::*;
 use std::path::Path;
@@ -319,6 +322,21 @@ fn check(name: &str, model: &RuntimeModel, v: &[f64], c: f64, scales: &[f64]) {
             check_tracking::<FlexibleJointTracking>(model, v, c, scales);
             check_reference::<FlexibleJointReference>(model, v[0] * 10.0);
         }
+        "FlexibleJointMass" => {
+            check_plant::<FlexibleJointMass>(model, v, c, scales);
+            check_tracking::<FlexibleJointMassTracking>(model, v, c, scales);
+            check_reference::<FlexibleJointMassReference>(model, v[0] * 10.0);
+        }
+        "FlexibleJointMass3" => {
+            check_plant::<FlexibleJointMass3>(model, v, c, scales);
+            check_tracking::<FlexibleJointMass3Tracking>(model, v, c, scales);
+            check_reference::<FlexibleJointMass3Reference>(model, v[0] * 10.0);
+        }
+        "FlexibleJointMass4" => {
+            check_plant::<FlexibleJointMass4>(model, v, c, scales);
+            check_tracking::<FlexibleJointMass4Tracking>(model, v, c, scales);
+            check_reference::<FlexibleJointMass4Reference>(model, v[0] * 10.0);
+        }
         "CartPendulum" => {
             check_plant::<CartPendulum>(model, v, c, scales);
             check_tracking::<CartPendulumTracking>(model, v, c, scales);
@@ -361,7 +379,7 @@ fn check(name: &str, model: &RuntimeModel, v: &[f64], c: f64, scales: &[f64]) {
 #[test]
 fn every_repository_model_is_covered() {
     let names: Vec<&str> = repository_models().iter().map(|m| m.1.as_str()).collect();
-    assert_eq!(names.len(), 11, "{names:?}");
+    assert_eq!(names.len(), 14, "{names:?}");
     // The listings are the generated ones.
     for (_, name, model) in repository_models() {
         let want = match name.as_str() {
@@ -369,6 +387,9 @@ fn every_repository_model_is_covered() {
             "WheelLinear" => WheelLinearTracking::LISTING,
             "Pendulum" => Pendulum::LISTING,
             "FlexibleJoint" => FlexibleJointTracking::LISTING,
+            "FlexibleJointMass" => FlexibleJointMassTracking::LISTING,
+            "FlexibleJointMass3" => FlexibleJointMass3Tracking::LISTING,
+            "FlexibleJointMass4" => FlexibleJointMass4Tracking::LISTING,
             "CartPendulum" => CartPendulumTracking::LISTING,
             "CartPendulumJoint" => CartPendulumJointTracking::LISTING,
             "SliderCrank" => SliderCrankTracking::LISTING,
@@ -384,6 +405,9 @@ fn every_repository_model_is_covered() {
             "WheelLinear" => WheelLinear::RELATIVE_DEGREES,
             "Pendulum" => Pendulum::RELATIVE_DEGREES,
             "FlexibleJoint" => FlexibleJoint::RELATIVE_DEGREES,
+            "FlexibleJointMass" => FlexibleJointMass::RELATIVE_DEGREES,
+            "FlexibleJointMass3" => FlexibleJointMass3::RELATIVE_DEGREES,
+            "FlexibleJointMass4" => FlexibleJointMass4::RELATIVE_DEGREES,
             "CartPendulum" => CartPendulum::RELATIVE_DEGREES,
             "CartPendulumJoint" => CartPendulumJoint::RELATIVE_DEGREES,
             "SliderCrank" => SliderCrank::RELATIVE_DEGREES,

@@ -16,7 +16,7 @@
 //! relative degrees, tracking DAE, references) so that node ids, and with them the emitted
 //! code, are deterministic.
 
-use crate::hirschorn::TrackingRow;
+use crate::hirschorn::{TrackingRow, TrackingSystem};
 use crate::ir::{Model, Symbol};
 use crate::symbolic::{ExprId, Var};
 use proc_macro2::Ident;
@@ -223,7 +223,8 @@ pub struct TrackingDerivatives {
     pub dae: DaeDerivatives,
     /// Per output, the compiled monic coefficients of `W_i`, lowest power first.
     pub w_defaults: Vec<Vec<f64>>,
-    /// Number of the plant's algebraic unknowns (the leading algebraic unknowns).
+    /// Number of algebraic unknowns before the plant's inputs: the plant's own, then the
+    /// higher derivatives of states that steps through implicit equations add.
     pub plant_algebraic: usize,
 }
 
@@ -298,9 +299,9 @@ fn unit_suffix(unit: &Option<String>) -> String {
     unit.as_ref().map(|u| format!(" [{u}]")).unwrap_or_default()
 }
 
-/// Derive everything for a lowered, checked model; `rows` are the tracking rows from
+/// Derive everything for a lowered, checked model; `system` holds the tracking rows from
 /// [`crate::hirschorn::tracking_rows`] (`None` without a `tracking` section).
-pub fn derive(model: &mut Model, rows: Option<&[TrackingRow]>) -> Derived {
+pub fn derive(model: &mut Model, system: Option<&TrackingSystem>) -> Derived {
     let plant_outputs: Vec<(String, ExprId)> = model
         .outputs
         .iter()
@@ -316,8 +317,8 @@ pub fn derive(model: &mut Model, rows: Option<&[TrackingRow]>) -> Derived {
         listing(model),
     );
     let relative_degrees = crate::hirschorn::relative_degrees(model);
-    let tracking = rows.and_then(|rows| derive_tracking(model, rows, plant_outputs));
-    let references = derive_references(model, rows);
+    let tracking = system.and_then(|system| derive_tracking(model, system, plant_outputs));
+    let references = derive_references(model, system.map(|s| &s.rows[..]));
     Derived {
         plant,
         relative_degrees,
@@ -384,16 +385,21 @@ fn derive_dae(
     }
 }
 
-/// The tracking DAE: the plant equations plus one constraint row per output, in the
-/// unknowns `(X, [Z; U])` with the inputs `w`.
+/// The tracking DAE: the plant equations, the derivatives of implicit equations the steps
+/// need, and one constraint row per output, in the unknowns `(X, [Z; D; U])` (`D` the higher
+/// derivatives of states those derivatives determine) with the inputs `w`.
 fn derive_tracking(
     model: &mut Model,
-    rows: &[TrackingRow],
+    system: &TrackingSystem,
     outputs: Vec<(String, ExprId)>,
 ) -> Option<TrackingDerivatives> {
     let tracking = model.tracking.clone()?;
+    let rows: &[TrackingRow] = &system.rows;
     let mut layout = Layout::plant(model);
     let inputs = std::mem::take(&mut layout.inputs);
+    layout
+        .algebraic
+        .extend(system.higher_derivatives.iter().copied());
     layout.algebraic.extend(inputs);
     layout.inputs = (0..model.outputs.len())
         .map(Symbol::TrackingInput)
@@ -414,6 +420,27 @@ fn derive_tracking(
         input_names.join(", "),
         w_names.join(", ")
     );
+    if !system.differentiated.is_empty() {
+        let unknowns: Vec<String> = system
+            .higher_derivatives
+            .iter()
+            .map(|s| model.symbol_name(*s))
+            .collect();
+        listing_text += &format!(
+            "  derivatives of implicit equations, with {} as algebraic unknowns\n",
+            unknowns.join(", ")
+        );
+        for d in &system.differentiated {
+            let text = format!(
+                "{} ({})",
+                derivative_operator(d.order),
+                model.equations[d.equation].text
+            );
+            listing_text += &format!("    [{}] {text}\n", d.equation);
+            residuals.push(d.residual);
+            texts.push(text);
+        }
+    }
     for row in rows {
         let out = model.outputs[row.output].label.clone();
         let roots: Vec<f64> = tracking
@@ -427,18 +454,18 @@ fn derive_tracking(
             crate::hirschorn::polynomial_text(&roots)
         );
         for (k, d) in row.derivatives.iter().enumerate().skip(1) {
-            let order = match k {
-                1 => "d/dt".to_string(),
-                _ => format!("d^{k}/dt^{k}"),
-            };
-            listing_text += &format!("    {order} {out} = {}\n", model.display(*d));
+            listing_text += &format!(
+                "    {} {out} = {}\n",
+                derivative_operator(k),
+                model.display(*d)
+            );
         }
         let text = format!("{} == w_{out}", model.display(row.combination));
         listing_text += &format!("    {text}\n");
         residuals.push(row.row);
         texts.push(text);
     }
-    let plant_algebraic = model.algebraic.len();
+    let plant_algebraic = model.algebraic.len() + system.higher_derivatives.len();
     let dae = derive_dae(
         model,
         tracking.type_name.clone(),
@@ -453,6 +480,14 @@ fn derive_tracking(
         w_defaults: rows.iter().map(|r| r.coefficients.clone()).collect(),
         plant_algebraic,
     })
+}
+
+/// `d/dt`, `d^2/dt^2`, ...
+fn derivative_operator(order: usize) -> String {
+    match order {
+        1 => "d/dt".to_string(),
+        _ => format!("d^{order}/dt^{order}"),
+    }
 }
 
 /// The references with exact derivatives up to one more than the tracking DAE needs.

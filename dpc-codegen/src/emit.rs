@@ -43,6 +43,9 @@ fn local_ident(model: &Model, symbol: Symbol) -> Ident {
         Symbol::Time => Ident::new("t", span),
         Symbol::State(i) => model.states[i].name.clone(),
         Symbol::StateDot(i) => format_ident!("der__{}", model.states[i].name),
+        Symbol::StateDerivative { state, order } => {
+            format_ident!("der{}__{}", order, model.states[state].name)
+        }
         Symbol::Algebraic(i) => model.algebraic[i].name.clone(),
         Symbol::AlgebraicDot(i) => format_ident!("der__{}", model.algebraic[i].name),
         Symbol::Input(i) => model.inputs[i].name.clone(),
@@ -191,8 +194,9 @@ fn option_list(values: &[Option<usize>]) -> TokenStream {
     quote!(&[#(#items),*])
 }
 
-/// The tracking DAE type: the plant equations plus one constraint row per output, in the
-/// unknowns `(X, [Z; U])` with the inputs `w`.
+/// The tracking DAE type: the plant equations, the derivatives of implicit equations its
+/// steps need, and one constraint row per output, in the unknowns `(X, [Z; D; U])` with the
+/// inputs `w` (`D` the higher derivatives of states, see [`crate::hirschorn::tracking_rows`]).
 fn emit_tracking(
     model: &Model,
     tracking: &TrackingDerivatives,
@@ -202,7 +206,20 @@ fn emit_tracking(
     let doc = format!(
         " The tracking DAE of [`{plant_name}`]: its equations plus `W_i(d/dt) h_i = w_i` per output, in the unknowns (states, algebraic unknowns and inputs of the plant); the inputs are `w_i = W_i(d/dt) xi_i` (see `dpc::core::TrackingDae`). The degrees of the `W_i` are fixed at compile time; their coefficients are read from the value, start as the compiled ones and can be changed with `dpc::core::TrackingDae::set_w_roots`."
     );
-    let docs: Vec<syn::Attribute> = vec![syn::parse_quote!(#[doc = #doc])];
+    let mut docs: Vec<syn::Attribute> = vec![syn::parse_quote!(#[doc = #doc])];
+    let higher = &tracking.dae.layout.algebraic[model.algebraic.len()..tracking.plant_algebraic];
+    if !higher.is_empty() {
+        let names: Vec<String> = higher
+            .iter()
+            .map(|s| format!("`{}`", model.symbol_name(*s)))
+            .collect();
+        let doc = format!(
+            " Its steps differentiate through implicit equations: their total derivatives are equations of this type too, and the higher derivatives {} are algebraic unknowns after the plant's and before its inputs.",
+            names.join(", ")
+        );
+        docs.push(syn::parse_quote!(#[doc = ""]));
+        docs.push(syn::parse_quote!(#[doc = #doc]));
+    }
     let tokens = emit_dae_type(model, &tracking.dae, &docs, Some(&tracking.w_defaults));
     let name = &tracking.dae.name;
     let coeffs = tracking.w_defaults.iter().map(|c| quote!(&[#(#c),*]));

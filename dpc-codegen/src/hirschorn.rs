@@ -7,6 +7,11 @@
 //! equations are differentiated through. Each step lowers the index of the tracking DAE by one,
 //! so the integrator has to resolve less.
 //!
+//! Where a step needs the derivative of `x_j'` of a state whose equation is implicit
+//! (`M(q) der(w) == ...`), the higher derivative `x_j''` becomes an unknown of the tracking DAE
+//! and the implicit equations are differentiated until they determine it, as index reduction
+//! does ([`tracking_rows`]): the mass matrix is never inverted.
+//!
 //! The relative degree of an output (the number of differentiations after which an input
 //! appears) is computed exactly along explicit equations and, once implicit equations are
 //! reached, structurally: the derivatives of implicitly defined states and the algebraic
@@ -26,7 +31,7 @@
 use crate::ctxt::Ctxt;
 use crate::ir::{Model, Symbol};
 use crate::symbolic::{ExprId, Var};
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 /// Why a total time derivative cannot be taken symbolically.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -41,7 +46,30 @@ pub enum Obstacle {
 }
 
 /// The total time derivative of `e` along the model, substituting explicit equations.
+///
+/// `x_j'` of a state without explicit equation is left as the unknown `der(x_j)`; an
+/// expression that already contains such an unknown (or an algebraic unknown, or an input) is
+/// an [`Obstacle`]. [`total_derivative_through_implicit`] goes on through implicit equations.
 pub fn total_derivative(model: &mut Model, e: ExprId) -> Result<ExprId, Obstacle> {
+    derivative_along(model, e, false)
+}
+
+/// The total time derivative of `e` along the model, through implicit equations too: as
+/// [`total_derivative`], but the derivative of `der(x_j)` of a state whose equation is implicit
+/// is the higher derivative `der2(x_j)` ([`Symbol::StateDerivative`]), that of `der2(x_j)` is
+/// `der3(x_j)`, and so on, and `der(x_j)` of a state with explicit equation `der(x_j) = f_j`
+/// becomes the total derivative of `f_j`. The higher derivatives are unknowns, which the total
+/// derivatives of the implicit equations determine (index reduction, see [`tracking_rows`]).
+/// Inputs and algebraic unknowns remain [`Obstacle`]s: their derivatives are not available.
+pub fn total_derivative_through_implicit(model: &mut Model, e: ExprId) -> Result<ExprId, Obstacle> {
+    derivative_along(model, e, true)
+}
+
+fn derivative_along(
+    model: &mut Model,
+    e: ExprId,
+    through_implicit: bool,
+) -> Result<ExprId, Obstacle> {
     let explicit = explicit_rhs(model);
     let mut dirs: Vec<(Var, ExprId)> = Vec::new();
     let syms: Vec<(Var, Symbol)> = model
@@ -76,7 +104,28 @@ pub fn total_derivative(model: &mut Model, e: ExprId) -> Result<ExprId, Obstacle
             | Symbol::IterationCoefficient
             | Symbol::TrackingInput(_)
             | Symbol::TrackingCoefficient { .. } => {}
-            Symbol::StateDot(j) => return Err(Obstacle::ImplicitDerivative(j)),
+            Symbol::StateDot(j) if through_implicit => {
+                let d = match explicit.get(&j) {
+                    // Explicit right-hand sides are free of derivatives: one level.
+                    Some(&f) => derivative_along(model, f, false)?,
+                    None => {
+                        let dv = model.var(Symbol::StateDerivative { state: j, order: 2 });
+                        model.graph.var(dv)
+                    }
+                };
+                dirs.push((v, d));
+            }
+            Symbol::StateDerivative { state, order } if through_implicit => {
+                let dv = model.var(Symbol::StateDerivative {
+                    state,
+                    order: order + 1,
+                });
+                let d = model.graph.var(dv);
+                dirs.push((v, d));
+            }
+            Symbol::StateDot(j) | Symbol::StateDerivative { state: j, .. } => {
+                return Err(Obstacle::ImplicitDerivative(j))
+            }
             Symbol::Algebraic(i) => return Err(Obstacle::Algebraic(i)),
             Symbol::Input(i) | Symbol::InputDot(i) => return Err(Obstacle::Input(i)),
             Symbol::AlgebraicDot(i) => return Err(Obstacle::Algebraic(i)),
@@ -134,14 +183,23 @@ fn differentiated_constraints(model: &mut Model) -> HashMap<usize, ExprId> {
     out
 }
 
-/// Symbols (states, inputs, time) each implicitly determined unknown depends on, or `None`
-/// if the implicit equations are structurally singular in the implicit unknowns (a plant of
-/// higher index whose constraints, differentiated by [`differentiated_constraints`], still
-/// leave them singular). `reduced` replaces the residuals of differentiated constraints.
-fn implicit_dependencies(
-    model: &Model,
-    reduced: &HashMap<usize, ExprId>,
-) -> Option<HashMap<Symbol, BTreeSet<Symbol>>> {
+/// The implicit equations matched to the unknowns they determine.
+struct ImplicitMatching {
+    /// The implicitly determined unknowns: `der(x_j)` of the states without explicit
+    /// equation, then the algebraic unknowns.
+    unknowns: Vec<Symbol>,
+    /// Per implicit equation: its index among the model's equations, the known symbols
+    /// (states, inputs, time) and the unknowns it contains (with explicit `x_j'` expanded).
+    equations: Vec<(usize, BTreeSet<Symbol>, BTreeSet<Symbol>)>,
+    /// Per unknown, the implicit equation (index into `equations`) matched to it.
+    equation_of: Vec<usize>,
+}
+
+/// A perfect matching of the implicitly determined unknowns to the implicit equations (a
+/// maximum bipartite matching, as in Pantelides' algorithm), or `None` if the implicit
+/// equations are structurally singular in them. `reduced` replaces the residuals of
+/// differentiated constraints (see [`differentiated_constraints`]).
+fn implicit_matching(model: &Model, reduced: &HashMap<usize, ExprId>) -> Option<ImplicitMatching> {
     let explicit = explicit_rhs(model);
     let is_unknown = |s: &Symbol| match s {
         Symbol::StateDot(j) => !explicit.contains_key(j),
@@ -179,12 +237,15 @@ fn implicit_dependencies(
         .map(Symbol::StateDot)
         .collect();
     unknowns.extend((0..model.algebraic.len()).map(Symbol::Algebraic));
-    let equations: Vec<(BTreeSet<Symbol>, BTreeSet<Symbol>)> = model
+    let equations: Vec<(usize, BTreeSet<Symbol>, BTreeSet<Symbol>)> = model
         .equations
         .iter()
         .enumerate()
         .filter(|(_, e)| e.explicit.is_none())
-        .map(|(k, e)| split(model.graph.vars(*reduced.get(&k).unwrap_or(&e.residual))))
+        .map(|(k, e)| {
+            let (known, unknown) = split(model.graph.vars(*reduced.get(&k).unwrap_or(&e.residual)));
+            (k, known, unknown)
+        })
         .collect();
     if equations.len() != unknowns.len() {
         return None;
@@ -194,11 +255,11 @@ fn implicit_dependencies(
     fn augment(
         u: usize,
         unknowns: &[Symbol],
-        equations: &[(BTreeSet<Symbol>, BTreeSet<Symbol>)],
+        equations: &[(usize, BTreeSet<Symbol>, BTreeSet<Symbol>)],
         owner: &mut [Option<usize>],
         visited: &mut [bool],
     ) -> bool {
-        for (e, (_, unk)) in equations.iter().enumerate() {
+        for (e, (_, _, unk)) in equations.iter().enumerate() {
             if visited[e] || !unk.contains(&unknowns[u]) {
                 continue;
             }
@@ -220,18 +281,41 @@ fn implicit_dependencies(
             return None;
         }
     }
-    let mut eq_of = vec![0; unknowns.len()];
+    let mut equation_of = vec![0; unknowns.len()];
     for (e, o) in owner.iter().enumerate() {
-        eq_of[o.expect("perfect matching")] = e;
+        equation_of[(*o)?] = e;
     }
+    Some(ImplicitMatching {
+        unknowns,
+        equations,
+        equation_of,
+    })
+}
+
+/// Symbols (states, inputs, time) each implicitly determined unknown depends on, or `None`
+/// if the implicit equations are structurally singular in the implicit unknowns (a plant of
+/// higher index whose constraints, differentiated by [`differentiated_constraints`], still
+/// leave them singular). `reduced` replaces the residuals of differentiated constraints.
+fn implicit_dependencies(
+    model: &Model,
+    reduced: &HashMap<usize, ExprId>,
+) -> Option<HashMap<Symbol, BTreeSet<Symbol>>> {
+    let ImplicitMatching {
+        unknowns,
+        equations,
+        equation_of,
+    } = implicit_matching(model, reduced)?;
     // Fixpoint: an unknown depends on the known symbols of its equation and on whatever the
     // other unknowns of that equation depend on.
-    let mut deps: Vec<BTreeSet<Symbol>> = eq_of.iter().map(|&e| equations[e].0.clone()).collect();
+    let mut deps: Vec<BTreeSet<Symbol>> = equation_of
+        .iter()
+        .map(|&e| equations[e].1.clone())
+        .collect();
     loop {
         let mut changed = false;
         for u in 0..unknowns.len() {
-            let others: Vec<usize> = equations[eq_of[u]]
-                .1
+            let others: Vec<usize> = equations[equation_of[u]]
+                .2
                 .iter()
                 .filter_map(|s| unknowns.iter().position(|x| x == s))
                 .filter(|&w| w != u)
@@ -355,8 +439,17 @@ impl Structure {
                     }
                 }
             }
-            Symbol::StateDot(_) | Symbol::Algebraic(_) | Symbol::AlgebraicDot(_) => {
-                match self.implicit.as_ref().and_then(|m| m.get(&s)) {
+            Symbol::StateDot(_)
+            | Symbol::StateDerivative { .. }
+            | Symbol::Algebraic(_)
+            | Symbol::AlgebraicDot(_) => {
+                // A higher derivative of an implicitly determined state reaches what its first
+                // derivative does.
+                let key = match s {
+                    Symbol::StateDerivative { state, .. } => Symbol::StateDot(state),
+                    other => other,
+                };
+                match self.implicit.as_ref().and_then(|m| m.get(&key)) {
                     Some(deps) => {
                         for d in deps {
                             match d {
@@ -558,9 +651,173 @@ pub fn coefficient_index(degrees: &[usize], output: usize, power: usize) -> usiz
     degrees[..output].iter().map(|d| d + 1).sum::<usize>() + power
 }
 
+/// A total time derivative of an implicit equation of the plant, a row of a tracking DAE
+/// whose steps differentiate through implicit equations.
+#[derive(Clone, Debug)]
+pub struct DifferentiatedEquation {
+    /// Index of the plant equation.
+    pub equation: usize,
+    /// How many times it is differentiated (at least 1).
+    pub order: usize,
+    /// `d^order/dt^order` of its residual, along the model
+    /// ([`total_derivative_through_implicit`]).
+    pub residual: ExprId,
+}
+
+/// The rows a tracking DAE adds to the plant equations, and its additional unknowns.
+pub struct TrackingSystem {
+    /// One constraint row per output.
+    pub rows: Vec<TrackingRow>,
+    /// The total derivatives of implicit equations that the rows need, by order, then by
+    /// equation (empty unless a step differentiates through an implicit equation).
+    pub differentiated: Vec<DifferentiatedEquation>,
+    /// The higher derivatives of states ([`Symbol::StateDerivative`]) they determine: the
+    /// tracking DAE's additional algebraic unknowns, by order, then by state.
+    pub higher_derivatives: Vec<Symbol>,
+}
+
+/// Why the implicit equations cannot be differentiated as far as the steps need.
+enum ReductionObstacle {
+    /// The implicit equations are structurally singular in their unknowns.
+    Singular,
+    /// The unknown would be determined by the derivatives of a constraint (an equation
+    /// without implicit unknown, differentiated for the matching already): not supported.
+    Constraint(usize),
+    /// The derivative of this order of this equation cannot be taken.
+    Derivative {
+        equation: usize,
+        order: usize,
+        obstacle: Obstacle,
+    },
+}
+
+/// Per state, the highest order `>= 2` of its derivative among the variables of `exprs`.
+fn higher_derivative_orders(model: &Model, exprs: &[ExprId]) -> BTreeMap<usize, usize> {
+    let mut out = BTreeMap::new();
+    for &e in exprs {
+        for v in model.graph.vars(e) {
+            if let Symbol::StateDerivative { state, order } = model.symbols.symbol(v) {
+                let o = out.entry(state).or_insert(order);
+                *o = (*o).max(order);
+            }
+        }
+    }
+    out
+}
+
+/// The index reduction the steps need: per state `x_j` whose derivatives up to `x_j^(m_j)`
+/// occur (`orders`, `m_j >= 2`), the implicit equations are differentiated, in the manner of
+/// Pantelides' algorithm, until they determine them. The unknown `der(x_j)` is matched to an
+/// implicit equation ([`implicit_matching`]); to determine its derivatives up to order
+/// `m_j - 1`, that equation is differentiated `m_j - 1` times, and its derivatives contain the
+/// derivatives of the same order of every other unknown in it, which need their equations
+/// differentiated as often: the least fixpoint. As many derivative rows as new unknowns
+/// result, one per equation and order.
+fn differentiate_implicit_equations(
+    model: &mut Model,
+    orders: &BTreeMap<usize, usize>,
+) -> Result<(Vec<DifferentiatedEquation>, Vec<Symbol>), ReductionObstacle> {
+    if orders.is_empty() {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let reduced = differentiated_constraints(model);
+    let matching = implicit_matching(model, &reduced).ok_or(ReductionObstacle::Singular)?;
+    // How many times each unknown is differentiated.
+    let mut need = vec![0usize; matching.unknowns.len()];
+    for (&state, &order) in orders {
+        let u = matching
+            .unknowns
+            .iter()
+            .position(|s| *s == Symbol::StateDot(state))
+            .ok_or(ReductionObstacle::Singular)?;
+        need[u] = need[u].max(order - 1);
+    }
+    loop {
+        let mut changed = false;
+        for u in 0..need.len() {
+            if need[u] == 0 {
+                continue;
+            }
+            let (_, _, unknowns) = &matching.equations[matching.equation_of[u]];
+            for other in unknowns {
+                if let Some(w) = matching.unknowns.iter().position(|x| x == other) {
+                    if need[w] < need[u] {
+                        need[w] = need[u];
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    // Per model equation, how many times it is differentiated.
+    let mut equation_orders: BTreeMap<usize, usize> = BTreeMap::new();
+    for (u, &n) in need.iter().enumerate() {
+        if n > 0 {
+            let k = matching.equations[matching.equation_of[u]].0;
+            if reduced.contains_key(&k) {
+                return Err(ReductionObstacle::Constraint(k));
+            }
+            equation_orders.insert(k, n);
+        }
+    }
+    let highest = equation_orders.values().copied().max().unwrap_or(0);
+    let mut last: BTreeMap<usize, ExprId> = equation_orders
+        .keys()
+        .map(|&k| (k, model.equations[k].residual))
+        .collect();
+    let mut differentiated = Vec::new();
+    let mut higher = Vec::new();
+    for order in 1..=highest {
+        for (&equation, &n) in &equation_orders {
+            if n < order {
+                continue;
+            }
+            let residual =
+                total_derivative_through_implicit(model, last[&equation]).map_err(|obstacle| {
+                    ReductionObstacle::Derivative {
+                        equation,
+                        order,
+                        obstacle,
+                    }
+                })?;
+            last.insert(equation, residual);
+            differentiated.push(DifferentiatedEquation {
+                equation,
+                order,
+                residual,
+            });
+        }
+        for (u, &n) in need.iter().enumerate() {
+            match matching.unknowns[u] {
+                Symbol::StateDot(state) if n >= order => higher.push(Symbol::StateDerivative {
+                    state,
+                    order: order + 1,
+                }),
+                // An algebraic unknown with a derivative: its equation's derivative stopped
+                // at it above already.
+                _ => {}
+            }
+        }
+    }
+    Ok((differentiated, higher))
+}
+
 /// The constraint rows of the tracking DAE, one per output (outputs without an entry get
-/// `W_i = 1`), or `None` after recording errors for steps that cannot be taken.
-pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow>> {
+/// `W_i = 1`), with the derivatives of implicit equations the steps need, or `None` after
+/// recording errors for steps that cannot be taken.
+///
+/// The derivatives of the outputs are taken through implicit equations
+/// ([`total_derivative_through_implicit`]): where a step needs the derivative of `der(x_j)` of
+/// a state whose equation is implicit (`M(q) der(w) == ...`), the higher derivative
+/// `der2(x_j)` is a new unknown, and the implicit equations are differentiated as often as
+/// needed to determine it ([`TrackingSystem::differentiated`]), instead of the mass matrix
+/// being inverted symbolically. Steps are refused where the derivatives would need an input's
+/// derivative (more steps than the relative degree), an algebraic unknown's derivative, or the
+/// derivatives of a constraint.
+pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<TrackingSystem> {
     let tracking = model.tracking.clone()?;
     let (ny, nu) = (model.outputs.len(), model.inputs.len());
     if ny != nu {
@@ -583,7 +840,7 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
         let mut derivatives = vec![model.outputs[i].expr];
         for k in 0..roots.len() {
             let last = derivatives[k];
-            match total_derivative(model, last) {
+            match total_derivative_through_implicit(model, last) {
                 Ok(d) => derivatives.push(d),
                 Err(obstacle) => {
                     let span = entry.map(|e| e.span).unwrap_or(tracking.span);
@@ -652,6 +909,34 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
             row,
         });
     }
+    // The derivatives of the implicit equations, first per output (so that an error names the
+    // output whose steps need them), then for all rows together.
+    let mut orders: BTreeMap<usize, usize> = BTreeMap::new();
+    for row in &rows {
+        let needed = higher_derivative_orders(model, &row.derivatives);
+        if let Err(obstacle) = differentiate_implicit_equations(model, &needed) {
+            report_reduction_obstacle(model, cx, &tracking, row, obstacle);
+            ok = false;
+        }
+        for (state, order) in needed {
+            let o = orders.entry(state).or_insert(order);
+            *o = (*o).max(order);
+        }
+    }
+    let (differentiated, higher_derivatives) = if ok {
+        match differentiate_implicit_equations(model, &orders) {
+            Ok(reduction) => reduction,
+            Err(_) => {
+                cx.error_at(
+                    tracking.span,
+                    "internal error: the implicit equations could be differentiated for each output's steps, but not for all together",
+                );
+                return None;
+            }
+        }
+    } else {
+        (Vec::new(), Vec::new())
+    };
     // After the rows, so that the derivatives the steps need are built first and the
     // expansion of a model with reachable outputs is the same as without this check.
     for (i, degree) in relative_degree_analysis(model).into_iter().enumerate() {
@@ -670,7 +955,104 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<Vec<TrackingRow
         );
         ok = false;
     }
-    ok.then_some(rows)
+    ok.then_some(TrackingSystem {
+        rows,
+        differentiated,
+        higher_derivatives,
+    })
+}
+
+/// The error for a row whose steps need derivatives of implicit equations that cannot be
+/// taken, at the row's `tracking` entry.
+fn report_reduction_obstacle(
+    model: &mut Model,
+    cx: &mut Ctxt,
+    tracking: &crate::ir::Tracking,
+    row: &TrackingRow,
+    obstacle: ReductionObstacle,
+) {
+    let i = row.output;
+    let entry = tracking.entries.iter().find(|e| e.output == i);
+    let span = entry.map(|e| e.span).unwrap_or(tracking.span);
+    let out = model.outputs[i].label.clone();
+    let n = row.derivatives.len() - 1;
+    let steps = format!("{n} step{}", if n == 1 { "" } else { "s" });
+    let higher_in = |m: &Model, d: ExprId| -> Vec<Symbol> {
+        m.graph
+            .vars(d)
+            .into_iter()
+            .map(|v| m.symbols.symbol(v))
+            .filter(|s| matches!(s, Symbol::StateDerivative { .. }))
+            .collect()
+    };
+    // The first derivative of the output that contains a higher derivative of a state: the
+    // steps before it need no derivative of an implicit equation.
+    let first = (0..=n)
+        .find(|&k| !higher_in(model, row.derivatives[k]).is_empty())
+        .unwrap_or(n);
+    // The highest derivative in the last one, which the steps need.
+    let symbol = higher_in(model, row.derivatives[n])
+        .into_iter()
+        .max_by_key(|s| match s {
+            Symbol::StateDerivative { order, .. } => *order,
+            _ => 0,
+        })
+        .map_or_else(
+            || "a higher derivative".to_string(),
+            |s| model.symbol_name(s),
+        );
+    let roots = |k: usize| {
+        format!(
+            "use at most {k} root{} for `{out}`",
+            if k == 1 { "" } else { "s" }
+        )
+    };
+    let before = roots(first.saturating_sub(1));
+    let head = format!(
+        "cannot apply {steps} to output `{out}`: its derivative of order {n} contains `{symbol}`"
+    );
+    let msg = match obstacle {
+        ReductionObstacle::Singular => format!(
+            "{head}, but the implicit equations are structurally singular in their unknowns, so their derivatives cannot determine it; {before}"
+        ),
+        ReductionObstacle::Constraint(k) => format!(
+            "{head}, which only derivatives of the constraint `{}` would determine; steps through the derivatives of constraints are not supported; {before}",
+            model.equations[k].text
+        ),
+        ReductionObstacle::Derivative {
+            equation,
+            order,
+            obstacle,
+        } => {
+            let text = model.equations[equation].text.clone();
+            let derivative = match order {
+                1 => format!("the derivative of equation `{text}`"),
+                _ => format!("the derivative of order {order} of equation `{text}`"),
+            };
+            match obstacle {
+                Obstacle::Input(u) => {
+                    let degree = relative_degrees(model)[i].filter(|&r| r < n);
+                    let limit = match degree {
+                        Some(r) => format!(" (relative degree {r}); {}", roots(r)),
+                        None => format!("; {before}"),
+                    };
+                    format!(
+                        "{head}, and determining it needs {derivative}, which would need the derivative of input `{}`{limit}",
+                        model.inputs[u].label
+                    )
+                }
+                Obstacle::Algebraic(z) => format!(
+                    "{head}, and determining it needs {derivative}, which would need the derivative of the algebraic unknown `{}` (steps through implicit equations do not differentiate algebraic unknowns); {before}",
+                    model.algebraic[z].label
+                ),
+                Obstacle::ImplicitDerivative(j) => format!(
+                    "{head}, and determining it needs {derivative}, which would need a derivative of `der({})` that is not available; {before}",
+                    model.states[j].label
+                ),
+            }
+        }
+    };
+    cx.error_at(span, msg);
 }
 
 #[cfg(test)]
@@ -712,7 +1094,9 @@ mod tests {
             }
         });
         let mut cx = Ctxt::new();
-        let rows = tracking_rows(&mut m, &mut cx).expect("steps can be taken");
+        let rows = tracking_rows(&mut m, &mut cx)
+            .expect("steps can be taken")
+            .rows;
         cx.check().expect("no errors");
         assert_eq!(w_degrees(&m), vec![2, 0]);
         let coefficient_vars = |m: &Model, e: ExprId| -> Vec<Symbol> {
@@ -831,5 +1215,126 @@ mod tests {
             }
         });
         assert_eq!(relative_degrees(&mut m), vec![None]);
+    }
+
+    /// Values of the symbols named in `values` (by [`Model::symbol_name`]); 0 for others.
+    fn eval_at(m: &Model, e: ExprId, values: &[(&str, f64)]) -> f64 {
+        m.graph.eval(e, &|v| {
+            let name = m.symbol_name(m.symbols.symbol(v));
+            values
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map_or(0.0, |(_, x)| *x)
+        })
+    }
+
+    #[test]
+    fn steps_through_an_implicit_equation_differentiate_it() {
+        // x'' = v' is given implicitly with a state-dependent mass; the third step needs
+        // der2(v), which d/dt of the implicit equation determines:
+        // 2 x x' v' + (2 + x^2) v'' - w' = 2 x v v' + (2 + x^2) der2(v) - u.
+        let source = |roots: proc_macro2::TokenStream| {
+            quote! {
+                Plant {
+                    states { x, v, w }
+                    inputs { u }
+                    equations {
+                        der(x) = v;
+                        (2.0 + x.powi(2)) * der(v) == w;
+                        der(w) = u;
+                    }
+                    outputs { x }
+                    tracking PlantTracking { x: #roots }
+                }
+            }
+        };
+        let mut m = model(source(quote!([1.0, 2.0, 3.0])));
+        assert_eq!(relative_degrees(&mut m), vec![Some(3)]);
+        let mut cx = Ctxt::new();
+        let system = tracking_rows(&mut m, &mut cx).expect("three steps are taken");
+        cx.check().expect("no errors");
+        let der2_v = Symbol::StateDerivative { state: 1, order: 2 };
+        assert_eq!(system.higher_derivatives, vec![der2_v]);
+        assert_eq!(system.differentiated.len(), 1);
+        let d = &system.differentiated[0];
+        assert_eq!((d.equation, d.order), (1, 1));
+        assert_eq!(m.display(system.rows[0].derivatives[3]), "der2(v)");
+        let point = [
+            ("x", 0.7),
+            ("v", -1.3),
+            ("w", 0.4),
+            ("der(v)", 2.1),
+            ("der2(v)", -0.6),
+            ("u", 1.9),
+        ];
+        let (x, v, dv, d2v, u) = (0.7, -1.3, 2.1, -0.6, 1.9);
+        let want = 2.0 * x * v * dv + (2.0_f64 + x * x) * d2v - u;
+        let got = eval_at(&m, d.residual, &point);
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+
+        // A fourth step is beyond the relative degree: d^2/dt^2 of the equation needs u'.
+        let mut m = model(source(quote!([1.0, 2.0, 3.0, 4.0])));
+        let mut cx = Ctxt::new();
+        assert!(tracking_rows(&mut m, &mut cx).is_none());
+        let message = cx.check().expect_err("refused").to_string();
+        assert!(
+            message.contains("its derivative of order 4 contains `der3(v)`")
+                && message.contains("derivative of input `u` (relative degree 3)")
+                && message.contains("use at most 3 roots"),
+            "{message}"
+        );
+    }
+
+    #[test]
+    fn coupled_implicit_equations_are_differentiated_together() {
+        // Two masses coupled through a mass matrix [[2, 1], [1, 2 + x^2]] (Pantelides): der2 of
+        // y needs the derivative of the first equation, which contains der(b) too, so the
+        // second equation is differentiated as well and der2(b) joins: two rows, two unknowns.
+        let mut m = model(quote! {
+            Coupled {
+                states { y, a, x, b }
+                inputs { u, f }
+                equations {
+                    der(y) = a;
+                    2.0 * der(a) + der(b) == -y + x;
+                    der(x) = b;
+                    der(a) + (2.0 + x.powi(2)) * der(b) == -x;
+                }
+                outputs { y }
+                tracking CoupledTracking { y: [1.0, 2.0, 3.0] }
+            }
+        });
+        // Not square (two inputs, one output): use the reduction directly.
+        let mut cx = Ctxt::new();
+        assert!(tracking_rows(&mut m, &mut cx).is_none());
+        let orders = BTreeMap::from([(1, 2)]);
+        let Ok((differentiated, higher)) = differentiate_implicit_equations(&mut m, &orders) else {
+            panic!("the coupled equations are differentiated");
+        };
+        assert_eq!(
+            differentiated
+                .iter()
+                .map(|d| (d.equation, d.order))
+                .collect::<Vec<_>>(),
+            vec![(1, 1), (3, 1)]
+        );
+        assert_eq!(
+            higher,
+            vec![
+                Symbol::StateDerivative { state: 1, order: 2 },
+                Symbol::StateDerivative { state: 3, order: 2 },
+            ]
+        );
+        // d/dt of the second: der2(a) + 2 x b der(b) + (2 + x^2) der2(b) + b.
+        let point = [
+            ("x", 0.5),
+            ("b", -0.8),
+            ("der(b)", 0.3),
+            ("der2(a)", 1.1),
+            ("der2(b)", -2.0),
+        ];
+        let want = 1.1 + 2.0 * 0.5 * -0.8 * 0.3 + (2.0 + 0.25) * -2.0 + -0.8;
+        let got = eval_at(&m, differentiated[1].residual, &point);
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
     }
 }

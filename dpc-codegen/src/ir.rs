@@ -17,6 +17,16 @@ pub enum Symbol {
     State(usize),
     /// Its derivative `x_i'`.
     StateDot(usize),
+    /// A higher derivative `x_i^(order)` (`order >= 2`) of a state whose equation is
+    /// implicit: an algebraic unknown of a tracking DAE whose Hirschorn steps differentiate
+    /// through implicit equations, determined by their total derivatives (see
+    /// [`crate::hirschorn::tracking_rows`]).
+    StateDerivative {
+        /// Index of the state.
+        state: usize,
+        /// The order of the derivative, at least 2.
+        order: usize,
+    },
     /// Algebraic unknown `z_i`.
     Algebraic(usize),
     /// The derivative of an algebraic unknown (appears only after total time derivatives).
@@ -222,6 +232,9 @@ impl Model {
             Symbol::Time => "t".into(),
             Symbol::State(i) => self.states[i].label.clone(),
             Symbol::StateDot(i) => format!("der({})", self.states[i].label),
+            Symbol::StateDerivative { state, order } => {
+                format!("der{order}({})", self.states[state].label)
+            }
             Symbol::Algebraic(i) => self.algebraic[i].label.clone(),
             Symbol::AlgebraicDot(i) => format!("der({})", self.algebraic[i].label),
             Symbol::Input(i) => self.inputs[i].label.clone(),

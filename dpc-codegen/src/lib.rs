@@ -58,7 +58,7 @@ pub fn derive_model(input: TokenStream) -> syn::Result<(ir::Model, derive::Deriv
         None => None,
     };
     cx.check()?;
-    let derived = derive::derive(&mut model, tracking.as_deref());
+    let derived = derive::derive(&mut model, tracking.as_ref());
     Ok((model, derived))
 }
 

@@ -806,7 +806,10 @@ impl Lowerer<'_> {
         self.graph.vars(e).into_iter().any(|v| {
             matches!(
                 self.symbols.symbol(v),
-                Symbol::StateDot(_) | Symbol::AlgebraicDot(_) | Symbol::InputDot(_)
+                Symbol::StateDot(_)
+                    | Symbol::StateDerivative { .. }
+                    | Symbol::AlgebraicDot(_)
+                    | Symbol::InputDot(_)
             )
         })
     }

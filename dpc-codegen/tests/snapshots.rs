@@ -63,5 +63,13 @@ fn pendulum_model() {
 
 #[test]
 fn flexible_joint_model() {
-    snapshot_file("flexible_joint.rs", &["FlexibleJoint"]);
+    snapshot_file(
+        "flexible_joint.rs",
+        &[
+            "FlexibleJoint",
+            "FlexibleJointMass",
+            "FlexibleJointMass3",
+            "FlexibleJointMass4",
+        ],
+    );
 }

@@ -189,8 +189,9 @@ pub trait TrackingDae: DaeModel {
         self.structure().n_algebraic() - self.plant_algebraic()
     }
 
-    /// Number of the plant's algebraic unknowns: the leading algebraic unknowns of the
-    /// tracking DAE (the plant's inputs follow them).
+    /// Number of algebraic unknowns before the plant's inputs: the plant's own, then the
+    /// higher derivatives of states that steps through implicit equations add (the plant's
+    /// inputs follow them).
     fn plant_algebraic(&self) -> usize;
 
     /// Per output, how many derivatives of the reference `w_i` needs (`deg W_i`, fixed at

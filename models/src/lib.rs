@@ -5,7 +5,10 @@
 //! * [`Pendulum`]: the planar pendulum in Cartesian coordinates with a Lagrange multiplier
 //!   (index 3);
 //! * [`FlexibleJoint`]: a flexible-joint robot arm of relative degree 4, with two
-//!   stabilised Hirschorn steps in [`FlexibleJointTracking`];
+//!   stabilised Hirschorn steps in [`FlexibleJointTracking`]; [`FlexibleJointMass`],
+//!   [`FlexibleJointMass3`], [`FlexibleJointMass4`]: the same plant with implicit (mass-matrix)
+//!   equations and two, three and four steps, the latter two differentiating through the
+//!   implicit link equation;
 //! * [`CartPendulum`]: an inverted pendulum on a cart in Cartesian coordinates with a rod
 //!   constraint and its multiplier (index 3), and [`CartPendulumJoint`], the same plant in
 //!   joint coordinates (an ODE);
@@ -41,7 +44,11 @@ pub use cart_pendulum::{
     CartPendulumJointTracking, CartPendulumParams, CartPendulumReference, CartPendulumTracking,
 };
 pub use flexible_joint::{
-    FlexibleJoint, FlexibleJointParams, FlexibleJointReference, FlexibleJointTracking,
+    FlexibleJoint, FlexibleJointMass, FlexibleJointMass3, FlexibleJointMass3Params,
+    FlexibleJointMass3Reference, FlexibleJointMass3Tracking, FlexibleJointMass4,
+    FlexibleJointMass4Params, FlexibleJointMass4Reference, FlexibleJointMass4Tracking,
+    FlexibleJointMassParams, FlexibleJointMassReference, FlexibleJointMassTracking,
+    FlexibleJointParams, FlexibleJointReference, FlexibleJointTracking,
 };
 pub use pendulum::{Pendulum, PendulumParams};
 pub use slider_crank::{

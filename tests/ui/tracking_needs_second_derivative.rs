@@ -1,3 +1,5 @@
+// Steps through an implicit equation differentiate it (`der2(v)` joins the tracking DAE), but
+// not beyond the relative degree: the fourth step would need the derivative of the input.
 dpc::model! {
     pub Plant {
         states { x, v, w }
@@ -8,7 +10,25 @@ dpc::model! {
             der(w) = u;
         }
         outputs { x }
-        tracking PlantTracking { x: [1.0, 2.0, 3.0] }
+        tracking PlantTracking { x: [1.0, 2.0, 3.0, 4.0] }
+    }
+}
+
+// Within the relative degree (3), but the implicit equation holds an algebraic unknown, whose
+// derivative the steps do not take.
+dpc::model! {
+    pub WithAlgebraic {
+        states { x, v, w }
+        algebraic { z }
+        inputs { u }
+        equations {
+            der(x) = v;
+            (2.0 + x.powi(2)) * der(v) == z;
+            0.0 == z - sin(x) * w;
+            der(w) = u;
+        }
+        outputs { x }
+        tracking WithAlgebraicTracking { x: [1.0, 2.0, 3.0] }
     }
 }
 
