@@ -784,15 +784,21 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 }
                 _ => self.err_k,
             };
-            let rr = (2.0 * err_knew + 1e-4).powf(-1.0 / (self.kk as f64 + 1.0));
-            if failed_before && rr > 1.0 {
+            // The step ratio rr = (2 err + 1e-4)^(-1/(k+1)) is compared with 1 and 2 through
+            // its base (rr >= 2 iff base <= 2^-(k+1), rr <= 1 iff base >= 1), so the power is
+            // computed only when the step shrinks by it (most accepted steps keep or double h).
+            let base = 2.0 * err_knew + 1e-4;
+            let exponent = -1.0 / (self.kk as f64 + 1.0);
+            let doubles = base <= 0.5f64.powi(self.kk as i32 + 1);
+            let keeps = !doubles && base < 1.0;
+            if failed_before && (doubles || keeps) {
                 // The step that just passed was found after repeated error-test failures: do
                 // not grow it at once (RADAU5 keeps the step after any rejection; after a
                 // single one that costs the index-3 pendulum accuracy), it would fail again.
-            } else if rr >= 2.0 {
+            } else if doubles {
                 self.hh = (2.0 * self.hh).min(hmax);
-            } else if rr <= 1.0 {
-                self.hh *= rr.clamp(0.5, 0.9);
+            } else if !keeps {
+                self.hh *= base.powf(exponent).clamp(0.5, 0.9);
             }
         }
         let ku = self.kused;

@@ -90,7 +90,7 @@ impl LinearSolver for FaerDenseLu {
                 for (j, col) in lu.chunks_exact_mut(n.max(1)).enumerate() {
                     col.copy_from_slice(self.matrix.col_as_slice(j));
                 }
-                unblocked::factor(lu, n, pivots)
+                unblocked::factor_dispatched(lu, n, pivots)
                     .err()
                     .map(|SingularPivot { column }| column)
             }
@@ -134,7 +134,7 @@ impl LinearSolver for FaerDenseLu {
         }
         let n = self.matrix.nrows();
         match &mut self.factors {
-            Factors::Unblocked { lu, pivots } => unblocked::solve(lu, n, pivots, b),
+            Factors::Unblocked { lu, pivots } => unblocked::solve_dispatched(lu, n, pivots, b),
             Factors::Blocked {
                 lu,
                 perm,

@@ -44,7 +44,7 @@ pub(crate) struct SingularPivot {
 ///
 /// # Panics
 /// If `a` is shorter than `n * n` or `pivots` shorter than `n` (a caller's sizing bug).
-#[inline]
+#[inline(always)]
 pub(crate) fn factor(a: &mut [f64], n: usize, pivots: &mut [usize]) -> Result<(), SingularPivot> {
     let a = &mut a[..n * n];
     let pivots = &mut pivots[..n];
@@ -102,7 +102,7 @@ pub(crate) fn factor(a: &mut [f64], n: usize, pivots: &mut [usize]) -> Result<()
 ///
 /// # Panics
 /// If `lu`, `pivots` or `b` are shorter than `n * n`, `n`, `n`.
-#[inline]
+#[inline(always)]
 pub(crate) fn solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
     let lu = &lu[..n * n];
     let b = &mut b[..n];
@@ -111,7 +111,10 @@ pub(crate) fn solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
             b.swap(k, p);
         }
     }
-    for (j, col) in lu.chunks_exact(n).enumerate() {
+    // Columns by offset (not `chunks_exact`, whose count is an integer division by the
+    // run-time `n`, a noticeable part of a 5x5 solve).
+    for j in 0..n {
+        let col = &lu[j * n..j * n + n];
         let bj = b[j];
         if bj != 0.0 {
             for (bi, l) in b[j + 1..].iter_mut().zip(&col[j + 1..]) {
@@ -119,7 +122,8 @@ pub(crate) fn solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
             }
         }
     }
-    for (j, col) in lu.chunks_exact(n).enumerate().rev() {
+    for j in (0..n).rev() {
+        let col = &lu[j * n..j * n + n];
         b[j] /= col[j];
         let bj = b[j];
         if bj != 0.0 {
@@ -128,6 +132,39 @@ pub(crate) fn solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
             }
         }
     }
+}
+
+/// [`factor`] with `n` turned into a constant for each size up to
+/// [`UNBLOCKED_MAX_DIMENSION`], so that a run-time dimension gets the same unrolled loops as a
+/// compile-time one (for `n = 5` the generic loops spent about 600 instructions per solve in
+/// loop set-up; see `docs/performance.md`).
+pub(crate) fn factor_dispatched(
+    a: &mut [f64],
+    n: usize,
+    pivots: &mut [usize],
+) -> Result<(), SingularPivot> {
+    macro_rules! sizes {
+        ($($k:literal)*) => {
+            match n {
+                $($k => factor(a, $k, pivots),)*
+                _ => factor(a, n, pivots),
+            }
+        };
+    }
+    sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+/// [`solve`] with `n` turned into a constant, as [`factor_dispatched`].
+pub(crate) fn solve_dispatched(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
+    macro_rules! sizes {
+        ($($k:literal)*) => {
+            match n {
+                $($k => solve(lu, $k, pivots, b),)*
+                _ => solve(lu, n, pivots, b),
+            }
+        };
+    }
+    sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
 #[cfg(test)]
