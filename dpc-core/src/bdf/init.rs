@@ -9,7 +9,10 @@
 //! from two calls of the model's iteration matrix `dF/dy + c dF/dy'`, with `c = C` (scaled by
 //! `1/C`) and `c = 0` (subtracted), so that singularity of this Jacobian (the problem is not
 //! index 1 in the given split) is detected rather than hidden by an `O(1/C)` perturbation.
-//! Newton's method is damped by backtracking on the residual norm.
+//! Newton's method is damped by backtracking on the residual norm; after a full step that
+//! shrank the residual a hundredfold the next iteration reuses the factorisation (simplified
+//! Newton), so a plant made consistent again after a jump of its inputs costs one
+//! factorisation, not two.
 
 use super::newton::{error_weights, first_non_finite, wrms};
 use super::{BdfError, Options, Stats};
@@ -18,6 +21,10 @@ use crate::{ImplicitDae, MatrixSink};
 
 /// A power of two, so the scalings by `1/C_BIG` are exact.
 const C_BIG: f64 = 134_217_728.0;
+
+/// A full Newton step that shrinks the residual's 2-norm at least this much keeps its
+/// factorisation for the next iteration.
+const REUSE_CONTRACTION: f64 = 1e-2;
 
 /// Pass 1 (the model called with `c = C_BIG`): algebraic columns `dF/dy_a` as they are,
 /// differential columns `(dF/dy_d + C dF/dy'_d) / C`.
@@ -214,13 +221,18 @@ fn solve<D: ImplicitDae, L: LinearSolver>(
             Ok(res.iter().map(|r| r * r).sum::<f64>().sqrt())
         };
     let mut fnorm = eval(y, yp, &mut *res, &mut stats)?;
+    // Keep the factorisation for the next iteration (simplified Newton) after a full step
+    // that contracted the residual by REUSE_CONTRACTION: the Jacobian then hardly changed
+    // (exactly not at all where F is linear in y'_d and there are no algebraic unknowns, the
+    // usual mechanical plant after a jump of its inputs).
+    let mut reuse = false;
     for _ in 0..20 {
         // Each unknown is measured in its own tolerance units: y_a by |y_a|, y'_d by |y'_d|.
         for i in 0..n {
             y_try[i] = if differential[i] { yp[i] } else { y[i] };
         }
         error_weights(opts, y_try, &mut *w)?;
-        {
+        if !reuse {
             let m = ls.matrix_mut();
             m.fill_zero();
             let mut first = FirstPass {
@@ -233,10 +245,10 @@ fn solve<D: ImplicitDae, L: LinearSolver>(
                 differential,
             };
             dae.iteration_matrix(t0, y, yp, 0.0, &mut second);
+            stats.jacobian_evaluations += 2;
+            stats.factorisations += 1;
         }
-        stats.jacobian_evaluations += 2;
-        stats.factorisations += 1;
-        match ls.factor() {
+        match if reuse { Ok(()) } else { ls.factor() } {
             Ok(()) => {}
             Err(FactorError::Singular { column, row }) => {
                 return Err(BdfError::SingularMatrix {
@@ -261,6 +273,7 @@ fn solve<D: ImplicitDae, L: LinearSolver>(
         ls.solve_in_place(&mut *delta);
         stats.newton_iterations += 1;
         let dnorm = wrms(delta, w);
+        let fnorm_before = fnorm;
         let mut lambda = 1.0;
         loop {
             for i in 0..n {
@@ -289,9 +302,12 @@ fn solve<D: ImplicitDae, L: LinearSolver>(
         }
         y.copy_from_slice(y_try);
         yp.copy_from_slice(yp_try);
-        if lambda * dnorm <= 1e-3 * opts.newton_tolerance || fnorm == 0.0 {
+        // A reused matrix's damped step says little about convergence: form a fresh one.
+        let trusted = !reuse || lambda == 1.0;
+        if trusted && (lambda * dnorm <= 1e-3 * opts.newton_tolerance || fnorm == 0.0) {
             return Ok(stats);
         }
+        reuse = lambda == 1.0 && fnorm <= REUSE_CONTRACTION * fnorm_before;
     }
     Err(BdfError::InitialisationFailed(format!(
         "Newton did not converge in 20 iterations (residual 2-norm {fnorm:e})"

@@ -248,7 +248,12 @@ fn iterate<D: ImplicitDae, L: LinearSolver>(
                 converged = true;
             }
         } else {
-            let rate = (delnrm / oldnrm).powf(1.0 / m as f64);
+            let ratio = delnrm / oldnrm;
+            let rate = if m == 1 {
+                ratio
+            } else {
+                ratio.powf(1.0 / m as f64)
+            };
             if rate > 0.9 {
                 return Err(NewtonFailure::Convergence);
             }

@@ -56,6 +56,9 @@ pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
     terr_km1: f64,
     phi: Vec<Vec<f64>>,
     h_initialised: bool,
+    /// First step after [`Bdf::reinit`] from the curvature of the previous integration's last
+    /// polynomial (`None`: the default rule of [`Options::initial_step`]).
+    restart_step: Option<f64>,
     /// `stats.steps` when the current integration started (0, or at the last `reinit`).
     steps_at_start: usize,
     tstop: Option<f64>,
@@ -150,6 +153,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             terr_km1: 0.0,
             phi,
             h_initialised: false,
+            restart_step: None,
             steps_at_start: 0,
             tstop: None,
             y: y0.to_vec(),
@@ -171,6 +175,17 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// Restart from a new consistent point `(t0, y0, yp0)` without allocating (for example
     /// after a jump of the model's inputs). Statistics keep accumulating; the stop time is
     /// cleared and the iteration matrix is re-formed at the first step.
+    ///
+    /// The integration restarts at order 1 (`y'` may jump at `t0`). Unless
+    /// [`Options::initial_step`] is set, the first step comes from the curvature of the
+    /// solution so far: with `y''` the second derivative of the last step's interpolating
+    /// polynomial at its end, measured in the error weights of `y0`, order 1's local error
+    /// `h^2 |y''| / 2` is kept at a quarter of the tolerance, `h0 = sqrt(1 / (2 |y''|))`,
+    /// clamped to the distance to the next output time and to [`Options::max_step`]. When the
+    /// last polynomial has order 1 (no curvature known) the default rule applies, as after
+    /// [`Bdf::new`]. A smooth solution whose `y'` jumps mildly thus restarts with a step near
+    /// the one the error test allows instead of the default rule's `h |y'| <= 1/2` tolerance
+    /// unit, which at tight tolerances costs a dozen steps to grow out of.
     ///
     /// # Errors
     /// [`BdfError::DimensionMismatch`], [`BdfError::NonFiniteResidual`] or
@@ -195,6 +210,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             });
         }
         error_weights(&self.opts, y0, &mut self.ewt)?;
+        self.restart_step = self.curvature_step();
         self.phi[0].copy_from_slice(y0);
         self.phi[1].copy_from_slice(yp0);
         self.y.copy_from_slice(y0);
@@ -211,6 +227,32 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.jac = JacState::default();
         self.steps_at_start = self.stats.steps;
         Ok(())
+    }
+
+    /// `sqrt(1 / (2 |y''|))` in the weights `ewt`, with `y''` the second derivative at `tn` of
+    /// the last step's interpolating polynomial; `None` before a step or when its order is 1
+    /// (or the curvature vanishes or is not finite).
+    fn curvature_step(&mut self) -> Option<f64> {
+        if self.nst() == 0 || self.kused < 2 {
+            return None;
+        }
+        // y(t) = sum_j c_j(t) phi_j with c_j a product of the linear factors of
+        // `dense::interpolate`; carry each c_j with its first and second derivatives at tn.
+        let (mut c, mut d1, mut d2) = (1.0, 0.0, 0.0);
+        self.delta.fill(0.0);
+        for j in 1..=self.kused {
+            let offset = if j == 1 { 0.0 } else { self.psi[j - 2] };
+            let slope = 1.0 / self.psi[j - 1];
+            let factor = offset * slope;
+            d2 = d2 * factor + 2.0 * d1 * slope;
+            d1 = d1 * factor + c * slope;
+            c *= factor;
+            for (y2, p) in self.delta.iter_mut().zip(&self.phi[j]) {
+                *y2 += d2 * p;
+            }
+        }
+        let curvature = wrms(&self.delta, &self.ewt);
+        (curvature.is_finite() && curvature > 0.0).then(|| (0.5 / curvature).sqrt())
     }
 
     /// The DAE being integrated.
@@ -264,10 +306,12 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     }
 
     fn init_step(&mut self, tout: f64) {
-        let mut h = match self.opts.initial_step {
-            Some(h) => h,
-            None => {
-                let tdist = (tout - self.tn).abs();
+        let tdist = (tout - self.tn).abs();
+        let mut h = match (self.opts.initial_step, self.restart_step) {
+            (Some(h), _) => h,
+            (None, Some(h)) if tdist > 0.0 => h.min(tdist).max(self.hmin()),
+            (None, Some(h)) => h.max(self.hmin()),
+            (None, None) => {
                 let mut h = if tdist > 0.0 {
                     1e-3 * tdist
                 } else {
@@ -743,15 +787,21 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 }
                 _ => self.err_k,
             };
-            let rr = (2.0 * err_knew + 1e-4).powf(-1.0 / (self.kk as f64 + 1.0));
-            if failed_before && rr > 1.0 {
+            // The step ratio rr = (2 err + 1e-4)^(-1/(k+1)) is compared with 1 and 2 through
+            // its base (rr >= 2 iff base <= 2^-(k+1), rr <= 1 iff base >= 1), so the power is
+            // computed only when the step shrinks by it (most accepted steps keep or double h).
+            let base = 2.0 * err_knew + 1e-4;
+            let exponent = -1.0 / (self.kk as f64 + 1.0);
+            let doubles = base <= 0.5f64.powi(self.kk as i32 + 1);
+            let keeps = !doubles && base < 1.0;
+            if failed_before && (doubles || keeps) {
                 // The step that just passed was found after repeated error-test failures: do
                 // not grow it at once (RADAU5 keeps the step after any rejection; after a
                 // single one that costs the index-3 pendulum accuracy), it would fail again.
-            } else if rr >= 2.0 {
+            } else if doubles {
                 self.hh = (2.0 * self.hh).min(hmax);
-            } else if rr <= 1.0 {
-                self.hh *= rr.clamp(0.5, 0.9);
+            } else if !keeps {
+                self.hh *= base.powf(exponent).clamp(0.5, 0.9);
             }
         }
         let ku = self.kused;

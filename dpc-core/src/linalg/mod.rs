@@ -6,9 +6,10 @@
 //! * [`NalgebraLu`]: fixed-size `SMatrix<f64, N, N>` with a partial-pivoting LU on the stack,
 //!   for models generated with compile-time dimensions. Nothing allocates after construction,
 //!   so an integrator step built on it is allocation-free.
-//! * [`FaerDenseLu`]: faer's blocked partial-pivoting LU on a heap matrix, with the permutation
-//!   and scratch memory allocated once at construction, so it too is allocation-free per step
-//!   (`tests/bdf_alloc.rs` checks both dense back ends).
+//! * [`FaerDenseLu`]: partial-pivoting LU on a heap matrix, with the factors, permutation and
+//!   scratch memory allocated once at construction, so it too is allocation-free per step
+//!   (`tests/bdf_alloc.rs` checks both dense back ends). Up to [`UNBLOCKED_MAX_DIMENSION`] it
+//!   uses the same unblocked elimination as [`NalgebraLu`], above it faer's blocked LU.
 //! * [`FaerSparseLu`]: faer's sparse LU (symbolic analysis once, from
 //!   [`crate::ImplicitDae::iteration_pattern`], numeric factorisation per Jacobian update).
 //!   Factorisations and solves allocate their scratch memory (faer's high-level sparse API).
@@ -23,11 +24,13 @@ mod auto;
 mod faer_dense;
 mod faer_sparse;
 mod nalgebra_lu;
+mod unblocked;
 
 pub use auto::{FaerLu, SPARSE_DENSITY, SPARSE_MIN_DIMENSION};
 pub use faer_dense::FaerDenseLu;
 pub use faer_sparse::{FaerSparseLu, PatternMatrix};
 pub use nalgebra_lu::NalgebraLu;
+pub use unblocked::UNBLOCKED_MAX_DIMENSION;
 
 use crate::sink::MatrixSink;
 

@@ -2,20 +2,21 @@
 
 use nalgebra::SMatrix;
 
+use super::unblocked::{self, SingularPivot};
 use super::{zero_row, FactorError, LinearSolver};
 
 /// Dense `N x N` LU with partial (row) pivoting in stack storage.
 ///
 /// The matrix is an `SMatrix<f64, N, N>` (the sink the generated code writes into); the
-/// factors overwrite a second `SMatrix` and the permutation is a `[usize; N]`. Construction,
-/// factorisation and solves never touch the heap. The elimination is the textbook
-/// right-looking Doolittle algorithm (Golub & Van Loan, Algorithm 3.4.1), which for the small
-/// sizes of generated models beats blocked code.
+/// factors overwrite a second `SMatrix` and the row interchanges are a `[usize; N]`.
+/// Construction, factorisation and solves never touch the heap. The elimination is the
+/// unblocked one shared with [`super::FaerDenseLu`]'s small sizes (`linalg/unblocked.rs`): a
+/// pivot at most `N eps max |a_ij|` is reported as [`FactorError::Singular`].
 #[derive(Debug, Clone)]
 pub struct NalgebraLu<const N: usize> {
     matrix: SMatrix<f64, N, N>,
     lu: SMatrix<f64, N, N>,
-    perm: [usize; N],
+    pivots: [usize; N],
     factored: bool,
 }
 
@@ -25,7 +26,7 @@ impl<const N: usize> NalgebraLu<N> {
         Self {
             matrix: SMatrix::zeros(),
             lu: SMatrix::zeros(),
-            perm: [0; N],
+            pivots: [0; N],
             factored: false,
         }
     }
@@ -51,44 +52,14 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
     fn factor(&mut self) -> Result<(), FactorError> {
         self.factored = false;
         self.lu = self.matrix;
-        let a = &mut self.lu;
-        for (i, p) in self.perm.iter_mut().enumerate() {
-            *p = i;
-        }
-        for k in 0..N {
-            let mut piv = k;
-            let mut best = a[(k, k)].abs();
-            for i in k + 1..N {
-                let v = a[(i, k)].abs();
-                if v > best {
-                    best = v;
-                    piv = i;
-                }
-            }
-            if best == 0.0 || !best.is_finite() {
-                let m = &self.matrix;
-                return Err(FactorError::Singular {
-                    column: Some(k),
-                    row: zero_row(N, |i, j| m[(i, j)]),
-                });
-            }
-            if piv != k {
-                a.swap_rows(k, piv);
-                self.perm.swap(k, piv);
-            }
-            let d = 1.0 / a[(k, k)];
-            for i in k + 1..N {
-                a[(i, k)] *= d;
-            }
-            for j in k + 1..N {
-                let akj = a[(k, j)];
-                if akj != 0.0 {
-                    for i in k + 1..N {
-                        let l = a[(i, k)];
-                        a[(i, j)] -= l * akj;
-                    }
-                }
-            }
+        if let Err(SingularPivot { column }) =
+            unblocked::factor(self.lu.as_mut_slice(), N, &mut self.pivots)
+        {
+            let m = &self.matrix;
+            return Err(FactorError::Singular {
+                column: Some(column),
+                row: zero_row(N, |i, j| m[(i, j)]),
+            });
         }
         self.factored = true;
         Ok(())
@@ -101,28 +72,8 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
     }
 
     fn solve_in_place(&mut self, b: &mut [f64]) {
-        if !self.factored {
-            return;
+        if self.factored {
+            unblocked::solve(self.lu.as_slice(), N, &self.pivots, b);
         }
-        let b = &mut b[..N];
-        let mut x = [0.0; N];
-        for (xi, &p) in x.iter_mut().zip(&self.perm) {
-            *xi = b[p];
-        }
-        let a = &self.lu;
-        for j in 0..N {
-            let xj = x[j];
-            for i in j + 1..N {
-                x[i] -= a[(i, j)] * xj;
-            }
-        }
-        for j in (0..N).rev() {
-            x[j] /= a[(j, j)];
-            let xj = x[j];
-            for i in 0..j {
-                x[i] -= a[(i, j)] * xj;
-            }
-        }
-        b.copy_from_slice(&x);
     }
 }

@@ -1,0 +1,314 @@
+//! Unblocked dense LU with partial pivoting for small matrices, shared by the dense back ends.
+//!
+//! For the 5x5 to 16x16 iteration matrices of generated models the textbook right-looking
+//! elimination (Golub & Van Loan, *Matrix Computations*, Algorithm 3.4.1) on a contiguous
+//! column-major array beats a blocked factorisation, whose set-up and dispatch cost more than
+//! the arithmetic at these sizes. Both [`super::NalgebraLu`] and [`super::FaerDenseLu`] (up to
+//! [`UNBLOCKED_MAX_DIMENSION`]) factorise with [`factor`] and solve with [`solve`]; neither
+//! allocates.
+
+/// Largest dimension for which [`super::FaerDenseLu`] uses this unblocked LU instead of
+/// faer's blocked one ([`super::NalgebraLu`] always uses it).
+pub const UNBLOCKED_MAX_DIMENSION: usize = 16;
+
+/// A pivot is treated as zero when its magnitude is at most this many machine epsilons per
+/// row, relative to the magnitude of the terms it was computed from: the elimination cannot
+/// tell such a pivot from their round-off.
+const SINGULAR_PIVOT_EPSILONS: f64 = 1.0;
+
+/// The factorisation met a pivot that is zero relative to the norm of what it was computed
+/// from (or a non-finite entry).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("the pivot of column {column} vanishes relative to the largest entry of the matrix")]
+pub(crate) struct SingularPivot {
+    /// The column whose pivot vanished (the first column holding a non-finite entry when the
+    /// matrix has one).
+    pub column: usize,
+}
+
+/// Factorise the `n x n` column-major matrix in `a` in place as `P A = L U`: `L` unit lower
+/// triangular below the diagonal, `U` on and above it, `pivots[k]` the row interchanged with
+/// row `k` at step `k` (LAPACK's `ipiv`, zero-based).
+///
+/// A pivot `u_kk` is numerically zero when `|u_kk| <= n eps s_k`, with
+/// `s_k = |u_kk| + sum_{m<k} |l_km| |u_mk|` the norm of the terms whose sum it is
+/// (`a_kk = u_kk + sum l_km u_mk` after the interchanges): the pivot is then the round-off
+/// left by cancellation, as in an exactly singular matrix. The test is invariant under row and
+/// column scaling, so the widely scaled iteration matrices of index-3 problems at small steps
+/// (condition `O(h^-3)`, pivots of order `h^2` beside entries of order `1/h`, computed
+/// without cancellation) stay regular.
+///
+/// # Errors
+/// [`SingularPivot`] when a pivot is numerically zero (exactly zero included) or an entry is
+/// not finite; `a` then holds a partial factorisation.
+///
+/// # Panics
+/// If `a` is shorter than `n * n` or `pivots` shorter than `n` (a caller's sizing bug).
+#[inline(always)]
+pub(crate) fn factor(a: &mut [f64], n: usize, pivots: &mut [usize]) -> Result<(), SingularPivot> {
+    let a = &mut a[..n * n];
+    let pivots = &mut pivots[..n];
+    if let Some(first) = a.iter().position(|v| !v.is_finite()) {
+        return Err(SingularPivot { column: first / n });
+    }
+    let round_off = SINGULAR_PIVOT_EPSILONS * n as f64 * f64::EPSILON;
+    for k in 0..n {
+        let (left, right) = a.split_at_mut((k + 1) * n);
+        let col_k = &mut left[k * n..];
+        let mut pivot_row = k;
+        let mut best = col_k[k].abs();
+        for (i, v) in col_k.iter().enumerate().skip(k + 1) {
+            if v.abs() > best {
+                best = v.abs();
+                pivot_row = i;
+            }
+        }
+        pivots[k] = pivot_row;
+        if pivot_row != k {
+            for col in left.chunks_exact_mut(n).chain(right.chunks_exact_mut(n)) {
+                col.swap(k, pivot_row);
+            }
+        }
+        let (lower, col_k) = left.split_at_mut(k * n);
+        // The terms l_km u_mk that were subtracted from the pivot's original entry.
+        let subtracted: f64 = lower
+            .chunks_exact(n)
+            .zip(col_k.iter())
+            .map(|(col_m, u_mk)| (col_m[k] * u_mk).abs())
+            .sum();
+        // Overflow in the elimination shows as a non-finite pivot or sum.
+        let regular = best.is_finite() && best > round_off * (best + subtracted);
+        if !regular {
+            return Err(SingularPivot { column: k });
+        }
+        let d = 1.0 / col_k[k];
+        for v in &mut col_k[k + 1..] {
+            *v *= d;
+        }
+        let multipliers = &col_k[k + 1..];
+        for col in right.chunks_exact_mut(n) {
+            let akj = col[k];
+            if akj != 0.0 {
+                for (c, l) in col[k + 1..].iter_mut().zip(multipliers) {
+                    *c -= l * akj;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Overwrite `b` with the solution of `A x = b` from a factorisation by [`factor`].
+///
+/// # Panics
+/// If `lu`, `pivots` or `b` are shorter than `n * n`, `n`, `n`.
+#[inline(always)]
+pub(crate) fn solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
+    let lu = &lu[..n * n];
+    let b = &mut b[..n];
+    for (k, &p) in pivots[..n].iter().enumerate() {
+        if p != k {
+            b.swap(k, p);
+        }
+    }
+    // Columns by offset (not `chunks_exact`, whose count is an integer division by the
+    // run-time `n`, a noticeable part of a 5x5 solve).
+    for j in 0..n {
+        let col = &lu[j * n..j * n + n];
+        let bj = b[j];
+        if bj != 0.0 {
+            for (bi, l) in b[j + 1..].iter_mut().zip(&col[j + 1..]) {
+                *bi -= l * bj;
+            }
+        }
+    }
+    for j in (0..n).rev() {
+        let col = &lu[j * n..j * n + n];
+        b[j] /= col[j];
+        let bj = b[j];
+        if bj != 0.0 {
+            for (bi, u) in b[..j].iter_mut().zip(&col[..j]) {
+                *bi -= u * bj;
+            }
+        }
+    }
+}
+
+/// [`factor`] with `n` turned into a constant for each size up to
+/// [`UNBLOCKED_MAX_DIMENSION`], so that a run-time dimension gets the same unrolled loops as a
+/// compile-time one (for `n = 5` the generic loops spent about 600 instructions per solve in
+/// loop set-up; see `docs/performance.md`).
+pub(crate) fn factor_dispatched(
+    a: &mut [f64],
+    n: usize,
+    pivots: &mut [usize],
+) -> Result<(), SingularPivot> {
+    macro_rules! sizes {
+        ($($k:literal)*) => {
+            match n {
+                $($k => factor(a, $k, pivots),)*
+                _ => factor(a, n, pivots),
+            }
+        };
+    }
+    sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+/// [`solve`] with `n` turned into a constant, as [`factor_dispatched`].
+pub(crate) fn solve_dispatched(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
+    macro_rules! sizes {
+        ($($k:literal)*) => {
+            match n {
+                $($k => solve(lu, $k, pivots, b),)*
+                _ => solve(lu, n, pivots, b),
+            }
+        };
+    }
+    sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Column-major `n x n` matrix from a row-major literal.
+    fn column_major(rows: &[&[f64]]) -> Vec<f64> {
+        let n = rows.len();
+        (0..n * n).map(|k| rows[k % n][k / n]).collect()
+    }
+
+    fn multiply(a: &[f64], n: usize, x: &[f64]) -> Vec<f64> {
+        (0..n)
+            .map(|i| (0..n).map(|j| a[i + j * n] * x[j]).sum())
+            .collect()
+    }
+
+    #[test]
+    fn solves_a_system_that_needs_pivoting() {
+        let a = column_major(&[
+            &[0.0, 2.0, 1.0, 0.0],
+            &[1.0, 0.0, 0.0, 3.0],
+            &[4.0, 1.0, -1.0, 0.0],
+            &[0.0, 0.0, 5.0, 1.0],
+        ]);
+        let x = [1.0, -2.0, 0.5, 3.0];
+        let mut b = multiply(&a, 4, &x);
+        let mut lu = a.clone();
+        let mut pivots = [0; 4];
+        factor(&mut lu, 4, &mut pivots).expect("regular");
+        solve(&lu, 4, &pivots, &mut b);
+        for (got, want) in b.iter().zip(x) {
+            assert!((got - want).abs() <= 1e-14 * 5.0, "{b:?}");
+        }
+    }
+
+    #[test]
+    fn agrees_with_faer_on_random_matrices_up_to_the_limit() {
+        use faer::prelude::Solve;
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for n in 1..=UNBLOCKED_MAX_DIMENSION {
+            let a: Vec<f64> = (0..n * n).map(|_| next()).collect();
+            let b: Vec<f64> = (0..n).map(|_| next()).collect();
+            let mut lu = a.clone();
+            let mut pivots = vec![0; n];
+            factor(&mut lu, n, &mut pivots).expect("random matrices are regular");
+            let mut x = b.clone();
+            solve(&lu, n, &pivots, &mut x);
+            let fa = faer::Mat::from_fn(n, n, |i, j| a[i + j * n]);
+            let fb = faer::Mat::from_fn(n, 1, |i, _| b[i]);
+            let reference = fa.partial_piv_lu().solve(&fb);
+            let scale = x.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+            for i in 0..n {
+                assert!(
+                    (x[i] - reference[(i, 0)]).abs() <= 1e-10 * scale,
+                    "n = {n}: {} vs {}",
+                    x[i],
+                    reference[(i, 0)]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_pivot_left_by_cancellation_is_singular() {
+        // Rank 2: the last pivot is round-off of the entries it was computed from (or zero).
+        let mut a = column_major(&[&[1.0, 2.0, 3.0], &[4.0, 5.0, 6.0], &[7.0, 8.0, 9.0]]);
+        let mut pivots = [0; 3];
+        assert_eq!(
+            factor(&mut a, 3, &mut pivots),
+            Err(SingularPivot { column: 2 })
+        );
+        let mut zero_column = column_major(&[&[1.0, 0.0], &[2.0, 0.0]]);
+        assert_eq!(
+            factor(&mut zero_column, 2, &mut pivots),
+            Err(SingularPivot { column: 1 })
+        );
+    }
+
+    #[test]
+    fn a_widely_scaled_regular_matrix_is_regular() {
+        // Condition 1e17 by scaling alone, and an index-3-like matrix at a step of 1e-7
+        // (entries 1/h beside a last pivot of order h^2, condition 1e21): both factorise, and
+        // the solution satisfies the system to round-off of its terms (backward stable).
+        let h = 1e-7;
+        for rows in [
+            vec![vec![1e10, 0.0], vec![0.0, 1e-7]],
+            vec![
+                vec![1.0 / h, -1.0, 0.0],
+                vec![0.0, 1.0 / h, 0.6],
+                vec![0.6, 0.0, 0.0],
+            ],
+        ] {
+            let n = rows.len();
+            let rows: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
+            let a = column_major(&rows);
+            let mut lu = a.clone();
+            let mut pivots = [0; 3];
+            factor(&mut lu, n, &mut pivots).expect("regular");
+            let b: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+            let mut x = b.clone();
+            solve(&lu, n, &pivots, &mut x);
+            let ax = multiply(&a, n, &x);
+            for i in 0..n {
+                let terms: f64 = (0..n).map(|j| (a[i + j * n] * x[j]).abs()).sum();
+                assert!(
+                    (ax[i] - b[i]).abs() <= 1e-14 * (terms + b[i].abs()),
+                    "row {i}: {} vs {}",
+                    ax[i],
+                    b[i]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_non_finite_entry_is_reported_at_its_column() {
+        let mut a = column_major(&[&[1.0, 0.0], &[0.0, f64::NAN]]);
+        let mut pivots = [0; 2];
+        assert_eq!(
+            factor(&mut a, 2, &mut pivots),
+            Err(SingularPivot { column: 1 })
+        );
+    }
+
+    #[test]
+    fn a_well_scaled_small_pivot_is_regular() {
+        // A pivot of 1e-12 against entries of size 1 is far above round-off: regular.
+        let a = column_major(&[&[1e-12, 1.0], &[1.0, 1.0]]);
+        let mut lu = a.clone();
+        let mut pivots = [0; 2];
+        factor(&mut lu, 2, &mut pivots).expect("regular");
+        let mut b = multiply(&a, 2, &[2.0, 3.0]);
+        solve(&lu, 2, &pivots, &mut b);
+        assert!(
+            (b[0] - 2.0).abs() < 1e-12 && (b[1] - 3.0).abs() < 1e-12,
+            "{b:?}"
+        );
+    }
+}
