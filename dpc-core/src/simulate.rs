@@ -61,6 +61,7 @@ use crate::prefeedback::Prefeedback;
 use crate::radau::{self, Radau, RadauError};
 use crate::reference::Reference;
 use crate::sink::MatrixSink;
+use crate::stabilised::{Stabilised, StabilisedError};
 use crate::tracking::TrackingDae;
 use nalgebra::DMatrix;
 use thiserror::Error;
@@ -193,6 +194,10 @@ pub enum SimulateError {
     /// [`Hold::Correction`] needs a controller with a preliminary feedback.
     #[error("hold = correction needs a preliminary feedback")]
     NoPrefeedback,
+    /// The constraint structure of the plant could not be stabilised (an internal
+    /// inconsistency of the structure read from the model).
+    #[error("constrained plant: {0}")]
+    Stabilised(#[from] StabilisedError),
     /// A constrained plant whose linearisation at the initial state has a singular pencil, an
     /// index above 3, or an input whose derivatives drive it.
     #[error("constrained plant at the initial state: {0}")]
@@ -830,151 +835,6 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
     }
 }
 
-/// A plant with position constraints in the stabilised index-2 form of Gear, Gupta and
-/// Leimkuhler ("Automatic integration of Euler-Lagrange equations with constraints", J. Comput.
-/// Appl. Math. 12-13, 1985): the hidden velocity constraints `G(x) phi(x) = 0` are appended
-/// with one more multiplier `mu` each, which enters the kinematic rows as `x' = phi(x) -
-/// G(x)^T mu` (scaled by the row's coefficient of `x'`). Exact solutions have `mu = 0` and
-/// satisfy the position and the velocity constraints; the positions and velocities are index 1,
-/// `z` and `mu` index 2, so the integrator controls the error of the velocities as strictly as
-/// that of the positions (in the index-3 form the velocities' error weights are relaxed by the
-/// step size and the velocity error is the tolerance divided by the step).
-///
-/// Newton's iteration matrix leaves out the terms with second derivatives of the constraints
-/// (`(dG/dx) phi` and `(dG/dx)^T mu`), which are not generated; simplified Newton converges
-/// with it, at a rate the integrator monitors.
-struct Stabilised<'h, 'a, M: DaeModel> {
-    held: &'h HeldPlant<'a, M>,
-    /// The position-constraint rows.
-    rows: &'h [usize],
-    /// Per state, its kinematic row (whose coefficient of `x'` is read at evaluation).
-    kinematic: &'h [Option<usize>],
-}
-
-impl<M: DaeModel> Stabilised<'_, '_, M> {
-    fn core(&self) -> usize {
-        let s = self.held.model.structure();
-        s.n_states() + s.n_algebraic()
-    }
-
-    /// The model's residual and Jacobians at `(t, y, yp)` into the scratch.
-    fn evaluate(&self, t: f64, y: &[f64], yp: &[f64], sc: &mut HeldScratch) {
-        let nx = self.held.model.structure().n_states();
-        let n = self.core();
-        let (x, z) = y[..n].split_at(nx);
-        self.held.inputs(t, x, sc);
-        for m in [&mut sc.f_xdot, &mut sc.f_x, &mut sc.f_z, &mut sc.f_u] {
-            m.fill(0.0);
-        }
-        self.held.model.evaluate(
-            t,
-            x,
-            &yp[..nx],
-            z,
-            &sc.u,
-            &mut sc.res,
-            &mut sc.f_xdot,
-            &mut sc.f_x,
-            &mut sc.f_z,
-            &mut sc.f_u,
-        );
-    }
-
-    /// The terms of the stabilisation: per position constraint `a` (row `g`) and state `j`
-    /// with a kinematic row `i` and a non-zero gradient `g_j = dG_g/dx_j` in `f_x`, the tuple
-    /// `(a, i, j, g_j)`.
-    fn gradient_terms<'s>(
-        &'s self,
-        f_x: &'s DMatrix<f64>,
-    ) -> impl Iterator<Item = (usize, usize, usize, f64)> + 's {
-        self.rows.iter().enumerate().flat_map(move |(a, &g)| {
-            self.kinematic
-                .iter()
-                .enumerate()
-                .filter_map(move |(j, row)| {
-                    let i = (*row)?;
-                    let gj = f_x[(g, j)];
-                    (gj != 0.0).then_some((a, i, j, gj))
-                })
-        })
-    }
-}
-
-impl<M: DaeModel> ImplicitDae for Stabilised<'_, '_, M> {
-    fn dimension(&self) -> usize {
-        self.held.model.structure().n_equations() + self.rows.len()
-    }
-
-    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-        let (ne, n) = (self.held.model.structure().n_equations(), self.core());
-        let sc = &mut *self.held.scratch.borrow_mut();
-        self.evaluate(t, y, yp, sc);
-        let mu = &y[n..];
-        out[..ne].copy_from_slice(&sc.res);
-        out[ne..].fill(0.0);
-        for (a, i, j, gj) in self.gradient_terms(&sc.f_x) {
-            let c = sc.f_xdot[(i, j)];
-            // phi_j = x'_j - F_i / c: the velocity the kinematic row gives.
-            out[ne + a] += gj * (yp[j] - sc.res[i] / c);
-            out[i] += c * gj * mu[a];
-        }
-    }
-
-    fn iteration_matrix<S: MatrixSink + ?Sized>(
-        &self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        c: f64,
-        out: &mut S,
-    ) {
-        let nx = self.held.model.structure().n_states();
-        let (ne, n) = (self.held.model.structure().n_equations(), self.core());
-        self.held.iteration_matrix(t, &y[..n], &yp[..n], c, out);
-        let sc = &mut *self.held.scratch.borrow_mut();
-        self.evaluate(t, y, yp, sc);
-        for (a, i, j, gj) in self.gradient_terms(&sc.f_x) {
-            let cj = sc.f_xdot[(i, j)];
-            out.set(i, n + a, cj * gj);
-            // d/dx of gj * phi_j with phi_j = -f_j / c_j's x-dependence (dF_i/dx / c).
-            for k in 0..nx {
-                let d = sc.f_x[(i, k)];
-                if d != 0.0 {
-                    out.add(ne + a, k, -gj * d / cj);
-                }
-            }
-        }
-    }
-
-    fn is_differential(&self, i: usize) -> bool {
-        i < self.held.model.structure().n_states()
-    }
-
-    fn equation_name(&self, i: usize) -> String {
-        let ne = self.held.model.structure().n_equations();
-        if i < ne {
-            self.held.model.structure().equation_name(i)
-        } else {
-            format!(
-                "the hidden velocity constraint of {}",
-                self.held.model.structure().equation_name(self.rows[i - ne])
-            )
-        }
-    }
-
-    fn unknown_name(&self, i: usize) -> String {
-        let n = self.core();
-        if i < n {
-            self.held.model.structure().unknown_name(i)
-        } else {
-            format!(
-                "the stabilising multiplier of {}",
-                self.held.model.structure().equation_name(self.rows[i - n])
-            )
-        }
-    }
-}
-
 /// Told how far a closed-loop run has come ([`simulate_with_progress`]).
 pub trait Progress {
     /// The run has recorded its sample at `t`; it ends at `t_final` (the last sample's time,
@@ -1162,6 +1022,10 @@ where
         },
     );
     let mut integrator = PlantIntegrator::new(&held_plant, bdf_opts);
+    let stabilised = match &constrained {
+        Some(c) => Some(c.stabilise(&held_plant)?),
+        None => None,
+    };
     result.samples.reserve(steps + 1);
     for k in 0..=steps {
         let t = k as f64 * opts.h;
@@ -1293,13 +1157,13 @@ where
             g.start(t);
             (g, &mut record as &mut dyn FnMut(f64, &[f64]))
         });
-        let integrated = match &constrained {
-            None => integrator
+        let integrated = match (&constrained, &stabilised) {
+            (Some(c), Some(dae)) => c
+                .integrate(dae, t, t + opts.h, &mut y, &mut yp, dense_interval)
+                .map_err(DivergenceCause::ConstrainedPlant),
+            _ => integrator
                 .interval(t, t + opts.h, &mut y, &mut yp, dense_interval)
                 .map_err(DivergenceCause::Plant),
-            Some(c) => c
-                .integrate(&held_plant, t, t + opts.h, &mut y, &mut yp, dense_interval)
-                .map_err(DivergenceCause::ConstrainedPlant),
         };
         if let Err(cause) = integrated {
             result.divergence = Some(Divergence { t, cause });
@@ -1584,30 +1448,38 @@ impl Constrained {
         Ok(())
     }
 
-    /// Integrate the plant over `[t0, t1]` in its stabilised form ([`Stabilised`]) from the
+    /// The held plant in its stabilised form: its position constraints with the kinematic
+    /// rows of the states.
+    fn stabilise<'h, M: DaeModel>(
+        &self,
+        held: &'h HeldPlant<'_, M>,
+    ) -> Result<Stabilised<&'h HeldPlant<'h, M>>, StabilisedError> {
+        let kinematic = self
+            .kinematic
+            .iter()
+            .enumerate()
+            .filter_map(|(j, row)| row.map(|i| (j, i)))
+            .collect();
+        Stabilised::new(held, self.position_rows.clone(), kinematic)
+    }
+
+    /// Integrate the plant over `[t0, t1]` in its stabilised form
+    /// ([`Stabilised`](crate::stabilised::Stabilised)) from the
     /// consistent `(y, yp)`, with `mu = 0`; with `dense`, record each of its times in
     /// `(t0, t1)` from inside the steps.
     fn integrate<M: DaeModel>(
         &self,
-        held: &HeldPlant<'_, M>,
+        dae: &Stabilised<&HeldPlant<'_, M>>,
         t0: f64,
         t1: f64,
         y: &mut [f64],
         yp: &mut [f64],
         dense: Option<DenseInterval<'_, '_>>,
     ) -> Result<(), RadauError> {
-        let dae = Stabilised {
-            held,
-            rows: &self.position_rows,
-            kinematic: &self.kinematic,
-        };
         let n = y.len();
-        let mut ys = y.to_vec();
-        ys.resize(n + self.position_rows.len(), 0.0);
-        let mut yps = yp.to_vec();
-        yps.resize(ys.len(), 0.0);
+        let (mut ys, mut yps) = dae.extend(y, yp);
         let ls = FaerDenseLu::new(dae.dimension());
-        let mut radau = Radau::new(&dae, ls, self.radau.clone(), t0, &ys, &yps)?;
+        let mut radau = Radau::new(dae, ls, self.radau.clone(), t0, &ys, &yps)?;
         radau.set_stop_time(t1)?;
         match dense {
             None => {

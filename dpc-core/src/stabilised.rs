@@ -96,9 +96,6 @@ pub enum StabilisedError {
         /// The index given twice.
         index: usize,
     },
-    /// No position constraint was given.
-    #[error("no position constraint to stabilise")]
-    NoConstraint,
 }
 
 /// Work of one evaluation: the wrapped DAE's residual and its Jacobians.
@@ -138,17 +135,14 @@ impl<D: ImplicitDae> Stabilised<D> {
     /// `kinematic = [(j, row), ...]`, the row whose only derivative is `q_j'`.
     ///
     /// # Errors
-    /// [`StabilisedError`] for an index out of range, a repeated row or unknown, or no
-    /// constraint.
+    /// [`StabilisedError`] for an index out of range or a repeated row or unknown. Without
+    /// constraints the stabilised form is the DAE itself.
     pub fn new(
         dae: D,
         rows: Vec<usize>,
         kinematic: Vec<(usize, usize)>,
     ) -> Result<Self, StabilisedError> {
         let n = dae.dimension();
-        if rows.is_empty() {
-            return Err(StabilisedError::NoConstraint);
-        }
         let mut seen_rows = vec![false; n];
         let mut seen_unknowns = vec![false; n];
         let listed = rows.iter().map(|&r| ("constraint row", r, true)).chain(
@@ -295,6 +289,9 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
     }
 
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        if self.rows.is_empty() {
+            return self.dae.residual(t, y, yp, out);
+        }
         let n = self.dae.dimension();
         let sc = &mut *self.scratch.borrow_mut();
         self.dae.residual(t, &y[..n], &yp[..n], &mut sc.res);
@@ -331,6 +328,9 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         c: f64,
         out: &mut S,
     ) {
+        if self.rows.is_empty() {
+            return self.dae.iteration_matrix(t, y, yp, c, out);
+        }
         let n = self.dae.dimension();
         let sc = &mut *self.scratch.borrow_mut();
         self.jacobians(t, &y[..n], &yp[..n], sc);
@@ -429,10 +429,6 @@ mod tests {
                 .err()
                 .map(|e| e.to_string())
         };
-        assert_eq!(
-            e(vec![], vec![(0, 0)]),
-            Some("no position constraint to stabilise".into())
-        );
         assert_eq!(
             e(vec![3], vec![(0, 0)]),
             Some("constraint row 3 is out of range: the DAE has 3 equations and unknowns".into())
