@@ -11,6 +11,7 @@ use crate::cli::run::RunResult;
 use crate::cli::scenario::{Overrides, Scenario};
 use crate::cli::sweep::{self, Axis};
 use crate::cli::text::{short, Num};
+use dpc::core::numeric::Time;
 use crate::cli::ScenarioError;
 use clap::Args;
 
@@ -75,7 +76,7 @@ pub enum SweepCommand {
 
 fn describe(summary: &Digest) -> String {
     let verdict = match (summary.t_diverged, &summary.divergence_cause) {
-        (Some(t), Some(cause)) => format!("DIVERGED at t = {}: {cause}", Num(t)),
+        (Some(t), Some(cause)) => format!("DIVERGED at t = {}: {cause}", Time(t)),
         _ => "no divergence".to_string(),
     };
     let errors: Vec<String> = summary
