@@ -150,7 +150,7 @@ fn bad_inputs_are_typed_errors() {
             delta: 0.0,
             ..DpcOptions::default()
         }),
-        Err(DpcError::InvalidOption(_))
+        Err(DpcError::InvalidOption(ref o)) if o.name == "delta"
     ));
     assert!(matches!(
         make(DpcOptions {
@@ -158,7 +158,7 @@ fn bad_inputs_are_typed_errors() {
             max_delta: 1e-4,
             ..DpcOptions::default()
         }),
-        Err(DpcError::InvalidOption(_))
+        Err(DpcError::InvalidOption(ref o)) if o.name == "max_delta"
     ));
     let mut dpc = make(DpcOptions::default()).unwrap();
     let mut u = [0.0; 2];

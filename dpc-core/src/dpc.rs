@@ -36,6 +36,7 @@
 //! [`NalgebraLu`](crate::linalg::NalgebraLu) back end an update allocates nothing.
 
 use crate::consistent::ConstraintStructure;
+use crate::error::InvalidOption;
 use crate::linalg::{FactorError, LinearSolver};
 use crate::numeric::{max_or_nan, Readable, Time};
 use crate::prefeedback::{FeedbackChain, Prefeedback};
@@ -126,7 +127,7 @@ impl DpcOptions {
 pub enum DpcError {
     /// An option is out of range.
     #[error("invalid DPC option: {0}")]
-    InvalidOption(String),
+    InvalidOption(#[from] InvalidOption),
     /// A buffer has the wrong length.
     #[error("{what} has length {found}, expected {expected}")]
     Dimension {
@@ -266,29 +267,21 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// [`DpcError::UnknownNu`] when `nu` is neither given nor defined by the model;
     /// [`DpcError::Dimension`] when the solver or the reference do not fit the model.
     pub fn new(model: T, reference: R, solver: L, opts: DpcOptions) -> Result<Self, DpcError> {
-        if !(opts.delta.is_finite() && opts.delta > 0.0) {
-            return Err(DpcError::InvalidOption(format!("delta = {}", opts.delta)));
-        }
-        if !(opts.residual_tolerance.is_finite() && opts.residual_tolerance > 0.0) {
-            return Err(DpcError::InvalidOption(format!(
-                "residual_tolerance = {}",
-                opts.residual_tolerance
-            )));
-        }
+        InvalidOption::positive("delta", opts.delta)?;
+        InvalidOption::positive("residual_tolerance", opts.residual_tolerance)?;
         if !(opts.retry_growth.is_finite() && opts.retry_growth > 1.0) {
-            return Err(DpcError::InvalidOption(format!(
-                "retry_growth = {} (must exceed 1)",
-                opts.retry_growth
-            )));
+            return Err(InvalidOption::new(
+                "retry_growth",
+                opts.retry_growth,
+                "finite and above 1",
+            )
+            .into());
         }
         if opts.max_delta.is_nan() || opts.max_delta < opts.delta {
-            return Err(DpcError::InvalidOption(format!(
-                "max_delta = {} (must be at least delta = {})",
-                opts.max_delta, opts.delta
-            )));
+            return Err(InvalidOption::new("max_delta", opts.max_delta, "at least `delta`").into());
         }
         if opts.max_newton_iterations == 0 {
-            return Err(DpcError::InvalidOption("max_newton_iterations = 0".into()));
+            return Err(InvalidOption::new("max_newton_iterations", 0.0, "at least 1").into());
         }
         let nu = match opts.nu {
             Some(nu) => nu,

@@ -52,6 +52,7 @@ use crate::consistent::{
 };
 use crate::dae::ImplicitDae;
 use crate::dpc::{Dpc, DpcError};
+use crate::error::InvalidOption;
 use crate::linalg::{FaerDenseLu, LinearSolver};
 use crate::linear::descriptor::{descriptor_system, realise, DescriptorError, DescriptorOptions};
 use crate::linearize::OperatingPoint;
@@ -167,7 +168,7 @@ impl Default for ClosedLoopOptions {
 pub enum SimulateError {
     /// An option is out of range.
     #[error("invalid simulation option: {0}")]
-    InvalidOption(String),
+    InvalidOption(#[from] InvalidOption),
     /// A state or tracking-error bound is NaN or not positive.
     #[error("the bound on {quantity} `{name}` is {}; it must be positive", Readable(*value))]
     InvalidBound {
@@ -903,12 +904,8 @@ where
         plant.structure().n_inputs(),
         plant.structure().n_outputs(),
     );
-    if !(opts.h.is_finite() && opts.h > 0.0 && opts.t_end.is_finite() && opts.t_end > 0.0) {
-        return Err(SimulateError::InvalidOption(format!(
-            "h = {}, t_end = {}",
-            opts.h, opts.t_end
-        )));
-    }
+    InvalidOption::positive("h", opts.h)?;
+    InvalidOption::positive("t_end", opts.t_end)?;
     check_bounds("state", &opts.state_bounds, &plant.structure().states)?;
     check_bounds(
         "tracking error",
@@ -945,12 +942,7 @@ where
     if opts.hold == Hold::Correction && dpc.prefeedback().is_none() {
         return Err(SimulateError::NoPrefeedback);
     }
-    if !(opts.constraint_tolerance.is_finite() && opts.constraint_tolerance > 0.0) {
-        return Err(SimulateError::InvalidOption(format!(
-            "constraint_tolerance = {} (must be positive and finite)",
-            opts.constraint_tolerance
-        )));
-    }
+    InvalidOption::positive("constraint_tolerance", opts.constraint_tolerance)?;
     let steps = (opts.t_end / opts.h).round() as usize;
     let t_final = steps as f64 * opts.h;
     let mut grid = match opts.output_step {

@@ -19,9 +19,28 @@ pub enum BdfError {
         /// Length given.
         found: usize,
     },
-    /// An option is out of range (order, step size, output time behind the integrator, ...).
+    /// An option or argument is out of range (order, step size, tolerance of Newton, ...).
     #[error("invalid option: {0}")]
-    InvalidOption(String),
+    InvalidOption(#[from] crate::error::InvalidOption),
+    /// A time argument lies outside where it can be served: an output time behind the
+    /// integrator, an interpolation time outside the last step, a stop time not ahead.
+    #[error("time {} is outside [{}, {}]", Time(*t), Time(*from), Time(*to))]
+    TimeOutOfRange {
+        /// The time asked for.
+        t: f64,
+        /// Start of the admissible interval.
+        from: f64,
+        /// End of the admissible interval (infinity when open).
+        to: f64,
+    },
+    /// The model wrote an iteration-matrix entry outside the pattern it declared.
+    #[error("iteration matrix entry ({equation}, {unknown}) lies outside the declared pattern")]
+    OutsidePattern {
+        /// Name of the row's equation.
+        equation: String,
+        /// Name of the column's unknown.
+        unknown: String,
+    },
     /// The iteration matrix is singular and reducing the step did not help.
     #[error(
         "singular iteration matrix at t = {}: {}; {}",

@@ -11,6 +11,7 @@
 
 use super::newton::{self, error_weights, JacState, NewtonProblem};
 use super::{BdfError, Options, Stats, Tolerance};
+use crate::error::InvalidOption;
 use crate::linalg::LinearSolver;
 use crate::ImplicitDae;
 
@@ -88,18 +89,19 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
     ) -> Result<Self, BdfError> {
         let n = dae.dimension();
         if !(1..=5).contains(&order) {
-            return Err(BdfError::InvalidOption(format!(
-                "order {order} is not in 1..=5"
-            )));
+            return Err(InvalidOption::new("order", order as f64, "between 1 and 5").into());
         }
-        if !(h.is_finite() && h > 0.0 && t0.is_finite()) {
-            return Err(BdfError::InvalidOption(format!("step h = {h}, t0 = {t0}")));
+        InvalidOption::positive("h", h)?;
+        if !t0.is_finite() {
+            return Err(InvalidOption::new("t0", t0, "finite").into());
         }
         if history.is_empty() || history.len() > order {
-            return Err(BdfError::InvalidOption(format!(
-                "history of {} values for order {order}",
-                history.len()
-            )));
+            return Err(InvalidOption::new(
+                "history length",
+                history.len() as f64,
+                "between 1 and the order",
+            )
+            .into());
         }
         if ls.dimension() != n {
             return Err(BdfError::DimensionMismatch {

@@ -264,9 +264,10 @@ fn solve<D: ImplicitDae, L: LinearSolver>(
                 });
             }
             Err(FactorError::OutsidePattern { row, col }) => {
-                return Err(BdfError::InvalidOption(format!(
-                    "iteration matrix entry ({row}, {col}) outside the declared pattern"
-                )));
+                return Err(BdfError::OutsidePattern {
+                    equation: dae.equation_name(row),
+                    unknown: dae.unknown_name(col),
+                });
             }
         }
         delta.copy_from_slice(res);

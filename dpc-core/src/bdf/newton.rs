@@ -66,11 +66,10 @@ impl NewtonFailure {
                 t,
                 equation: dae.equation_name(i),
             },
-            Self::OutsidePattern(r, c) => BdfError::InvalidOption(format!(
-                "iteration matrix entry ({}, {}) is outside the declared pattern",
-                dae.equation_name(r),
-                dae.unknown_name(c)
-            )),
+            Self::OutsidePattern(r, c) => BdfError::OutsidePattern {
+                equation: dae.equation_name(r),
+                unknown: dae.unknown_name(c),
+            },
         }
     }
 }

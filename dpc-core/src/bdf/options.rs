@@ -1,6 +1,7 @@
 //! Integrator options.
 
 use super::BdfError;
+use crate::error::InvalidOption;
 
 /// A tolerance, the same for every component or one per component.
 #[derive(Debug, Clone, PartialEq)]
@@ -151,10 +152,9 @@ impl Options {
             }
         }
         if !(1..=5).contains(&self.max_order) {
-            return Err(BdfError::InvalidOption(format!(
-                "max_order = {} is not in 1..=5",
-                self.max_order
-            )));
+            return Err(
+                InvalidOption::new("max_order", self.max_order as f64, "between 1 and 5").into(),
+            );
         }
         if !self.index.is_empty() && self.index.len() != n {
             return Err(BdfError::DimensionMismatch {
@@ -164,37 +164,43 @@ impl Options {
             });
         }
         if let Some(&m) = self.index.iter().find(|&&m| m > 3) {
-            return Err(BdfError::InvalidOption(format!(
-                "index {m} is not supported (at most 3)"
-            )));
+            return Err(InvalidOption::new("index", f64::from(m), "at most 3").into());
         }
         let positive = |x: f64| x.is_finite() && x > 0.0;
         if let Some(h) = self.initial_step {
             if !positive(h) {
-                return Err(BdfError::InvalidOption(format!("initial_step = {h}")));
+                return Err(InvalidOption::new("initial_step", h, "positive and finite").into());
             }
         }
-        if self.max_step.is_nan()
-            || self.max_step <= 0.0
-            || !self.min_step.is_finite()
-            || self.min_step < 0.0
-            || self.min_step > self.max_step
-        {
-            return Err(BdfError::InvalidOption(format!(
-                "min_step = {}, max_step = {}",
-                self.min_step, self.max_step
-            )));
+        if self.max_step.is_nan() || self.max_step <= 0.0 {
+            return Err(InvalidOption::new("max_step", self.max_step, "positive").into());
         }
-        if self.max_newton_iterations == 0 || !positive(self.newton_tolerance) {
-            return Err(BdfError::InvalidOption(
-                "max_newton_iterations and newton_tolerance must be positive".into(),
-            ));
+        if !self.min_step.is_finite() || self.min_step < 0.0 || self.min_step > self.max_step {
+            return Err(InvalidOption::new(
+                "min_step",
+                self.min_step,
+                "finite, not negative and at most max_step",
+            )
+            .into());
+        }
+        if self.max_newton_iterations == 0 {
+            return Err(InvalidOption::new("max_newton_iterations", 0.0, "at least 1").into());
+        }
+        if !positive(self.newton_tolerance) {
+            return Err(InvalidOption::new(
+                "newton_tolerance",
+                self.newton_tolerance,
+                "positive and finite",
+            )
+            .into());
         }
         if self.residual_tolerance.is_nan() || self.residual_tolerance <= 0.0 {
-            return Err(BdfError::InvalidOption(format!(
-                "residual_tolerance = {}",
-                self.residual_tolerance
-            )));
+            return Err(InvalidOption::new(
+                "residual_tolerance",
+                self.residual_tolerance,
+                "positive",
+            )
+            .into());
         }
         Ok(())
     }

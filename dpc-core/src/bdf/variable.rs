@@ -16,6 +16,7 @@
 
 use super::newton::{self, error_weights, wrms, JacState, NewtonFailure, NewtonProblem};
 use super::{BdfError, HigherIndexControl, Options, Stats};
+use crate::error::InvalidOption;
 use crate::linalg::LinearSolver;
 use crate::ImplicitDae;
 
@@ -109,7 +110,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         opts.validate(n)?;
         if !t0.is_finite() {
-            return Err(BdfError::InvalidOption(format!("t0 = {t0}")));
+            return Err(InvalidOption::new("t0", t0, "finite").into());
         }
         let mut res = vec![0.0; n];
         dae.residual(t0, y0, yp0, &mut res);
@@ -296,10 +297,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// [`BdfError::InvalidOption`] if `tstop` is not ahead of the current time.
     pub fn set_stop_time(&mut self, tstop: f64) -> Result<(), BdfError> {
         if tstop <= self.tn || !tstop.is_finite() {
-            return Err(BdfError::InvalidOption(format!(
-                "stop time {tstop} is not ahead of t = {}",
-                self.tn
-            )));
+            return Err(BdfError::TimeOutOfRange {
+                t: tstop,
+                from: self.tn,
+                to: f64::INFINITY,
+            });
         }
         self.tstop = Some(tstop);
         Ok(())
@@ -355,14 +357,19 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             });
         }
         if !tout.is_finite() {
-            return Err(BdfError::InvalidOption(format!("tout = {tout}")));
+            return Err(BdfError::TimeOutOfRange {
+                t: tout,
+                from: self.tn - self.hused,
+                to: f64::INFINITY,
+            });
         }
         if !self.h_initialised {
             if tout <= self.tn {
-                return Err(BdfError::InvalidOption(format!(
-                    "tout = {tout} is not ahead of t0 = {}",
-                    self.tn
-                )));
+                return Err(BdfError::TimeOutOfRange {
+                    t: tout,
+                    from: self.tn,
+                    to: f64::INFINITY,
+                });
             }
             self.init_step(tout);
         }
@@ -427,11 +434,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         let margin = 100.0 * f64::EPSILON * (self.tn.abs() + self.hused.abs());
         if !t.is_finite() || t > self.tn + margin || t < self.tn - self.hused - margin {
-            return Err(BdfError::InvalidOption(format!(
-                "interpolation time {t} outside the last step [{}, {}]",
-                self.tn - self.hused,
-                self.tn
-            )));
+            return Err(BdfError::TimeOutOfRange {
+                t,
+                from: self.tn - self.hused,
+                to: self.tn,
+            });
         }
         if self.nst() == 0 {
             y_out.copy_from_slice(&self.phi[0]);

@@ -11,9 +11,9 @@ use crate::cli::run::RunResult;
 use crate::cli::scenario::{Overrides, Scenario};
 use crate::cli::sweep::{self, Axis};
 use crate::cli::text::{short, Num};
-use dpc::core::numeric::Time;
 use crate::cli::ScenarioError;
 use clap::Args;
+use dpc::core::numeric::Time;
 
 use crate::cli::command::sayln;
 use dpc::core::linear::sampled::CriticalPeriod;
