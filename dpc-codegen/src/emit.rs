@@ -15,7 +15,11 @@
 //! entries) is scheduled together, so subexpressions are shared across the residual and all
 //! Jacobians; structurally zero entries are never emitted, and the non-zero positions are
 //! exported as pattern constants. `residual_and_iteration_matrix` schedules the residual and
-//! the iteration matrix together for Newton loops. Every slice a routine reads or writes is cut
+//! the iteration matrix together for Newton loops. The routines that write into sinks are
+//! generic over the sink type, so their computation is emitted once, as non-generic methods
+//! (`__evaluate_values` and the like) that store the entries' values into an array, and the
+//! generic methods only hand the values to the sinks in a loop over the pattern: `rustc` then
+//! compiles the heavy straight-line code once per model, not once per sink type. Every slice a routine reads or writes is cut
 //! to its length once at the top, so the indexing inside compiles without bounds checks.
 //! Function parameters use `__`-prefixed names, which the DSL forbids in user names, so user
 //! names can be bound as plain locals without shadowing.
