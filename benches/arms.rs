@@ -1,4 +1,4 @@
-//! The planar n-link flexible-joint arm under DPC for n = 2, 4, 6, 8 with two stabilised
+//! The planar n-link flexible-joint arm under DPC for n = 2, 4, 6, 8, 12, 16 with two stabilised
 //! Hirschorn steps per joint: per n, the size of the tracking DAE, one evaluation of its
 //! residual and iteration matrix, one DPC update (fixed-size LU), and the tracking error of
 //! a closed loop with the preliminary feedback about the hanging rest (as
@@ -76,6 +76,8 @@ arm!(Arm2, Arm2Tracking, 2);
 arm!(Arm4, Arm4Tracking, 4);
 arm!(Arm6, Arm6Tracking, 6);
 arm!(Arm8, Arm8Tracking, 8);
+arm!(Arm12, Arm12Tracking, 12);
+arm!(Arm16, Arm16Tracking, 16);
 
 /// Median time of `f` over about half a second.
 fn median(mut f: impl FnMut()) -> Duration {
@@ -179,15 +181,22 @@ macro_rules! measure {
             None => format!("{late:.1e}"),
             Some(d) => format!("diverged at t = {:.2}", d.t),
         };
-        println!("| {} | {ne} | {eval:.2?} | {update:.2?} | {outcome} |", $n);
+        // The update's time per (equations)^3, the growth of its dense LU.
+        let per_cube = update.as_secs_f64() * 1e9 / (ne as f64).powi(3);
+        println!(
+            "| {} | {ne} | {eval:.2?} | {update:.2?} | {per_cube:.3} | {outcome} |",
+            $n
+        );
     }};
 }
 
 fn main() {
-    println!("| links n | equations | residual + iteration matrix | one DPC update | max error, t in [4, 6] |");
-    println!("| --- | --- | --- | --- | --- |");
+    println!("| links n | equations | residual + iteration matrix | one DPC update | update / equations^3 (ns) | max error, t in [4, 6] |");
+    println!("| --- | --- | --- | --- | --- | --- |");
     measure!(Arm2, Arm2Tracking, Arm2Reference, 2);
     measure!(Arm4, Arm4Tracking, Arm4Reference, 4);
     measure!(Arm6, Arm6Tracking, Arm6Reference, 6);
     measure!(Arm8, Arm8Tracking, Arm8Reference, 8);
+    measure!(Arm12, Arm12Tracking, Arm12Reference, 12);
+    measure!(Arm16, Arm16Tracking, Arm16Reference, 16);
 }

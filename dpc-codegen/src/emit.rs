@@ -15,7 +15,11 @@
 //! entries) is scheduled together, so subexpressions are shared across the residual and all
 //! Jacobians; structurally zero entries are never emitted, and the non-zero positions are
 //! exported as pattern constants. `residual_and_iteration_matrix` schedules the residual and
-//! the iteration matrix together for Newton loops. Every slice a routine reads or writes is cut
+//! the iteration matrix together for Newton loops. The routines that write into sinks are
+//! generic over the sink type, so their computation is emitted once, as non-generic methods
+//! (`__evaluate_values` and the like) that store the entries' values into an array, and the
+//! generic methods only hand the values to the sinks in a loop over the pattern: `rustc` then
+//! compiles the heavy straight-line code once per model, not once per sink type. Every slice a routine reads or writes is cut
 //! to its length once at the top, so the indexing inside compiles without bounds checks.
 //! Function parameters use `__`-prefixed names, which the DSL forbids in user names, so user
 //! names can be bound as plain locals without shadowing.
@@ -393,19 +397,52 @@ fn emit_params(model: &Model) -> TokenStream {
     }
 }
 
-/// Writes of the roots of a routine into sinks: `(sink tokens, block)` in root order.
+/// The writes of a routine's Jacobian entries, split in two so that the heavy code is compiled
+/// once: the values are stored into an array `__values` in block order (in a non-generic
+/// method), and a small generic loop hands them to the sinks, block by block in row-major
+/// order, as the pattern constants list them. The sinks receive the same `set` calls with the
+/// same values as from straight-line writes.
+struct SinkWrites {
+    /// Number of entries (the length of `__values`).
+    count: usize,
+    /// `__values[k] = ...;` per entry, in block order.
+    stores: Vec<TokenStream>,
+    /// The generic part: per block, its pattern and the loop over its values.
+    forward: TokenStream,
+}
+
 fn sink_writes(
     roots: &mut impl Iterator<Item = TokenStream>,
     blocks: &[(TokenStream, &Block)],
-) -> Vec<TokenStream> {
-    let mut writes = Vec::new();
+) -> SinkWrites {
+    let mut stores = Vec::new();
+    let mut forward = TokenStream::new();
+    let mut count = 0usize;
     for (sink, b) in blocks {
-        for &(i, j, _) in &b.entries {
+        let start = count;
+        for _ in &b.entries {
             let v = roots.next().expect("one root per Jacobian entry");
-            writes.push(quote!(#sink.set(#i, #j, #v);));
+            stores.push(quote!(__values[#count] = #v;));
+            count += 1;
         }
+        if start == count {
+            continue;
+        }
+        let positions = pattern(b);
+        forward.extend(quote! {
+            {
+                const __PATTERN: &[(usize, usize)] = #positions;
+                for (&(__i, __j), &__v) in __PATTERN.iter().zip(&__values[#start..#count]) {
+                    #sink.set(__i, __j, __v);
+                }
+            }
+        });
     }
-    writes
+    SinkWrites {
+        count,
+        stores,
+        forward,
+    }
 }
 
 /// Emit one type implementing `DaeModel` with its fixed-size conveniences.
@@ -447,25 +484,31 @@ pub fn emit_dae_type(
             .map(|(i, v)| quote!(__out[#i] = #v;));
         quote!(#prelude let __out = &mut __out[..#neq]; #(#stmts)* #(#writes)*)
     };
-    // A routine whose roots are the residual rows followed by the entries of `blocks`.
+    // A routine whose roots are the residual rows followed by the entries of `blocks`: the
+    // body of its non-generic values method, the generic forwarding and the values' count.
     let residual_and_blocks = |roots: &[ExprId], blocks: &[(TokenStream, &Block)]| {
         let r = routine(model, layout, roots);
         let (prelude, stmts) = (r.prelude, r.statements);
         let mut it = r.roots.into_iter();
-        let mut writes: Vec<TokenStream> = (0..neq)
+        let residual_writes: Vec<TokenStream> = (0..neq)
             .map(|i| {
                 let v = it.next().expect("one root per residual row");
                 quote!(__residual[#i] = #v;)
             })
             .collect();
-        writes.extend(sink_writes(&mut it, blocks));
-        quote!(#prelude let __residual = &mut __residual[..#neq]; #(#stmts)* #(#writes)*)
+        let w = sink_writes(&mut it, blocks);
+        let stores = &w.stores;
+        (
+            quote!(#prelude let __residual = &mut __residual[..#neq]; #(#stmts)* #(#residual_writes)* #(#stores)*),
+            w.forward,
+            w.count,
+        )
     };
-    let fused_code = residual_and_blocks(
+    let (fused_values, fused_forward, fused_count) = residual_and_blocks(
         &ty.residual_and_iteration_roots(),
         &[(quote!(__out), &ty.iteration)],
     );
-    let evaluate_code = residual_and_blocks(
+    let (evaluate_values, evaluate_forward, evaluate_count) = residual_and_blocks(
         &ty.evaluate_roots(),
         &[
             (quote!(__f_xdot), f_xdot),
@@ -474,17 +517,13 @@ pub fn emit_dae_type(
             (quote!(__f_u), f_u),
         ],
     );
-    let iteration_code = {
+    let (iteration_values, iteration_forward, iteration_count) = {
         let roots: Vec<ExprId> = ty.iteration.exprs().collect();
         let r = routine(model, layout, &roots);
         let (prelude, stmts) = (r.prelude, r.statements);
-        let writes = ty
-            .iteration
-            .entries
-            .iter()
-            .zip(r.roots)
-            .map(|((i, j, _), v)| quote!(__out.set(#i, #j, #v);));
-        quote!(#prelude #(#stmts)* #(#writes)*)
+        let w = sink_writes(&mut r.roots.into_iter(), &[(quote!(__out), &ty.iteration)]);
+        let stores = &w.stores;
+        (quote!(#prelude #(#stmts)* #(#stores)*), w.forward, w.count)
     };
     let outputs_code = {
         let r = routine(model, layout, &outputs);
@@ -496,7 +535,7 @@ pub fn emit_dae_type(
             .map(|(i, v)| quote!(__out[#i] = #v;));
         quote!(#prelude let __out = &mut __out[..#ny]; #(#stmts)* #(#writes)*)
     };
-    let output_jac_code = {
+    let (output_jac_values, output_jac_forward, output_jac_count) = {
         let blocks = [
             (quote!(__h_x), h_x),
             (quote!(__h_z), h_z),
@@ -504,10 +543,10 @@ pub fn emit_dae_type(
         ];
         let r = routine(model, layout, &ty.output_jacobian_roots());
         let (prelude, stmts) = (r.prelude, r.statements);
-        let writes = sink_writes(&mut r.roots.into_iter(), &blocks);
-        quote!(#prelude #(#stmts)* #(#writes)*)
+        let w = sink_writes(&mut r.roots.into_iter(), &blocks);
+        let stores = &w.stores;
+        (quote!(#prelude #(#stmts)* #(#stores)*), w.forward, w.count)
     };
-
     // Constants.
     let sym_names = |list: &[Symbol]| str_list(list.iter().map(|s| model.symbol_name(*s)));
     let state_names = sym_names(&layout.states);
@@ -608,6 +647,28 @@ pub fn emit_dae_type(
                 Self { params, #w_init }
             }
 
+            // The values of the Jacobian entries of the generic `DaeModel` routines, computed
+            // once per model here instead of once per sink type.
+            #[inline(never)]
+            fn __evaluate_values(&self, __t: f64, __x: &[f64], __xdot: &[f64], __z: &[f64], __u: &[f64], __residual: &mut [f64], __values: &mut [f64; #evaluate_count]) {
+                #evaluate_values
+            }
+
+            #[inline(never)]
+            fn __iteration_values(&self, __t: f64, __x: &[f64], __xdot: &[f64], __z: &[f64], __u: &[f64], __c: f64, __values: &mut [f64; #iteration_count]) {
+                #iteration_values
+            }
+
+            #[inline(never)]
+            fn __residual_and_iteration_values(&self, __t: f64, __x: &[f64], __xdot: &[f64], __z: &[f64], __u: &[f64], __c: f64, __residual: &mut [f64], __values: &mut [f64; #fused_count]) {
+                #fused_values
+            }
+
+            #[inline(never)]
+            fn __output_jacobian_values(&self, __t: f64, __x: &[f64], __z: &[f64], __u: &[f64], __values: &mut [f64; #output_jac_count]) {
+                #output_jac_values
+            }
+
             /// Residual `F(t, x, x', z, u)` in fixed-size types.
             pub fn residual_fixed(
                 &self,
@@ -683,7 +744,7 @@ pub fn emit_dae_type(
             }
         }
 
-        #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens, non_snake_case)]
+        #[allow(clippy::all, clippy::pedantic, unused_variables, unused_mut, unused_parens, non_snake_case)]
         impl ::dpc::core::DaeModel for #name {
             type Params = #params_name;
             fn structure(&self) -> &::dpc::core::model::Structure {
@@ -749,7 +810,9 @@ pub fn emit_dae_type(
                 __C: ::dpc::core::MatrixSink + ?Sized,
                 __D: ::dpc::core::MatrixSink + ?Sized,
             {
-                #evaluate_code
+                let mut __values = [0.0_f64; #evaluate_count];
+                self.__evaluate_values(__t, __x, __xdot, __z, __u, __residual, &mut __values);
+                #evaluate_forward
             }
 
             fn iteration_matrix<__S: ::dpc::core::MatrixSink + ?Sized>(
@@ -762,7 +825,9 @@ pub fn emit_dae_type(
                 __c: f64,
                 __out: &mut __S,
             ) {
-                #iteration_code
+                let mut __values = [0.0_f64; #iteration_count];
+                self.__iteration_values(__t, __x, __xdot, __z, __u, __c, &mut __values);
+                #iteration_forward
             }
 
             fn residual_and_iteration_matrix<__S: ::dpc::core::MatrixSink + ?Sized>(
@@ -776,7 +841,9 @@ pub fn emit_dae_type(
                 __residual: &mut [f64],
                 __out: &mut __S,
             ) {
-                #fused_code
+                let mut __values = [0.0_f64; #fused_count];
+                self.__residual_and_iteration_values(__t, __x, __xdot, __z, __u, __c, __residual, &mut __values);
+                #fused_forward
             }
 
             fn outputs(&self, __t: f64, __x: &[f64], __z: &[f64], __u: &[f64], __out: &mut [f64]) {
@@ -797,7 +864,9 @@ pub fn emit_dae_type(
                 __B: ::dpc::core::MatrixSink + ?Sized,
                 __C: ::dpc::core::MatrixSink + ?Sized,
             {
-                #output_jac_code
+                let mut __values = [0.0_f64; #output_jac_count];
+                self.__output_jacobian_values(__t, __x, __z, __u, &mut __values);
+                #output_jac_forward
             }
         }
     }

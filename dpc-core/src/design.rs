@@ -976,12 +976,20 @@ impl fmt::Display for RelativeDegreeMismatch {
 }
 
 /// The relative degree of each output of `sys` (the first `k` with `C_i A^(k-1) B != 0`, `0`
-/// when `D_i != 0`), decided relative to the norms of the factors; `None` where no input
-/// reaches the output.
+/// when `D_i != 0`); `None` where no input reaches the output.
+///
+/// A Markov row `m = C_i A^(k-1) B` counts as non-zero when it exceeds both its own rounding
+/// noise and a relative threshold: `|m| > 1e-10 |v| |B| + 64 eps | |C_i| |A|^(k-1) |B| |`, with
+/// `v = C_i A^(k-1)` the row as computed (so a row is measured against its own size, not
+/// against `|C_i| |A|^(k-1)`, which for a stiff or many-link plant is dominated by other parts
+/// of `A` and would hide a true degree) and the entrywise product of absolute values bounding
+/// the error of the computed product.
 pub fn linear_relative_degrees(sys: &LinearSystem) -> Vec<Option<usize>> {
     let n = sys.a.nrows();
-    let (na, nb) = (sys.a.norm(), sys.b.norm());
+    let nb = sys.b.norm();
+    let (abs_a, abs_b) = (sys.a.abs(), sys.b.abs());
     let tol = 1e-10;
+    let noise = 64.0 * f64::EPSILON;
     (0..sys.c.nrows())
         .map(|i| {
             let d = sys.d.row(i);
@@ -989,17 +997,18 @@ pub fn linear_relative_degrees(sys: &LinearSystem) -> Vec<Option<usize>> {
                 return Some(0);
             }
             let mut v = sys.c.row(i).into_owned();
-            let mut bound = v.norm();
+            let mut abs_v = v.abs();
             for k in 1..=n {
-                if bound == 0.0 {
+                if v.iter().all(|&e| e == 0.0) {
                     return None;
                 }
                 let markov = &v * &sys.b;
-                if markov.norm() > tol * bound * nb {
+                let rounding = (&abs_v * &abs_b).norm();
+                if markov.norm() > tol * v.norm() * nb + noise * rounding {
                     return Some(k);
                 }
                 v = &v * &sys.a;
-                bound *= na;
+                abs_v = &abs_v * &abs_a;
             }
             None
         })
