@@ -118,67 +118,73 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// One problem of the table: its name, how it is solved, its reference, the scored components
+/// and the extra column (in brackets) of other components.
+struct Problem<'a> {
+    name: &'a str,
+    solve: &'a dyn Fn(f64, Form) -> Option<(Vec<f64>, Stats)>,
+    reference: &'a [f64],
+    scored: &'a [usize],
+    also: Option<(&'a str, &'a [usize])>,
+}
+
+/// The rows of `p` in `form` for tolerances 1e-4 .. 1e-10.
+fn rows(p: &Problem, form: Form, label: &str, components: bool) {
+    for k in [4, 5, 6, 7, 8, 9, 10] {
+        let tol = 10f64.powi(-k);
+        let d = median(
+            [0.9, 1.0, 1.1]
+                .iter()
+                .map(|f| {
+                    (p.solve)(tol * f, form)
+                        .map_or(f64::NAN, |(y, _)| scd(&y, p.reference, p.scored))
+                })
+                .collect(),
+        );
+        let Some((y, s)) = (p.solve)(tol, form) else {
+            println!("| {} {label} | 1e-{k} | failed | | | | |", p.name);
+            continue;
+        };
+        let also = p.also.map_or(String::new(), |(what, idx)| {
+            format!(" ({what} {:.2})", scd(&y, p.reference, idx))
+        });
+        println!(
+            "| {} {label}{also} | 1e-{k} | {d:.2} | {} | {} | {} | {} |",
+            p.name, s.steps, s.error_test_failures, s.newton_failures, s.jacobian_evaluations
+        );
+        if components {
+            let e: Vec<String> = (0..p.reference.len())
+                .map(|i| format!("{:.1}", scd(&y, p.reference, &[i])))
+                .collect();
+            println!("|   digits per component: {} |", e.join(" "));
+        }
+    }
+}
+
 fn main() {
     let components = std::env::args().any(|a| a == "--components");
     println!("| problem | tol | scd (median of tol x 0.9, 1, 1.1) | steps | rejected | Newton failures | Jacobians |");
     println!("|---|---|---|---|---|---|---|");
+    let all: Vec<usize> = (0..10).collect();
+    let problems = [
+        Problem {
+            name: "Andrews (y1..y7)",
+            solve: &andrews,
+            reference: &ANDREWS_REF,
+            scored: &ANDREWS_SCORED,
+            also: None,
+        },
+        Problem {
+            name: "car axis (all)",
+            solve: &car_axis,
+            reference: &CAR_AXIS_REF,
+            scored: &all,
+            also: Some(("positions", &[0, 1, 2, 3])),
+        },
+    ];
     for (form, label) in [(Form::Index3, "index 3"), (Form::Stabilised, "GGL")] {
-        for k in [4, 5, 6, 7, 8, 9, 10] {
-            let tol = 10f64.powi(-k);
-            let d = median(
-                [0.9, 1.0, 1.1]
-                    .iter()
-                    .map(|f| {
-                        andrews(tol * f, form)
-                            .map_or(f64::NAN, |(y, _)| scd(&y, &ANDREWS_REF, &ANDREWS_SCORED))
-                    })
-                    .collect(),
-            );
-            let Some((y, s)) = andrews(tol, form) else {
-                println!("| Andrews {label} (y1..y7) | 1e-{k} | failed | | | | |");
-                continue;
-            };
-            println!(
-                "| Andrews {label} (y1..y7) | 1e-{k} | {d:.2} | {} | {} | {} | {} |",
-                s.steps, s.error_test_failures, s.newton_failures, s.jacobian_evaluations
-            );
-            if components {
-                let e: Vec<String> = (0..27)
-                    .map(|i| format!("{:.1}", scd(&y, &ANDREWS_REF, &[i])))
-                    .collect();
-                println!("|   digits per component: {} |", e.join(" "));
-            }
-        }
-        let all: Vec<usize> = (0..10).collect();
-        for k in [4, 5, 6, 7, 8, 9, 10] {
-            let tol = 10f64.powi(-k);
-            let d = median(
-                [0.9, 1.0, 1.1]
-                    .iter()
-                    .map(|f| {
-                        car_axis(tol * f, form)
-                            .map_or(f64::NAN, |(y, _)| scd(&y, &CAR_AXIS_REF, &all))
-                    })
-                    .collect(),
-            );
-            let Some((y, s)) = car_axis(tol, form) else {
-                println!("| car axis {label} (all) | 1e-{k} | failed | | | | |");
-                continue;
-            };
-            println!(
-                "| car axis {label} (all; positions {:.2}) | 1e-{k} | {d:.2} | {} | {} | {} | {} |",
-                scd(&y, &CAR_AXIS_REF, &[0, 1, 2, 3]),
-                s.steps,
-                s.error_test_failures,
-                s.newton_failures,
-                s.jacobian_evaluations
-            );
-            if components {
-                let e: Vec<String> = (0..10)
-                    .map(|i| format!("{:.1}", scd(&y, &CAR_AXIS_REF, &[i])))
-                    .collect();
-                println!("|   digits per component: {} |", e.join(" "));
-            }
+        for p in &problems {
+            rows(p, form, label, components);
         }
     }
 }
