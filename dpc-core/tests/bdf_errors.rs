@@ -144,7 +144,10 @@ fn bad_tolerances_are_rejected() {
             &y0,
             &yp0,
         );
-        assert!(matches!(r, Err(BdfError::InvalidTolerance(_))), "{opts:?}");
+        assert!(
+            matches!(r, Err(BdfError::InvalidTolerance { .. })),
+            "{opts:?}"
+        );
     }
     let opts = Options {
         atol: Tolerance::Vector(vec![1e-8; 2]),
@@ -169,10 +172,10 @@ fn bad_tolerances_are_rejected() {
         let mut y = [0.0; 3];
         assert!(matches!(
             b.solve_to(1.0, &mut y, None),
-            Err(BdfError::InvalidTolerance(_))
+            Err(BdfError::InvalidTolerance { .. })
         ));
     } else {
-        assert!(matches!(bdf, Err(BdfError::InvalidTolerance(_))));
+        assert!(matches!(bdf, Err(BdfError::InvalidTolerance { .. })));
     }
 }
 

@@ -7,8 +7,15 @@ use crate::numeric::{Readable, Time};
 pub enum BdfError {
     /// A tolerance is negative, non-finite, or an error weight `1/(rtol |y_i| + atol_i)` is not
     /// positive and finite.
-    #[error("invalid tolerance: {0}")]
-    InvalidTolerance(String),
+    #[error("invalid tolerance {which} of component {component}: {}", Readable(*value))]
+    InvalidTolerance {
+        /// `"rtol"`, `"atol"`, `"rtol and atol"` or `"error weight"`.
+        which: &'static str,
+        /// Component index.
+        component: usize,
+        /// The offending value (`rtol |y_i| + atol_i` for an error weight).
+        value: f64,
+    },
     /// A vector or solver has the wrong length.
     #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
     DimensionMismatch {

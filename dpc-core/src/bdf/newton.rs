@@ -87,9 +87,11 @@ pub(crate) fn error_weights(opts: &Options, y: &[f64], w: &mut [f64]) -> Result<
     for (i, (wi, yi)) in w.iter_mut().zip(y).enumerate() {
         let d = opts.rtol.get(i) * yi.abs() + opts.atol.get(i);
         if !(d > 0.0 && d.is_finite()) {
-            return Err(BdfError::InvalidTolerance(format!(
-                "error weight of component {i} is not positive (rtol |y| + atol = {d})"
-            )));
+            return Err(BdfError::InvalidTolerance {
+                which: "error weight",
+                component: i,
+                value: d,
+            });
         }
         *wi = 1.0 / d;
     }

@@ -21,7 +21,7 @@ impl Tolerance {
         }
     }
 
-    fn check(&self, name: &str, n: usize) -> Result<(), BdfError> {
+    fn check(&self, name: &'static str, n: usize) -> Result<(), BdfError> {
         if let Self::Vector(v) = self {
             if v.len() != n {
                 return Err(BdfError::DimensionMismatch {
@@ -34,9 +34,11 @@ impl Tolerance {
         for i in 0..n {
             let x = self.get(i);
             if !(x.is_finite() && x >= 0.0) {
-                return Err(BdfError::InvalidTolerance(format!(
-                    "{name}[{i}] = {x} must be finite and non-negative"
-                )));
+                return Err(BdfError::InvalidTolerance {
+                    which: name,
+                    component: i,
+                    value: x,
+                });
             }
         }
         Ok(())
@@ -146,9 +148,11 @@ impl Options {
         self.atol.check("atol", n)?;
         for i in 0..n {
             if self.rtol.get(i) == 0.0 && self.atol.get(i) == 0.0 {
-                return Err(BdfError::InvalidTolerance(format!(
-                    "rtol[{i}] and atol[{i}] are both zero"
-                )));
+                return Err(BdfError::InvalidTolerance {
+                    which: "rtol and atol",
+                    component: i,
+                    value: 0.0,
+                });
             }
         }
         if !(1..=5).contains(&self.max_order) {
