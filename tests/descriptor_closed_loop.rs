@@ -12,7 +12,8 @@
 //! The two controllers integrate their tracking DAEs by implicit Euler in different
 //! coordinates; they give the same control at a state consistent with the reference up to
 //! `O(delta)` (checked by halving `delta`), so the closed loops agree up to that and the
-//! plant tolerance, not bit for bit.
+//! plant tolerance, not bit for bit: at `delta = 1e-7` to the plant tolerance (the
+//! descriptor form's tracking DAE is of index 2, its rope constraint differentiated once).
 
 use dpc::core::design::{check_relative_degrees, design, Design, DesignOptions};
 use dpc::core::dpc::{Dpc, DpcOptions};
@@ -184,6 +185,15 @@ fn options(t_end: f64, hold: Hold) -> ClosedLoopOptions {
         hold,
         tracking_bounds: vec![Some(1.0)],
         ..ClosedLoopOptions::default()
+    }
+}
+
+/// [`options`] with the plant integrated at `rtol` (and `atol = rtol / 100`).
+fn options_at(t_end: f64, hold: Hold, rtol: f64) -> ClosedLoopOptions {
+    ClosedLoopOptions {
+        rtol,
+        atol: 1e-2 * rtol,
+        ..options(t_end, hold)
     }
 }
 
@@ -366,10 +376,10 @@ fn prefeedback_tracks_on_both_forms() {
     }
 }
 
-#[test]
-fn prefeedback_on_shared_coordinates_gives_the_same_trajectory() {
-    // A cart-only feedback (the design's gains on s and vs, zero elsewhere) acts on
-    // coordinates both forms have.
+/// The largest difference of the two forms' closed loops over 2 s under a cart-only
+/// feedback (the design's gains on `s` and `vs`, zero elsewhere), which acts on coordinates
+/// both forms have.
+fn shared_feedback_difference(delta: f64) -> f64 {
     let (dc, dj) = designs();
     let (kc, kj) = (dc.plant_gain().expect("K_n"), dj.plant_gain().expect("K_n"));
     let mut ksc = DMatrix::zeros(1, 6);
@@ -378,32 +388,105 @@ fn prefeedback_on_shared_coordinates_gives_the_same_trajectory() {
     let mut ksj = DMatrix::zeros(1, 4);
     ksj[(0, 0)] = kj[(0, 0)];
     ksj[(0, 2)] = kj[(0, 2)];
-    let difference = |delta: f64| {
-        let c = run_cartesian(
-            Some(Prefeedback {
-                k_n: ksc.clone(),
-                nominal: Box::new(hanging_cartesian()),
-            }),
-            2.0,
-            Hold::Correction,
-            delta,
-        );
-        let j = run_joint(
-            Some(Prefeedback {
-                k_n: ksj.clone(),
-                nominal: Box::new(hanging_joint()),
-            }),
-            2.0,
-            Hold::Correction,
-            delta,
-        );
-        trajectory_difference(&c, &j, 2.0)
-    };
+    let c = run_cartesian(
+        Some(Prefeedback {
+            k_n: ksc,
+            nominal: Box::new(hanging_cartesian()),
+        }),
+        2.0,
+        Hold::Correction,
+        delta,
+    );
+    let j = run_joint(
+        Some(Prefeedback {
+            k_n: ksj,
+            nominal: Box::new(hanging_joint()),
+        }),
+        2.0,
+        Hold::Correction,
+        delta,
+    );
+    trajectory_difference(&c, &j, 2.0)
+}
+
+#[test]
+fn prefeedback_on_shared_coordinates_gives_the_same_trajectory() {
     // The two controllers differ by O(delta) (implicit Euler in different coordinates): the
     // closed loops converge to one trajectory as delta is halved.
-    let (d1, d2) = (difference(1e-3), difference(5e-4));
+    let (d1, d2) = (
+        shared_feedback_difference(1e-3),
+        shared_feedback_difference(5e-4),
+    );
     println!("crane, shared feedback: {d1:e} -> {d2:e}");
     assert!(d2 < 0.6 * d1 && d2 > 0.4 * d1, "{d1:e} -> {d2:e}");
+}
+
+#[test]
+fn the_tracking_dae_carries_the_velocity_constraint() {
+    // The rope's position constraint, differentiated once along `der(s) = vs`,
+    // `der(xb) = vx`, `der(yb) = vy`: the tracking DAE is of index 2 where the plant is of
+    // index 3.
+    let listing = CartPendulumTracking::LISTING;
+    assert!(
+        listing.contains("position constraints replaced by their first derivatives"),
+        "{listing}"
+    );
+    let tracking = CartPendulumTracking::default();
+    let s = 0.1;
+    let (phi, om, vs) = (0.3_f64, -0.7, 0.4);
+    let x = cartesian_state(s, phi, vs, om);
+    // Consistent positions and velocities: the row of the constraint is zero; a velocity
+    // off the rope's tangent makes it the velocity error times the rope vector.
+    let n = tracking.structure().n_equations();
+    let row = n - 2; // the plant's last equation, before the tracking row
+    let residual_at = |x: &[f64; 6]| {
+        let mut r = vec![0.0; n];
+        let xdot = [0.0; 6];
+        let z = vec![0.0; n - 6];
+        tracking.residual(0.0, x, &xdot, &z, &[0.0], &mut r);
+        r[row]
+    };
+    assert!(residual_at(&x).abs() < 1e-15);
+    let mut off = x;
+    off[5] += 1e-3;
+    // `0.0 == g`: the row is `-(d/dt) g = -((xb - s) (vx - vs) + yb vy)`.
+    let expected = -x[2] * 1e-3;
+    assert!(
+        (residual_at(&off) - expected).abs() < 1e-15,
+        "{}",
+        residual_at(&off)
+    );
+}
+
+#[test]
+fn closed_loops_agree_to_the_plant_tolerance_at_a_small_delta() {
+    // The Cartesian crane's tracking DAE carries the rope's velocity constraint in place of
+    // its position constraint (index 2: the multiplier's round-off grows like eps / delta,
+    // not eps / delta^2), and Newton stops only when the residual as it reaches the control
+    // is small (`DpcOptions::control_tolerance`). So the O(delta) difference of the two
+    // controllers falls with delta until the plant integration's own error (rtol = 1e-8 on
+    // positions of order 0.5, over a loop whose error grows like e^(1.9 t) without
+    // feedback) is all that is left.
+    let plain = |delta: f64| {
+        let c = run_cartesian(None, 1.0, Hold::Input, delta);
+        let j = run_joint(None, 1.0, Hold::Input, delta);
+        trajectory_difference(&c, &j, 1.0)
+    };
+    let (coarse, fine, finest) = (plain(1e-3), plain(1e-6), plain(1e-7));
+    let (shared_coarse, shared_finest) = (
+        shared_feedback_difference(1e-3),
+        shared_feedback_difference(1e-7),
+    );
+    println!(
+        "crane, without feedback: {coarse:e} (delta 1e-3), {fine:e} (1e-6), {finest:e} (1e-7); shared feedback: {shared_coarse:e} (1e-3), {shared_finest:e} (1e-7)"
+    );
+    assert!(fine < 0.01 * coarse, "{coarse:e} -> {fine:e}");
+    assert!(finest < 2e-7, "{finest:e}");
+    assert!(
+        shared_finest < 0.02 * shared_coarse,
+        "{shared_coarse:e} -> {shared_finest:e}"
+    );
+    assert!(shared_finest < 2e-7, "{shared_finest:e}");
 }
 
 #[test]
@@ -505,13 +588,16 @@ mod slider_crank {
         )
     }
 
+    /// The plant tolerance of the closed loops (the default).
+    const RTOL: f64 = 1e-8;
+
     /// The slider position on the rod for crank angle `th`.
     fn slider(th: f64) -> f64 {
         let p = SliderCrankParams::default();
         p.r * th.cos() + (p.l.powi(2) - (p.r * th.sin()).powi(2)).sqrt()
     }
 
-    fn run_descriptor(pf: Option<Prefeedback>, t_end: f64, delta: f64) -> ClosedLoop {
+    fn run_descriptor(pf: Option<Prefeedback>, t_end: f64, delta: f64, rtol: f64) -> ClosedLoop {
         let tracking = SliderCrankTracking::default();
         let n = tracking.structure().n_equations();
         let mut dpc = Dpc::new(
@@ -532,12 +618,12 @@ mod slider_crank {
             &SliderCrank::default(),
             &mut dpc,
             &[th0, slider(th0), 0.0, 0.0],
-            &options(t_end, Hold::Input),
+            &options_at(t_end, Hold::Input, rtol),
         )
         .expect("run starts")
     }
 
-    fn run_joint(pf: Option<Prefeedback>, t_end: f64, delta: f64) -> ClosedLoop {
+    fn run_joint(pf: Option<Prefeedback>, t_end: f64, delta: f64, rtol: f64) -> ClosedLoop {
         let tracking = SliderCrankJointTracking::default();
         let n = tracking.structure().n_equations();
         let mut dpc = Dpc::new(
@@ -557,7 +643,7 @@ mod slider_crank {
             &SliderCrankJoint::default(),
             &mut dpc,
             &[1.1, 0.0],
-            &options(t_end, Hold::Input),
+            &options_at(t_end, Hold::Input, rtol),
         )
         .expect("run starts")
     }
@@ -626,8 +712,8 @@ mod slider_crank {
         let (dc, dj) = designs();
         // Plain DPC: both diverge, at the same time.
         let (c, j) = (
-            run_descriptor(None, 10.0, 1e-3),
-            run_joint(None, 10.0, 1e-3),
+            run_descriptor(None, 10.0, 1e-3, RTOL),
+            run_joint(None, 10.0, 1e-3, RTOL),
         );
         let (tc, tj) = (
             c.divergence.as_ref().expect("descriptor diverges").t,
@@ -640,7 +726,7 @@ mod slider_crank {
         let mut shared = DMatrix::zeros(1, 4);
         shared[(0, 0)] = kj[(0, 0)];
         shared[(0, 2)] = kj[(0, 1)];
-        let shared_run = |delta: f64| {
+        let shared_run = |delta: f64, rtol: f64| {
             let (c_nominal, j_nominal) = nominals();
             let c = run_descriptor(
                 Some(Prefeedback {
@@ -649,6 +735,7 @@ mod slider_crank {
                 }),
                 10.0,
                 delta,
+                rtol,
             );
             let j = run_joint(
                 Some(Prefeedback {
@@ -657,21 +744,30 @@ mod slider_crank {
                 }),
                 10.0,
                 delta,
+                rtol,
             );
             assert!(c.divergence.is_none() && j.divergence.is_none());
             (c, j)
         };
-        let (c, j) = shared_run(1e-3);
+        let (c, j) = shared_run(1e-3, RTOL);
         let late = c.max_abs_error_since(5.0)[0];
         assert!(late < 1e-2, "late error {late}");
         // The same trajectory up to the controllers' O(delta) difference.
         let d1 = difference(&c, &j);
-        let (c2, j2) = shared_run(5e-4);
+        let (c2, j2) = shared_run(5e-4, RTOL);
         let d2 = difference(&c2, &j2);
         assert!(d2 < 0.6 * d1 && d2 > 0.4 * d1, "{d1:e} -> {d2:e}");
+        // And down to the plant integration's error at a small delta (the slider's position
+        // constraint enters the tracking DAE differentiated once): over these 10 s the plant's
+        // global error at rtol = 1e-8 is about 8.5e-7 (the difference stays there from
+        // delta = 1e-4 down), at rtol = 1e-9 about 8e-8.
+        let (c3, j3) = shared_run(1e-7, 1e-9);
+        let d3 = difference(&c3, &j3);
+        println!("slider-crank, shared K_n: {d1:e} (delta 1e-3) -> {d3:e} (delta 1e-7, rtol 1e-9)");
+        assert!(d3 < 0.05 * d1 && d3 < 2e-7, "{d1:e} -> {d3:e}");
         // The descriptor design's own K_x = K_r U^T also acts on the slider states: the same
         // linear feedback, a different nonlinear one; it tracks too.
-        let own = run_descriptor(Some(dc.prefeedback().expect("K_n")), 10.0, 1e-3);
+        let own = run_descriptor(Some(dc.prefeedback().expect("K_n")), 10.0, 1e-3, RTOL);
         assert!(own.divergence.is_none());
         assert!(own.max_abs_error_since(5.0)[0] < 1e-2);
         // Away from the nominal it is a different feedback: its trajectory departs from the

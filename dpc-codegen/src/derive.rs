@@ -420,6 +420,16 @@ fn derive_tracking(
         input_names.join(", "),
         w_names.join(", ")
     );
+    if !system.velocity_constraints.is_empty() {
+        listing_text +=
+            "  position constraints replaced by their first derivatives (velocity constraints)\n";
+        for &(k, d) in &system.velocity_constraints {
+            let text = format!("{} ({})", derivative_operator(1), model.equations[k].text);
+            listing_text += &format!("    [{k}] {text}\n");
+            residuals[k] = d;
+            texts[k] = text;
+        }
+    }
     if !system.differentiated.is_empty() {
         let unknowns: Vec<String> = system
             .higher_derivatives

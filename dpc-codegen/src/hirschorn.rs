@@ -183,6 +183,51 @@ fn differentiated_constraints(model: &mut Model) -> HashMap<usize, ExprId> {
     out
 }
 
+/// The position constraints of an index-3 plant, each replaced in the tracking DAE by its
+/// first total derivative along the explicit equations (the velocity constraint `g_q v = 0`
+/// for `g(q) = 0` with `der(q) = v`): per implicit equation that contains no implicitly
+/// determined unknown and whose first derivative contains none either (so the multiplier
+/// would need two differentiations), that derivative. Keyed by the equation's index.
+///
+/// Why: DPC integrates the tracking DAE by implicit Euler with a small inner step `delta`.
+/// On the index-3 form the multiplier's round-off grows like `eps / delta^2`, which swamps the
+/// controls below `delta` of about `1e-5`; on the index-2 form it grows like `eps / delta`.
+/// The measured state the controller starts from satisfies the constraint (the closed loop
+/// projects it), and the position constraint's drift over the few inner steps is `O(delta^2)`
+/// per step, so the controls are the same up to the integration's own error.
+fn velocity_constraints(model: &mut Model) -> Vec<(usize, ExprId)> {
+    let explicit = explicit_rhs(model);
+    let has_implicit_unknown = |model: &Model, e: ExprId| {
+        model
+            .graph
+            .vars(e)
+            .into_iter()
+            .any(|v| match model.symbols.symbol(v) {
+                Symbol::StateDot(j) => !explicit.contains_key(&j),
+                Symbol::Algebraic(_) => true,
+                _ => false,
+            })
+    };
+    let mut out = Vec::new();
+    for k in 0..model.equations.len() {
+        if model.equations[k].explicit.is_some() {
+            continue;
+        }
+        let residual = model.equations[k].residual;
+        if has_implicit_unknown(model, residual) {
+            continue;
+        }
+        let Ok(first) = total_derivative(model, residual) else {
+            continue;
+        };
+        if has_implicit_unknown(model, first) {
+            continue;
+        }
+        out.push((k, first));
+    }
+    out
+}
+
 /// The implicit equations matched to the unknowns they determine.
 struct ImplicitMatching {
     /// The implicitly determined unknowns: `der(x_j)` of the states without explicit
@@ -674,6 +719,9 @@ pub struct TrackingSystem {
     /// The higher derivatives of states ([`Symbol::StateDerivative`]) they determine: the
     /// tracking DAE's additional algebraic unknowns, by order, then by state.
     pub higher_derivatives: Vec<Symbol>,
+    /// The position constraints of an index-3 plant and the first total derivatives that
+    /// replace them in the tracking DAE (see [`velocity_constraints`]), by equation.
+    pub velocity_constraints: Vec<(usize, ExprId)>,
 }
 
 /// Why the implicit equations cannot be differentiated as far as the steps need.
@@ -955,10 +1003,16 @@ pub fn tracking_rows(model: &mut Model, cx: &mut Ctxt) -> Option<TrackingSystem>
         );
         ok = false;
     }
+    let velocity_constraints = if ok {
+        velocity_constraints(model)
+    } else {
+        Vec::new()
+    };
     ok.then_some(TrackingSystem {
         rows,
         differentiated,
         higher_derivatives,
+        velocity_constraints,
     })
 }
 

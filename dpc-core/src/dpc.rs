@@ -72,8 +72,17 @@ pub struct DpcOptions {
     pub nu: Option<usize>,
     /// How the control is extracted.
     pub extraction: Extraction,
-    /// Newton stops when the scaled residual is below `residual_tolerance * (1 + |X|_inf)`.
+    /// Newton stops when the scaled residual is below `residual_tolerance * (1 + |X|_inf)`
+    /// (and the control test below passes).
     pub residual_tolerance: f64,
+    /// Newton also stops only when the residual as it reaches the control is below
+    /// `control_tolerance * (1 + |X|_inf)`: the dynamic rows unscaled (a residual `r` there
+    /// is an error `r` in `X'` and so, through the rows the inputs enter, in the control,
+    /// although only `delta r` in `X`) and the plant's constraint rows amplified by
+    /// `delta^-2` (position) or `delta^-1` (velocity) -- or when that residual stops falling
+    /// (round-off). With the defaults and `delta = 1e-3` the scaled test implies this one;
+    /// at a small `delta` it is what keeps the control accurate.
+    pub control_tolerance: f64,
     /// Newton iterations per inner step before the step counts as failed.
     pub max_newton_iterations: usize,
     /// Retries of a sample with a larger `delta` after a failed inner step.
@@ -92,6 +101,7 @@ impl Default for DpcOptions {
             nu: None,
             extraction: Extraction::Extrapolated,
             residual_tolerance: 1e-10,
+            control_tolerance: 1e-7,
             max_newton_iterations: 20,
             max_retries: 4,
             retry_growth: 4.0,
@@ -269,6 +279,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     pub fn new(model: T, reference: R, solver: L, opts: DpcOptions) -> Result<Self, DpcError> {
         InvalidOption::positive("delta", opts.delta)?;
         InvalidOption::positive("residual_tolerance", opts.residual_tolerance)?;
+        InvalidOption::positive("control_tolerance", opts.control_tolerance)?;
         if !(opts.retry_growth.is_finite() && opts.retry_growth > 1.0) {
             return Err(InvalidOption::new(
                 "retry_growth",
@@ -660,13 +671,28 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         })) / scale
     }
 
+    /// The residual in `res` as it reaches the control, relative to `1 + |X|_inf`: the
+    /// dynamic rows unscaled, the plant's constraint rows amplified by `delta^-k` (`k = 2`
+    /// for position, 1 for velocity constraints), the other rows as they are (see
+    /// [`DpcOptions::control_tolerance`]).
+    fn res_at_control(&self, delta: f64) -> f64 {
+        let scale = 1.0 + max_or_nan(self.y[..self.nx].iter().map(|v| v.abs()));
+        let rows = max_or_nan(self.res.iter().map(|r| r.abs()));
+        let constraints = max_or_nan(
+            self.constraint_rows
+                .iter()
+                .map(|&(i, k)| (self.res[i] / delta.powi(k)).abs()),
+        );
+        max_or_nan([rows, constraints]) / scale
+    }
+
     /// Simplified Newton for one inner step from the guess in `y`: `Ok` with the scaled
     /// residual it reached when it converged, `Err` with the last one when it did not within
     /// [`DpcOptions::max_newton_iterations`].
     fn newton(&mut self, tj: f64, delta: f64) -> Result<Result<f64, f64>, DpcError> {
         self.y_last.copy_from_slice(&self.y);
         let mut last = f64::INFINITY;
-        let mut last_constraint = f64::INFINITY;
+        let mut last_control = f64::INFINITY;
         let mut residual = f64::INFINITY;
         for _ in 0..self.opts.max_newton_iterations {
             self.iterations += 1;
@@ -674,20 +700,11 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             self.evaluate(tj, delta, !reused)?;
             residual = self.res_scaled(delta);
             if residual <= self.opts.residual_tolerance {
-                // A plant constraint's residual reaches the multipliers and the control
-                // amplified by delta^-2 (position) or delta^-1 (velocity): it must meet the
-                // tolerance after that amplification, or stop decreasing (round-off).
-                let scale = 1.0 + max_or_nan(self.y[..self.nx].iter().map(|v| v.abs()));
-                let constraint = max_or_nan(
-                    self.constraint_rows
-                        .iter()
-                        .map(|&(i, k)| (self.res[i] / delta.powi(k)).abs()),
-                ) / scale;
-                if constraint <= self.opts.residual_tolerance || constraint >= 0.5 * last_constraint
-                {
+                let control = self.res_at_control(delta);
+                if control <= self.opts.control_tolerance || control >= 0.5 * last_control {
                     return Ok(Ok(residual));
                 }
-                last_constraint = constraint;
+                last_control = control;
             }
             // A NaN residual counts as no progress.
             let falls_by = |factor: f64| residual <= factor * last;
