@@ -22,6 +22,7 @@
 pub mod ctxt;
 pub mod derive;
 pub mod emit;
+pub mod expr;
 pub mod hirschorn;
 pub mod ir;
 pub mod lower;
