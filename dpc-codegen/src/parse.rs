@@ -1,4 +1,5 @@
-//! Syntax of the `model!` DSL, parsed with `syn`.
+//! Syntax of the `model!` DSL: the outer structure parsed with `syn`, the expressions with
+//! the DSL's own parser ([`crate::expr`]).
 //!
 //! This layer only recognises the shape of a model: sections, declared names and the
 //! expressions inside them, all with their spans. It does not resolve names or check
@@ -21,11 +22,11 @@
 //! equation   := expr ';' | 'for' Ident 'in' expr '{' equation* '}'
 //! ```
 
+use crate::expr::{parse_expr, parse_expr_without_brace, Expr};
 use proc_macro2::{Span, TokenStream, TokenTree};
 use syn::ext::IdentExt;
 use syn::parse::{Parse, ParseStream};
-use syn::punctuated::Punctuated;
-use syn::{braced, bracketed, Attribute, Expr, Ident, LitStr, Token, Visibility};
+use syn::{braced, bracketed, Attribute, Ident, LitStr, Token, Visibility};
 
 /// The sections a model may contain, in the order they must appear.
 pub const SECTION_ORDER: &[&str] = &[
@@ -229,9 +230,13 @@ const STACK_PER_LEVEL: usize = 32 * 1024;
 /// Stack kept free for everything else `syn` does.
 const STACK_BASE: usize = 1024 * 1024;
 
-/// Parse the body of a `model!` invocation (call it inside [`with_front_end_stack`]).
+/// Parse the body of a `model!` invocation.
+///
+/// `syn` builds its token buffer by recursion over nested groups, so groups nested deeper
+/// than a few levels are first set aside ([`crate::expr::parser::with_stash`]); the
+/// expression parser reads them back. Nothing here recurses along an expression's depth.
 pub fn parse_model(input: TokenStream) -> syn::Result<ModelDef> {
-    syn::parse2(input)
+    crate::expr::parser::with_stash(input, syn::parse2)
 }
 
 /// Runs `f`, the work on `syn`'s trees for `input`, on a stack deep enough for them.
@@ -311,7 +316,7 @@ impl Parse for Item {
             let name: Ident = user_ident(input, "a `let` intermediate")?;
             let subscripts = subscripts(input)?;
             input.parse::<Token![=]>()?;
-            let expr: Expr = input.parse()?;
+            let expr = parse_expr(input)?;
             input.parse::<Token![;]>().map_err(|e| {
                 syn::Error::new(e.span(), "expected `;` after the `let` intermediate")
             })?;
@@ -349,7 +354,7 @@ impl Parse for Item {
                     })?;
                     Ok(ConstDef {
                         name,
-                        value: c.parse()?,
+                        value: parse_expr(c)?,
                     })
                 })?)
             }
@@ -393,7 +398,7 @@ impl Parse for Item {
                     Ok(ReferenceDef {
                         output,
                         subscripts,
-                        expr: c.parse()?,
+                        expr: parse_expr(c)?,
                     })
                 })?)
             }
@@ -412,12 +417,12 @@ impl Parse for Item {
                     c.parse::<Token![:]>()?;
                     let list;
                     let bracket = bracketed!(list in c);
-                    let roots = Punctuated::<Expr, Token![,]>::parse_terminated(&list)?;
+                    let roots = comma_list(&list, parse_expr)?;
                     Ok(TrackingEntry {
                         output,
                         subscripts,
                         bracket_span: bracket.span.join(),
-                        roots: roots.into_iter().collect(),
+                        roots,
                     })
                 })?;
                 SectionBody::Tracking(TrackingDef { type_name, entries })
@@ -497,7 +502,7 @@ fn equation_items(input: ParseStream) -> syn::Result<Vec<EquationItem>> {
                     format!("expected `in` after `for {var}`, e.g. `for {var} in 0..N {{ ... }}`"),
                 )
             })?;
-            let range = Expr::parse_without_eager_brace(input)?;
+            let range = parse_expr_without_brace(input)?;
             let content;
             braced!(content in input);
             let body = equation_items(&content)?;
@@ -513,7 +518,7 @@ fn equation_items(input: ParseStream) -> syn::Result<Vec<EquationItem>> {
             }));
             continue;
         }
-        items.push(EquationItem::Equation(input.parse::<Expr>()?));
+        items.push(EquationItem::Equation(parse_expr(input)?));
         if input.is_empty() {
             break;
         }
@@ -530,7 +535,7 @@ fn dims(input: ParseStream) -> syn::Result<Vec<Expr>> {
     while input.peek(syn::token::Bracket) {
         let content;
         bracketed!(content in input);
-        out.push(content.parse()?);
+        out.push(parse_expr(&content)?);
     }
     Ok(out)
 }
@@ -546,10 +551,10 @@ fn subscripts(input: ParseStream) -> syn::Result<Vec<Subscript>> {
             content.parse::<Token![in]>()?;
             out.push(Subscript::Binder {
                 var,
-                range: content.parse()?,
+                range: parse_expr(&content)?,
             });
         } else {
-            out.push(Subscript::Index(content.parse()?));
+            out.push(Subscript::Index(parse_expr(&content)?));
         }
     }
     Ok(out)
@@ -618,7 +623,7 @@ fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
         name,
         dims,
         unit,
-        default: input.parse()?,
+        default: parse_expr(input)?,
     })
 }
 
@@ -629,7 +634,7 @@ fn parse_output(input: ParseStream) -> syn::Result<OutputDef> {
     let unit = unit(input, &name)?;
     let expr = if input.peek(Token![=]) {
         input.parse::<Token![=]>()?;
-        Some(input.parse()?)
+        Some(parse_expr(input)?)
     } else {
         None
     };
