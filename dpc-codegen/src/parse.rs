@@ -23,7 +23,7 @@
 //! ```
 
 use crate::expr::{parse_expr, parse_expr_without_brace, Expr};
-use proc_macro2::{Span, TokenStream, TokenTree};
+use proc_macro2::{Span, TokenStream};
 use syn::ext::IdentExt;
 use syn::parse::{Parse, ParseStream};
 use syn::{braced, bracketed, Attribute, Ident, LitStr, Token, Visibility};
@@ -221,15 +221,6 @@ pub struct TrackingEntry {
     pub roots: Vec<Expr>,
 }
 
-/// Stack that `syn` may need per unit of [`nesting_bound`]: its expression parser recurses
-/// through about ten functions per parenthesis or prefix operator, some KiB each in an
-/// unoptimised build (measured: 2.3 KiB per parenthesis and 5.6 KiB per Horner level with
-/// optimisations), so this leaves a wide margin.
-const STACK_PER_LEVEL: usize = 32 * 1024;
-
-/// Stack kept free for everything else `syn` does.
-const STACK_BASE: usize = 1024 * 1024;
-
 /// Parse the body of a `model!` invocation.
 ///
 /// `syn` builds its token buffer by recursion over nested groups, so groups nested deeper
@@ -237,49 +228,6 @@ const STACK_BASE: usize = 1024 * 1024;
 /// expression parser reads them back. Nothing here recurses along an expression's depth.
 pub fn parse_model(input: TokenStream) -> syn::Result<ModelDef> {
     crate::expr::parser::with_stash(input, syn::parse2)
-}
-
-/// Runs `f`, the work on `syn`'s trees for `input`, on a stack deep enough for them.
-///
-/// `syn` parses, prints and drops expressions by recursion, so its stack use grows with the
-/// depth of the user's expression (measured: a 1000-deep Horner expression overflowed the
-/// 8 MiB `rustc` gives a macro inside `syn`'s parser, where plain Rust compiles it). `f` runs
-/// on a stack with at least `STACK_BASE` + `STACK_PER_LEVEL` × `nesting_bound` bytes
-/// free, grown on this thread (the proc-macro API is tied to it) only when the current one
-/// has less.
-pub fn with_front_end_stack<R>(input: &TokenStream, f: impl FnOnce() -> R) -> R {
-    let need = STACK_BASE.saturating_add(STACK_PER_LEVEL.saturating_mul(nesting_bound(input)));
-    stacker::maybe_grow(need, need, f)
-}
-
-/// An upper bound on the recursion depth of a recursive-descent parse of `tokens`, in
-/// levels: along every path into the token tree, the groups entered plus, in each, the
-/// longest run of punctuation (prefix operators such as `- - x` nest without a group).
-/// Computed with an explicit stack, linear in the number of tokens.
-pub fn nesting_bound(tokens: &TokenStream) -> usize {
-    let mut deepest = 0;
-    let mut stack: Vec<(TokenStream, usize)> = vec![(tokens.clone(), 0)];
-    while let Some((stream, above)) = stack.pop() {
-        let (mut run, mut longest) = (0usize, 0usize);
-        let mut groups = Vec::new();
-        for tt in stream {
-            match tt {
-                TokenTree::Punct(_) => {
-                    run += 1;
-                    longest = longest.max(run);
-                }
-                TokenTree::Group(g) => {
-                    run = 0;
-                    groups.push(g.stream());
-                }
-                TokenTree::Ident(_) | TokenTree::Literal(_) => run = 0,
-            }
-        }
-        let here = above + 1 + longest;
-        deepest = usize::max(deepest, here);
-        stack.extend(groups.into_iter().map(|g| (g, here)));
-    }
-    deepest
 }
 
 impl Parse for ModelDef {
