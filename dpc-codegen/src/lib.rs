@@ -5,10 +5,12 @@
 //! data flow:
 //!
 //! ```text
-//! parse (syn, spans) -> lower (names, checks, symbolic graph) -> derive -> emit (quote)
+//! parse (syn + expr, spans) -> lower (names, checks, symbolic graph) -> derive -> emit (quote)
 //! ```
 //!
-//! * [`parse`]: the DSL's syntax;
+//! * [`parse`]: the DSL's syntax: the outer structure with `syn`, expressions with [`expr`];
+//! * [`expr`]: the flat expression tree and its iterative parser, so that no pass recurses
+//!   along the depth of the user's expressions;
 //! * [`lower`]: name resolution, structural checks, lowering into [`ir::Model`];
 //! * [`symbolic`]: the hash-consed expression graph, derivatives, CSE and Rust emission;
 //! * [`hirschorn`]: relative degrees and the tracking rows of the stabilised Hirschorn steps;
@@ -22,6 +24,7 @@
 pub mod ctxt;
 pub mod derive;
 pub mod emit;
+pub mod expr;
 pub mod hirschorn;
 pub mod ir;
 pub mod lower;
@@ -64,17 +67,13 @@ pub fn derive_model(input: TokenStream) -> syn::Result<(ir::Model, derive::Deriv
 
 /// Lower a model without emitting code, for inspection and tests.
 ///
-/// Parsing and lowering work on `syn`'s expression trees, whose parser, printer (`span()`,
-/// `to_token_stream()`) and destructor recurse once per nesting level; they run on a stack
-/// sized from the input by [`parse::with_front_end_stack`]. The passes after lowering work
-/// on the hash-consed graph and do not recurse along the expression's depth.
+/// Expressions are parsed into flat trees ([`expr`]) and lowered and printed with explicit
+/// stacks, and the passes after lowering work on the hash-consed graph: none recurses along
+/// an expression's depth, so no stack has to be sized from the input.
 pub fn lower_model(input: TokenStream) -> syn::Result<ir::Model> {
-    let (model, cx) = parse::with_front_end_stack(&input, || {
-        let def = parse::parse_model(input.clone())?;
-        let mut cx = ctxt::Ctxt::new();
-        let model = lower::lower(def, &mut cx);
-        Ok::<_, syn::Error>((model, cx))
-    })?;
+    let def = parse::parse_model(input)?;
+    let mut cx = ctxt::Ctxt::new();
+    let model = lower::lower(def, &mut cx);
     cx.check()?;
     model.ok_or_else(|| {
         syn::Error::new(

@@ -6,6 +6,7 @@
 //! together, each spanning the offending tokens and saying what was expected.
 
 use crate::ctxt::Ctxt;
+use crate::expr::{BinaryOp, ClosureParam, Expr, ExprKind, ExprRef, UnaryOp};
 use crate::ir::{
     Decl, Equation, Intermediate, Model, Output, Param, Reference, Symbol, Symbols, Tracking,
     TrackingEntry,
@@ -17,8 +18,7 @@ use proc_macro2::Span;
 use quote::ToTokens;
 use std::collections::{HashMap, HashSet};
 use syn::ext::IdentExt;
-use syn::spanned::Spanned;
-use syn::{Attribute, BinOp, Expr, Ident, Lit, UnOp};
+use syn::{Attribute, Ident, Lit};
 
 /// Named constants usable in expressions, with their values.
 pub const CONSTANTS: &[(&str, f64)] = &[
@@ -223,9 +223,9 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
         match item {
             Item::Let(l) => {
                 lw.pending_lets.remove(&l.name.to_string());
-                let text = expr_text(&l.expr);
+                let text = expr_text(l.expr.root());
                 let label = if l.subscripts.is_empty() {
-                    if let Some(expr) = lw.lower_expr(&l.expr, Place::Let) {
+                    if let Some(expr) = lw.lower_expr(l.expr.root(), Place::Let) {
                         let uses_der = lw.uses_derivatives(expr);
                         lw.declare(&l.name, Binding::Let { expr, uses_der });
                     }
@@ -263,7 +263,7 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                 match &section.body {
                     SectionBody::Consts(list) => {
                         for c in list {
-                            if let Some(v) = lw.eval_int(&c.value) {
+                            if let Some(v) = lw.eval_int(c.value.root()) {
                                 lw.declare(&c.name, Binding::Const(v));
                             }
                         }
@@ -272,7 +272,8 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                         for p in list {
                             let docs = lw.doc_attrs(&p.attrs, "a parameter");
                             if p.dims.is_empty() {
-                                let default = lw.param_default(&p.default, &p.name.to_string());
+                                let default =
+                                    lw.param_default(p.default.root(), &p.name.to_string());
                                 lw.declare(&p.name, Binding::Param(params.len()));
                                 lw.claim_code_name(&p.name, &p.name.unraw().to_string(), None);
                                 params.push(Param {
@@ -293,7 +294,7 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                 );
                                 continue;
                             };
-                            let defaults = lw.param_defaults(&p.default, &p.name, &dims);
+                            let defaults = lw.param_defaults(p.default.root(), &p.name, &dims);
                             let elements = multi_indices(&dims)
                                 .into_iter()
                                 .zip(defaults)
@@ -386,8 +387,8 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                 }
                                 let depth = lw.indices.len();
                                 lw.indices.extend(bound);
-                                let text = lw.indexed_text(&r.expr);
-                                let expr = lw.lower_expr(&r.expr, Place::Reference);
+                                let text = lw.indexed_text(r.expr.root());
+                                let expr = lw.lower_expr(r.expr.root(), Place::Reference);
                                 lw.indices.truncate(depth);
                                 if let Some(expr) = expr {
                                     references.push(Reference {
@@ -427,12 +428,12 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                             };
                             let mut roots = Vec::new();
                             for r in &entry.roots {
-                                match numeric_literal(r) {
+                                match numeric_literal(r.root()) {
                                     Some(a) if !a.is_finite() => lw.cx.error_spanned_by(
                                         r,
                                         format!(
                                             "`{}` is out of range for `f64` (it overflows to infinity); a negated root of W(s) must be a finite number",
-                                            expr_text(r)
+                                            expr_text(r.root())
                                         ),
                                     ),
                                     Some(a) if a >= 0.0 => roots.push(a),
@@ -447,7 +448,7 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
                                         r,
                                         format!(
                                             "expected a number (a negated root of W(s), e.g. `5.0` for `s + 5`), found `{}`",
-                                            expr_text(r)
+                                            expr_text(r.root())
                                         ),
                                     ),
                                 }
@@ -709,31 +710,60 @@ fn check_section_order(def: &ModelDef, cx: &mut Ctxt) {
 }
 
 /// The value of a numeric literal, optionally negated (`1.0`, `2`, `-9.81`).
-pub fn numeric_literal(e: &Expr) -> Option<f64> {
-    match e {
-        Expr::Lit(l) => match &l.lit {
-            Lit::Float(f) if matches!(f.suffix(), "" | "f64") => f.base10_parse::<f64>().ok(),
-            Lit::Int(i) if matches!(i.suffix(), "" | "f64") => i.base10_parse::<f64>().ok(),
-            _ => None,
-        },
-        Expr::Unary(u) if matches!(u.op, UnOp::Neg(_)) => numeric_literal(&u.expr).map(|v| -v),
-        Expr::Paren(p) => numeric_literal(&p.expr),
-        Expr::Group(g) => numeric_literal(&g.expr),
-        _ => None,
+pub fn numeric_literal(e: ExprRef<'_>) -> Option<f64> {
+    let mut e = e;
+    let mut negated = false;
+    loop {
+        match e.kind() {
+            ExprKind::Lit(Lit::Float(f)) if matches!(f.suffix(), "" | "f64") => {
+                return f
+                    .base10_parse::<f64>()
+                    .ok()
+                    .map(|v| if negated { -v } else { v })
+            }
+            ExprKind::Lit(Lit::Int(i)) if matches!(i.suffix(), "" | "f64") => {
+                return i
+                    .base10_parse::<f64>()
+                    .ok()
+                    .map(|v| if negated { -v } else { v })
+            }
+            ExprKind::Unary {
+                op: UnaryOp::Neg,
+                operand,
+                ..
+            } => {
+                negated = !negated;
+                e = e.at(*operand);
+            }
+            ExprKind::Paren(inner) => e = e.at(*inner),
+            _ => return None,
+        }
     }
 }
 
 /// The value of an integer literal, optionally negated, if it fits `i32`.
-fn integer_literal(e: &Expr) -> Option<i32> {
-    match e {
-        Expr::Lit(l) => match &l.lit {
-            Lit::Int(i) if matches!(i.suffix(), "" | "i32") => i.base10_parse::<i32>().ok(),
-            _ => None,
-        },
-        Expr::Unary(u) if matches!(u.op, UnOp::Neg(_)) => integer_literal(&u.expr).map(|v| -v),
-        Expr::Paren(p) => integer_literal(&p.expr),
-        Expr::Group(g) => integer_literal(&g.expr),
-        _ => None,
+fn integer_literal(e: ExprRef<'_>) -> Option<i32> {
+    let mut e = e;
+    let mut negated = false;
+    loop {
+        match e.kind() {
+            ExprKind::Lit(Lit::Int(i)) if matches!(i.suffix(), "" | "i32") => {
+                return i
+                    .base10_parse::<i32>()
+                    .ok()
+                    .map(|v| if negated { -v } else { v })
+            }
+            ExprKind::Unary {
+                op: UnaryOp::Neg,
+                operand,
+                ..
+            } => {
+                negated = !negated;
+                e = e.at(*operand);
+            }
+            ExprKind::Paren(inner) => e = e.at(*inner),
+            _ => return None,
+        }
     }
 }
 
@@ -819,14 +849,15 @@ impl Lowerer<'_> {
         self.graph.var(v)
     }
 
-    fn lower_equation(&mut self, e: &Expr) -> Option<Equation> {
+    fn lower_equation(&mut self, e: ExprRef<'_>) -> Option<Equation> {
         let text = self.indexed_text(e);
-        let span = e.span();
-        match e {
-            Expr::Assign(a) => {
-                let state = match &*a.left {
-                    Expr::Call(c) if call_name(c).as_deref() == Some("der") => {
-                        let d = self.lower_expr(&a.left, Place::Equation)?;
+        let span = e.spans().joined();
+        match e.kind() {
+            ExprKind::Assign { left, right } => {
+                let left = e.at(*left);
+                let state = match left.kind() {
+                    ExprKind::Call { .. } if left.call_name().as_deref() == Some("der") => {
+                        let d = self.lower_expr(left, Place::Equation)?;
                         match self.graph.node(d) {
                             crate::symbolic::Node::Var(v) => match self.symbols.symbol(*v) {
                                 Symbol::StateDot(j) => Some((j, d)),
@@ -835,18 +866,18 @@ impl Lowerer<'_> {
                             _ => None,
                         }
                     }
-                    other => {
+                    _ => {
                         self.cx.error_spanned_by(
-                            other,
+                            left,
                             format!(
                                 "the left side of `=` must be `der(state)`, found `{}`; write implicit equations as `lhs == rhs`",
-                                expr_text(other)
+                                expr_text(left)
                             ),
                         );
                         None
                     }
                 };
-                let rhs = self.lower_expr(&a.right, Place::Equation);
+                let rhs = self.lower_expr(e.at(*right), Place::Equation);
                 let (j, lhs) = state?;
                 let rhs = rhs?;
                 let residual = self.graph.sub(lhs, rhs);
@@ -858,9 +889,14 @@ impl Lowerer<'_> {
                     span,
                 })
             }
-            Expr::Binary(b) if matches!(b.op, BinOp::Eq(_)) => {
-                let lhs = self.lower_expr(&b.left, Place::Equation);
-                let rhs = self.lower_expr(&b.right, Place::Equation);
+            ExprKind::Binary {
+                op: BinaryOp::Eq,
+                left,
+                right,
+                ..
+            } => {
+                let lhs = self.lower_expr(e.at(*left), Place::Equation);
+                let rhs = self.lower_expr(e.at(*right), Place::Equation);
                 let (lhs, rhs) = (lhs?, rhs?);
                 let residual = self.graph.sub(lhs, rhs);
                 Some(Equation {
@@ -870,12 +906,12 @@ impl Lowerer<'_> {
                     span,
                 })
             }
-            other => {
+            _ => {
                 self.cx.error_spanned_by(
-                    other,
+                    e,
                     format!(
                         "expected an equation, either explicit `der(x) = expr` or implicit `lhs == rhs`, found `{}`",
-                        expr_text(other)
+                        expr_text(e)
                     ),
                 );
                 None
@@ -883,17 +919,59 @@ impl Lowerer<'_> {
         }
     }
 
-    fn lower_expr(&mut self, e: &Expr, place: Place) -> Option<ExprId> {
-        match e {
-            Expr::Paren(p) => self.lower_expr(&p.expr, place),
-            Expr::Group(g) => self.lower_expr(&g.expr, place),
-            Expr::Lit(l) => match numeric_literal(e) {
+    /// Lowers `e` into the graph, or records its errors and returns `None`.
+    ///
+    /// A loop over an explicit stack of [`Task`]s and a stack of lowered values, so that the
+    /// depth of the expression costs heap, not call stack. A node pushes the lowering of its
+    /// operands (left first) and then combines their values; errors are found in the same
+    /// order as by a recursive descent, and graph nodes are created in the same order.
+    fn lower_expr(&mut self, e: ExprRef<'_>, place: Place) -> Option<ExprId> {
+        let mut tasks = vec![Task::Lower(e)];
+        let mut values: Vec<Option<ExprId>> = Vec::new();
+        while let Some(task) = tasks.pop() {
+            match task {
+                Task::Lower(e) => self.lower_node(e, place, &mut tasks, &mut values),
+                Task::Combine(e) => {
+                    let v = self.combine_node(e, &mut values);
+                    values.push(v);
+                }
+                Task::Bind(name, k) => self.indices.push((name, k)),
+                Task::Unbind => {
+                    self.indices.pop();
+                }
+                Task::AddTerm => {
+                    let term = values.pop().flatten();
+                    let total = values.pop().flatten();
+                    values.push(match (total, term) {
+                        (Some(total), Some(term)) => Some(self.graph.add(total, term)),
+                        _ => None,
+                    });
+                }
+            }
+        }
+        values.pop().flatten()
+    }
+
+    /// One node of [`Lowerer::lower_expr`]: its value, or the tasks that compute it.
+    fn lower_node<'a>(
+        &mut self,
+        e: ExprRef<'a>,
+        place: Place,
+        tasks: &mut Vec<Task<'a>>,
+        values: &mut Vec<Option<ExprId>>,
+    ) {
+        let value = match e.kind() {
+            ExprKind::Paren(inner) => {
+                tasks.push(Task::Lower(e.at(*inner)));
+                return;
+            }
+            ExprKind::Lit(l) => match numeric_literal(e) {
                 Some(v) if !v.is_finite() => {
                     self.cx.error_spanned_by(
-                        l,
+                        e,
                         format!(
                             "the literal `{}` is out of range for `f64`: it overflows to infinity (the largest finite value is about 1.8e308)",
-                            l.lit.to_token_stream()
+                            l.to_token_stream()
                         ),
                     );
                     None
@@ -901,131 +979,196 @@ impl Lowerer<'_> {
                 Some(v) => Some(self.graph.constant(v)),
                 None => {
                     self.cx.error_spanned_by(
-                        l,
-                        format!("expected a number, found `{}`", l.lit.to_token_stream()),
+                        e,
+                        format!("expected a number, found `{}`", l.to_token_stream()),
                     );
                     None
                 }
             },
-            Expr::Path(p) => {
-                let Some(ident) = p.path.get_ident().filter(|_| p.qself.is_none()) else {
-                    if let Some(v) = std_constant(&p.path) {
-                        return Some(self.graph.constant(v));
-                    }
-                    self.cx.error_spanned_by(
-                        p,
-                        format!(
-                            "expected a declared name or a constant such as `PI`, found the path `{}`",
-                            expr_text(e)
-                        ),
-                    );
-                    return None;
-                };
-                self.lower_name(ident, place)
-            }
-            Expr::Index(_) => {
-                let (binding, label) = self.resolve_element(e)?;
-                self.lower_binding(binding, e, &label, place)
-            }
-            Expr::Unary(u) => match u.op {
-                UnOp::Neg(_) => {
-                    let a = self.lower_expr(&u.expr, place)?;
-                    Some(self.graph.neg(a))
-                }
-                _ => {
-                    self.cx.error_spanned_by(
-                        u.op,
-                        "unsupported operator; expected `-` (negation) or one of `+ - * /`",
-                    );
-                    None
-                }
-            },
-            Expr::Binary(b) => {
-                let op = match b.op {
-                    BinOp::Add(_) | BinOp::Sub(_) | BinOp::Mul(_) | BinOp::Div(_) => b.op,
-                    BinOp::Eq(_) => {
+            ExprKind::Path {
+                leading_colon,
+                segments,
+            } => match (leading_colon, segments.as_slice()) {
+                (false, [ident]) => self.lower_name(ident, place),
+                _ => match std_constant(segments) {
+                    Some(v) => Some(self.graph.constant(v)),
+                    None => {
                         self.cx.error_spanned_by(
-                            b.op,
-                            format!("`==` may appear only once, at the top of an equation, not inside {}", place.describe()),
+                            e,
+                            format!(
+                                "expected a declared name or a constant such as `PI`, found the path `{}`",
+                                expr_text(e)
+                            ),
                         );
-                        return None;
+                        None
+                    }
+                },
+            },
+            ExprKind::Index { .. } => self
+                .resolve_element(e)
+                .and_then(|(binding, label)| self.lower_binding(binding, &e, &label, place)),
+            ExprKind::Unary {
+                op: UnaryOp::Neg,
+                operand,
+                ..
+            } => {
+                tasks.push(Task::Combine(e));
+                tasks.push(Task::Lower(e.at(*operand)));
+                return;
+            }
+            ExprKind::Unary { op_span, .. } => {
+                self.cx.error_spanned_by(
+                    crate::expr::Spans::single(*op_span),
+                    "unsupported operator; expected `-` (negation) or one of `+ - * /`",
+                );
+                None
+            }
+            ExprKind::Binary {
+                op,
+                op_spans,
+                left,
+                right,
+            } => {
+                match op {
+                    BinaryOp::Add | BinaryOp::Sub | BinaryOp::Mul | BinaryOp::Div => {
+                        tasks.push(Task::Combine(e));
+                        tasks.push(Task::Lower(e.at(*right)));
+                        tasks.push(Task::Lower(e.at(*left)));
+                        return;
+                    }
+                    BinaryOp::Eq => {
+                        self.cx.error_spanned_by(
+                        op_spans,
+                        format!("`==` may appear only once, at the top of an equation, not inside {}", place.describe()),
+                    );
+                        None
                     }
                     _ => {
                         self.cx.error_spanned_by(
-                            b.op,
-                            format!(
-                                "unsupported operator `{}`; expected `+`, `-`, `*` or `/` (use `powi`/`powf` for powers)",
-                                b.op.to_token_stream()
-                            ),
-                        );
-                        return None;
+                        op_spans,
+                        format!(
+                            "unsupported operator `{}`; expected `+`, `-`, `*` or `/` (use `powi`/`powf` for powers)",
+                            op.as_str()
+                        ),
+                    );
+                        None
                     }
-                };
-                let l = self.lower_expr(&b.left, place);
-                let r = self.lower_expr(&b.right, place);
-                let (l, r) = (l?, r?);
-                Some(match op {
-                    BinOp::Add(_) => self.graph.add(l, r),
-                    BinOp::Sub(_) => self.graph.sub(l, r),
-                    BinOp::Mul(_) => self.graph.mul(l, r),
-                    _ => self.graph.div(l, r),
-                })
+                }
             }
-            Expr::Call(c) => {
-                let Some(name) = call_name(c) else {
+            ExprKind::Call { func, .. } => {
+                let Some(name) = e.call_name() else {
                     self.cx.error_spanned_by(
-                        &c.func,
+                        e.at(*func),
                         format!(
                             "expected a function name ({}), found `{}`",
                             supported_functions(),
-                            expr_text(&c.func)
+                            expr_text(e.at(*func))
                         ),
                     );
-                    return None;
+                    values.push(None);
+                    return;
                 };
-                let args: Vec<&Expr> = c.args.iter().collect();
                 if name == "der" {
-                    return self.lower_der(c, place);
+                    self.lower_der(e, place)
+                } else if name == "sum" {
+                    self.lower_sum(e, tasks, values);
+                    return;
+                } else {
+                    let (_, args) = call_parts(e);
+                    self.lower_call(e, &name, &e.at(*func), &args, false, tasks, values);
+                    return;
                 }
-                if name == "sum" {
-                    return self.lower_sum(c, place);
-                }
-                self.lower_call(&name, &c.func, &args, place, false)
             }
-            Expr::MethodCall(m) => {
-                if let Some(tf) = &m.turbofish {
+            ExprKind::MethodCall {
+                method, turbofish, ..
+            } => {
+                if let Some(tf) = turbofish {
                     self.cx.error_spanned_by(
                         tf,
                         "type arguments are not supported in model expressions",
                     );
-                    return None;
+                    values.push(None);
+                    return;
                 }
-                let name = m.method.to_string();
+                let name = method.to_string();
                 if name == "der" {
-                    self.cx.error_spanned_by(
-                        &m.method,
-                        "write derivatives as `der(x)`, not `x.der()`",
-                    );
-                    return None;
+                    self.cx
+                        .error_spanned_by(method, "write derivatives as `der(x)`, not `x.der()`");
+                    values.push(None);
+                    return;
                 }
-                let mut args: Vec<&Expr> = vec![&m.receiver];
-                args.extend(m.args.iter());
-                self.lower_call(&name, &m.method, &args, place, true)
+                let (_, args) = call_parts(e);
+                self.lower_call(e, &name, method, &args, true, tasks, values);
+                return;
             }
-            Expr::Assign(a) => {
+            ExprKind::Assign { .. } => {
                 self.cx.error_spanned_by(
-                    a,
+                    e,
                     format!("`=` may appear only at the top of an explicit equation `der(x) = expr`, not inside {}", place.describe()),
                 );
                 None
             }
-            other => {
+            _ => {
                 self.cx.error_spanned_by(
-                    other,
+                    e,
                     "unsupported expression; expected numbers, declared names, `+ - * /`, unary `-`, parentheses and function calls",
                 );
                 None
             }
+        };
+        values.push(value);
+    }
+
+    /// The value of a node from the values of its operands, lowered before it (on top of
+    /// `values`, last operand last).
+    fn combine_node(&mut self, e: ExprRef<'_>, values: &mut Vec<Option<ExprId>>) -> Option<ExprId> {
+        match e.kind() {
+            ExprKind::Unary { .. } => {
+                let a = values.pop().flatten()?;
+                Some(self.graph.neg(a))
+            }
+            ExprKind::Binary { op, .. } => {
+                let r = values.pop().flatten();
+                let l = values.pop().flatten();
+                let (l, r) = (l?, r?);
+                Some(match op {
+                    BinaryOp::Add => self.graph.add(l, r),
+                    BinaryOp::Sub => self.graph.sub(l, r),
+                    BinaryOp::Mul => self.graph.mul(l, r),
+                    _ => self.graph.div(l, r),
+                })
+            }
+            ExprKind::Call { .. } | ExprKind::MethodCall { .. } => {
+                let (name, args) = call_parts(e);
+                let name = name?;
+                if name == "powi" {
+                    let base = values.pop().flatten();
+                    let exponent = *args.get(1)?;
+                    let Some(n) = integer_literal(exponent) else {
+                        self.cx.error_spanned_by(
+                            exponent,
+                            format!(
+                                "`powi` needs an integer literal exponent such as `2` or `-1`, found `{}`; use `powf` for real or variable exponents",
+                                expr_text(exponent)
+                            ),
+                        );
+                        return None;
+                    };
+                    return Some(self.graph.powi(base?, n));
+                }
+                let lowered = values.split_off(values.len().saturating_sub(args.len()));
+                let lowered: Vec<ExprId> = lowered.into_iter().collect::<Option<_>>()?;
+                Some(match name.as_str() {
+                    "atan2" => self.graph.atan2(lowered[0], lowered[1]),
+                    "hypot" => self.graph.hypot(lowered[0], lowered[1]),
+                    "powf" => self.graph.powf(lowered[0], lowered[1]),
+                    _ => {
+                        let f = Func::from_name(&name)?;
+                        self.graph.func(f, lowered[0])
+                    }
+                })
+            }
+            _ => None,
         }
     }
 
@@ -1119,7 +1262,10 @@ impl Lowerer<'_> {
         })
     }
 
-    fn lower_der(&mut self, c: &syn::ExprCall, place: Place) -> Option<ExprId> {
+    fn lower_der(&mut self, c: ExprRef<'_>, place: Place) -> Option<ExprId> {
+        let ExprKind::Call { args, .. } = c.kind() else {
+            return None;
+        };
         if matches!(place, Place::Output | Place::Reference) {
             self.cx.error_spanned_by(
                 c,
@@ -1130,27 +1276,25 @@ impl Lowerer<'_> {
             );
             return None;
         }
-        if c.args.len() != 1 {
+        if args.len() != 1 {
             self.cx.error_spanned_by(
                 c,
                 format!(
                     "`der` takes exactly one state name, found {} arguments",
-                    c.args.len()
+                    args.len()
                 ),
             );
             return None;
         }
-        let arg = &c.args[0];
-        if let Expr::Call(inner) = arg {
-            if call_name(inner).as_deref() == Some("der") {
-                self.cx.error_spanned_by(
-                    c,
-                    "nested `der(der(..))` is not supported; introduce a state for the first derivative (e.g. `der(x) = v; der(v) = ...`)",
-                );
-                return None;
-            }
+        let arg = c.at(args[0]);
+        if arg.call_name().as_deref() == Some("der") {
+            self.cx.error_spanned_by(
+                c,
+                "nested `der(der(..))` is not supported; introduce a state for the first derivative (e.g. `der(x) = v; der(v) = ...`)",
+            );
+            return None;
         }
-        if matches!(crate::text::strip_parentheses(arg), Expr::Index(_)) {
+        if matches!(arg.strip_parentheses().kind(), ExprKind::Index { .. }) {
             let (binding, label) = self.resolve_element(arg)?;
             return match binding {
                 Binding::State(i) => Some(self.symbol(Symbol::StateDot(i))),
@@ -1166,7 +1310,7 @@ impl Lowerer<'_> {
                 }
             };
         }
-        let Some(ident) = path_ident(arg) else {
+        let Some(ident) = arg.path_ident() else {
             self.cx.error_spanned_by(
                 arg,
                 format!(
@@ -1219,14 +1363,20 @@ impl Lowerer<'_> {
         }
     }
 
-    fn lower_call(
+    /// A call of a supported function (`name` at `name_tokens`, arguments including a
+    /// method's receiver): checks the arity and pushes the lowering of the arguments and
+    /// their combination at `e`.
+    #[allow(clippy::too_many_arguments)]
+    fn lower_call<'a>(
         &mut self,
+        e: ExprRef<'a>,
         name: &str,
         name_tokens: &dyn ToTokens,
-        args: &[&Expr],
-        place: Place,
+        args: &[ExprRef<'a>],
         method: bool,
-    ) -> Option<ExprId> {
+        tasks: &mut Vec<Task<'a>>,
+        values: &mut Vec<Option<ExprId>>,
+    ) {
         let arity = if UNARY_FUNCTIONS.contains(&name) {
             1
         } else if BINARY_FUNCTIONS.contains(&name) {
@@ -1239,7 +1389,8 @@ impl Lowerer<'_> {
                     supported_functions()
                 ),
             );
-            return None;
+            values.push(None);
+            return;
         };
         if args.len() != arity {
             let (found, expected) = if method {
@@ -1262,33 +1413,51 @@ impl Lowerer<'_> {
             };
             self.cx
                 .error_spanned_by(name_tokens, format!("{what}, found {found}; write {form}"));
-            return None;
+            values.push(None);
+            return;
         }
+        tasks.push(Task::Combine(e));
         if name == "powi" {
-            let base = self.lower_expr(args[0], place);
-            let Some(n) = integer_literal(args[1]) else {
-                self.cx.error_spanned_by(
-                    args[1],
-                    format!(
-                        "`powi` needs an integer literal exponent such as `2` or `-1`, found `{}`; use `powf` for real or variable exponents",
-                        expr_text(args[1])
-                    ),
-                );
-                return None;
-            };
-            return Some(self.graph.powi(base?, n));
+            // The exponent is checked, not lowered.
+            tasks.push(Task::Lower(args[0]));
+            return;
         }
-        let lowered: Vec<Option<ExprId>> = args.iter().map(|a| self.lower_expr(a, place)).collect();
-        let lowered: Vec<ExprId> = lowered.into_iter().collect::<Option<_>>()?;
-        Some(match name {
-            "atan2" => self.graph.atan2(lowered[0], lowered[1]),
-            "hypot" => self.graph.hypot(lowered[0], lowered[1]),
-            "powf" => self.graph.powf(lowered[0], lowered[1]),
-            _ => {
-                let f = Func::from_name(name)?;
-                self.graph.func(f, lowered[0])
-            }
-        })
+        tasks.extend(args.iter().rev().map(|a| Task::Lower(*a)));
+    }
+}
+
+/// Work of [`Lowerer::lower_expr`].
+enum Task<'a> {
+    /// Lower a node: its value goes on the value stack, directly or through more tasks.
+    Lower(ExprRef<'a>),
+    /// Combine the values of a node's operands, lowered just before, into its own.
+    Combine(ExprRef<'a>),
+    /// Bind the index variable of a `sum` for the next term.
+    Bind(String, i64),
+    /// Unbind it after the term.
+    Unbind,
+    /// Add the last value (a term of a `sum`) to the one below it (the total so far).
+    AddTerm,
+}
+
+/// The function name and the arguments of a call, or the method name and the receiver
+/// followed by the arguments of a method call.
+fn call_parts(e: ExprRef<'_>) -> (Option<String>, Vec<ExprRef<'_>>) {
+    match e.kind() {
+        ExprKind::Call { args, .. } => (e.call_name(), args.iter().map(|a| e.at(*a)).collect()),
+        ExprKind::MethodCall {
+            receiver,
+            method,
+            args,
+            ..
+        } => (
+            Some(method.to_string()),
+            std::iter::once(*receiver)
+                .chain(args.iter().copied())
+                .map(|a| e.at(a))
+                .collect(),
+        ),
+        _ => (None, Vec::new()),
     }
 }
 
@@ -1297,22 +1466,9 @@ fn unit_text(unit: Option<&syn::LitStr>) -> Option<String> {
     unit.map(|u| u.value().trim().to_string())
 }
 
-fn call_name(c: &syn::ExprCall) -> Option<String> {
-    path_ident(&c.func).map(|i| i.to_string())
-}
-
-fn path_ident(e: &Expr) -> Option<&Ident> {
-    match e {
-        Expr::Path(p) if p.qself.is_none() => p.path.get_ident(),
-        Expr::Paren(p) => path_ident(&p.expr),
-        Expr::Group(g) => path_ident(&g.expr),
-        _ => None,
-    }
-}
-
 /// `std::f64::consts::PI`, `core::f64::consts::PI` and `f64::consts::PI`.
-fn std_constant(path: &syn::Path) -> Option<f64> {
-    let segs: Vec<String> = path.segments.iter().map(|s| s.ident.to_string()).collect();
+fn std_constant(segments: &[Ident]) -> Option<f64> {
+    let segs: Vec<String> = segments.iter().map(|s| s.to_string()).collect();
     let tail = match segs.as_slice() {
         [a, b, c, d] if (a == "std" || a == "core") && b == "f64" && c == "consts" => d,
         [b, c, d] if b == "f64" && c == "consts" => d,
@@ -1344,8 +1500,8 @@ fn subscripts_text(subscripts: &[Subscript]) -> String {
     subscripts
         .iter()
         .map(|s| match s {
-            Subscript::Binder { var, range } => format!("[{var} in {}]", expr_text(range)),
-            Subscript::Index(e) => format!("[{}]", expr_text(e)),
+            Subscript::Binder { var, range } => format!("[{var} in {}]", expr_text(range.root())),
+            Subscript::Index(e) => format!("[{}]", expr_text(e.root())),
         })
         .collect()
 }
@@ -1357,117 +1513,164 @@ const INDEX_EXPRESSIONS: &str = "integer literals, constants of the `consts` sec
 impl Lowerer<'_> {
     /// The value of an integer expression (a length, range bound or index), or `None` with
     /// the error recorded on the offending tokens.
-    fn eval_int(&mut self, e: &Expr) -> Option<i64> {
-        match e {
-            Expr::Paren(p) => self.eval_int(&p.expr),
-            Expr::Group(g) => self.eval_int(&g.expr),
-            Expr::Lit(l) => match &l.lit {
-                Lit::Int(i) if matches!(i.suffix(), "" | "usize" | "i64" | "i32") => {
-                    match i.base10_parse::<i64>() {
-                        Ok(v) => Some(v),
-                        Err(_) => {
-                            self.cx.error_spanned_by(
-                                l,
-                                format!(
-                                    "the integer `{}` is too large for an index or length",
-                                    l.lit.to_token_stream()
-                                ),
-                            );
-                            None
+    ///
+    /// Evaluated with an explicit stack (operands first, then the node on a second visit),
+    /// reporting errors in the order of a left-to-right descent.
+    fn eval_int(&mut self, e: ExprRef<'_>) -> Option<i64> {
+        let mut todo = vec![(e, false)];
+        let mut stack: Vec<Option<i64>> = Vec::new();
+        while let Some((e, ready)) = todo.pop() {
+            let e = e.strip_parentheses();
+            if ready {
+                let value = match e.kind() {
+                    ExprKind::Unary { .. } => match stack.pop().flatten() {
+                        Some(v) => self.checked(v.checked_neg(), e),
+                        None => None,
+                    },
+                    ExprKind::Binary { op, .. } => {
+                        let r = stack.pop().flatten();
+                        let l = stack.pop().flatten();
+                        match (l, r) {
+                            (Some(l), Some(r)) => {
+                                let v = match op {
+                                    BinaryOp::Add => l.checked_add(r),
+                                    BinaryOp::Sub => l.checked_sub(r),
+                                    _ => l.checked_mul(r),
+                                };
+                                self.checked(v, e)
+                            }
+                            _ => None,
                         }
                     }
+                    _ => {
+                        let b = stack.pop().flatten();
+                        let a = stack.pop().flatten();
+                        match (a, b) {
+                            (Some(a), Some(b)) if e.call_name().as_deref() == Some("min") => {
+                                Some(a.min(b))
+                            }
+                            (Some(a), Some(b)) => Some(a.max(b)),
+                            _ => None,
+                        }
+                    }
+                };
+                stack.push(value);
+                continue;
+            }
+            let value = match e.kind() {
+                ExprKind::Lit(lit) => match lit {
+                    Lit::Int(i) if matches!(i.suffix(), "" | "usize" | "i64" | "i32") => {
+                        match i.base10_parse::<i64>() {
+                            Ok(v) => Some(v),
+                            Err(_) => {
+                                self.cx.error_spanned_by(
+                                    e,
+                                    format!(
+                                        "the integer `{}` is too large for an index or length",
+                                        lit.to_token_stream()
+                                    ),
+                                );
+                                None
+                            }
+                        }
+                    }
+                    _ => {
+                        self.cx.error_spanned_by(
+                            e,
+                            format!(
+                                "lengths, ranges and indices are integers, found `{}`; write e.g. `3` or `N`",
+                                lit.to_token_stream()
+                            ),
+                        );
+                        None
+                    }
+                },
+                ExprKind::Path { .. } => self.eval_int_name(e),
+                ExprKind::Unary {
+                    op: UnaryOp::Neg,
+                    operand,
+                    ..
+                } => {
+                    todo.push((e, true));
+                    todo.push((e.at(*operand), false));
+                    continue;
+                }
+                ExprKind::Binary {
+                    op: BinaryOp::Add | BinaryOp::Sub | BinaryOp::Mul,
+                    left,
+                    right,
+                    ..
+                } => {
+                    todo.push((e, true));
+                    todo.push((e.at(*right), false));
+                    todo.push((e.at(*left), false));
+                    continue;
+                }
+                ExprKind::Call { args, .. }
+                    if args.len() == 2
+                        && matches!(e.call_name().as_deref(), Some("min") | Some("max")) =>
+                {
+                    todo.push((e, true));
+                    todo.push((e.at(args[1]), false));
+                    todo.push((e.at(args[0]), false));
+                    continue;
                 }
                 _ => {
                     self.cx.error_spanned_by(
-                        l,
+                        e,
                         format!(
-                            "lengths, ranges and indices are integers, found `{}`; write e.g. `3` or `N`",
-                            l.lit.to_token_stream()
+                            "unsupported index expression `{}`; lengths, ranges and indices may use {INDEX_EXPRESSIONS}",
+                            expr_text(e)
                         ),
                     );
                     None
                 }
-            },
-            Expr::Path(p) => {
-                let Some(ident) = p.path.get_ident().filter(|_| p.qself.is_none()) else {
-                    self.cx.error_spanned_by(
-                        p,
-                        format!(
-                            "expected an integer constant or index variable, found the path `{}`",
-                            expr_text(e)
-                        ),
-                    );
-                    return None;
-                };
-                let s = ident.unraw().to_string();
-                if let Some((_, v)) = self.indices.iter().rev().find(|(n, _)| *n == s) {
-                    return Some(*v);
-                }
-                match self.env.get(&s).copied() {
-                    Some((Binding::Const(v), _)) => Some(v),
-                    Some((b, _)) => {
-                        self.cx.error_spanned_by(
-                            ident,
-                            format!(
-                                "`{s}` is {}, not a constant: lengths, ranges and indices must be known when the model is compiled, so they may use only {INDEX_EXPRESSIONS}",
-                                b.describe()
-                            ),
-                        );
-                        None
-                    }
-                    None => {
-                        let mut scope: Vec<&str> =
-                            self.indices.iter().map(|(n, _)| n.as_str()).collect();
-                        scope.dedup();
-                        let in_scope = if scope.is_empty() {
-                            "no index variable is in scope here".to_string()
-                        } else {
-                            format!("in scope: {}", scope.join(", "))
-                        };
-                        self.cx.error_spanned_by(
-                            ident,
-                            format!(
-                                "unknown index variable `{s}` ({in_scope}); an index may use {INDEX_EXPRESSIONS}"
-                            ),
-                        );
-                        None
-                    }
-                }
-            }
-            Expr::Unary(u) if matches!(u.op, UnOp::Neg(_)) => {
-                let v = self.eval_int(&u.expr)?;
-                self.checked(v.checked_neg(), e)
-            }
-            Expr::Binary(b) if matches!(b.op, BinOp::Add(_) | BinOp::Sub(_) | BinOp::Mul(_)) => {
-                let l = self.eval_int(&b.left);
-                let r = self.eval_int(&b.right);
-                let (l, r) = (l?, r?);
-                let v = match b.op {
-                    BinOp::Add(_) => l.checked_add(r),
-                    BinOp::Sub(_) => l.checked_sub(r),
-                    _ => l.checked_mul(r),
-                };
-                self.checked(v, e)
-            }
-            Expr::Call(c)
-                if c.args.len() == 2
-                    && matches!(call_name(c).as_deref(), Some("min") | Some("max")) =>
-            {
-                let a = self.eval_int(&c.args[0]);
-                let b = self.eval_int(&c.args[1]);
-                let (a, b) = (a?, b?);
-                Some(if call_name(c).as_deref() == Some("min") {
-                    a.min(b)
-                } else {
-                    a.max(b)
-                })
-            }
-            other => {
+            };
+            stack.push(value);
+        }
+        stack.pop().flatten()
+    }
+
+    /// The value of a name in an integer expression: an index variable or a constant.
+    fn eval_int_name(&mut self, e: ExprRef<'_>) -> Option<i64> {
+        let Some(ident) = e.path_ident() else {
+            self.cx.error_spanned_by(
+                e,
+                format!(
+                    "expected an integer constant or index variable, found the path `{}`",
+                    expr_text(e)
+                ),
+            );
+            return None;
+        };
+        let s = ident.unraw().to_string();
+        if let Some((_, v)) = self.indices.iter().rev().find(|(n, _)| *n == s) {
+            return Some(*v);
+        }
+        match self.env.get(&s).copied() {
+            Some((Binding::Const(v), _)) => Some(v),
+            Some((b, _)) => {
                 self.cx.error_spanned_by(
-                    other,
+                    ident,
                     format!(
-                        "unsupported index expression `{}`; lengths, ranges and indices may use {INDEX_EXPRESSIONS}",
-                        expr_text(other)
+                        "`{s}` is {}, not a constant: lengths, ranges and indices must be known when the model is compiled, so they may use only {INDEX_EXPRESSIONS}",
+                        b.describe()
+                    ),
+                );
+                None
+            }
+            None => {
+                let mut scope: Vec<&str> = self.indices.iter().map(|(n, _)| n.as_str()).collect();
+                scope.dedup();
+                let in_scope = if scope.is_empty() {
+                    "no index variable is in scope here".to_string()
+                } else {
+                    format!("in scope: {}", scope.join(", "))
+                };
+                self.cx.error_spanned_by(
+                    ident,
+                    format!(
+                        "unknown index variable `{s}` ({in_scope}); an index may use {INDEX_EXPRESSIONS}"
                     ),
                 );
                 None
@@ -1475,7 +1678,7 @@ impl Lowerer<'_> {
         }
     }
 
-    fn checked(&mut self, v: Option<i64>, e: &Expr) -> Option<i64> {
+    fn checked(&mut self, v: Option<i64>, e: ExprRef<'_>) -> Option<i64> {
         if v.is_none() {
             self.cx.error_spanned_by(
                 e,
@@ -1486,8 +1689,9 @@ impl Lowerer<'_> {
     }
 
     /// A range `a..b` or `a..=b` as half-open bounds.
-    fn eval_range(&mut self, e: &Expr) -> Option<(i64, i64)> {
-        let Expr::Range(r) = crate::text::strip_parentheses(e) else {
+    fn eval_range(&mut self, e: ExprRef<'_>) -> Option<(i64, i64)> {
+        let r = e.strip_parentheses();
+        let ExprKind::Range { start, end, closed } = r.kind() else {
             self.cx.error_spanned_by(
                 e,
                 format!(
@@ -1497,7 +1701,7 @@ impl Lowerer<'_> {
             );
             return None;
         };
-        let (Some(start), Some(end)) = (&r.start, &r.end) else {
+        let (Some(start), Some(end)) = (start, end) else {
             self.cx.error_spanned_by(
                 r,
                 format!(
@@ -1507,12 +1711,13 @@ impl Lowerer<'_> {
             );
             return None;
         };
-        let a = self.eval_int(start);
-        let b = self.eval_int(end);
+        let a = self.eval_int(r.at(*start));
+        let b = self.eval_int(r.at(*end));
         let (a, b) = (a?, b?);
-        match r.limits {
-            syn::RangeLimits::HalfOpen(_) => Some((a, b)),
-            syn::RangeLimits::Closed(_) => Some((a, self.checked(b.checked_add(1), e)?)),
+        if *closed {
+            Some((a, self.checked(b.checked_add(1), e)?))
+        } else {
+            Some((a, b))
         }
     }
 
@@ -1521,14 +1726,14 @@ impl Lowerer<'_> {
         let mut out = Vec::new();
         let mut ok = true;
         for d in dims {
-            match self.eval_int(d) {
+            match self.eval_int(d.root()) {
                 Some(v) if v >= 1 => out.push(v as usize),
                 Some(v) => {
                     self.cx.error_spanned_by(
                         d,
                         format!(
                             "the length of an indexed family must be at least 1, found `{}` = {v}",
-                            expr_text(d)
+                            expr_text(d.root())
                         ),
                     );
                     ok = false;
@@ -1551,7 +1756,7 @@ impl Lowerer<'_> {
     }
 
     /// The default of a scalar parameter (or one element), or 0 with the error recorded.
-    fn param_default(&mut self, e: &Expr, label: &str) -> f64 {
+    fn param_default(&mut self, e: ExprRef<'_>, label: &str) -> f64 {
         match numeric_literal(e) {
             Some(v) if !v.is_finite() => {
                 self.cx.error_spanned_by(
@@ -1579,7 +1784,7 @@ impl Lowerer<'_> {
 
     /// The defaults of a parameter family, row-major: one number for every element, or an
     /// array literal (nested per index) of exactly the family's lengths.
-    fn param_defaults(&mut self, e: &Expr, name: &Ident, dims: &[usize]) -> Vec<f64> {
+    fn param_defaults(&mut self, e: ExprRef<'_>, name: &Ident, dims: &[usize]) -> Vec<f64> {
         let total: usize = dims.iter().product();
         if numeric_literal(e).is_some() {
             let v = self.param_default(e, &name.unraw().to_string());
@@ -1593,7 +1798,7 @@ impl Lowerer<'_> {
 
     fn collect_defaults(
         &mut self,
-        e: &Expr,
+        e: ExprRef<'_>,
         name: &Ident,
         dims: &[usize],
         prefix: &mut Vec<usize>,
@@ -1606,7 +1811,8 @@ impl Lowerer<'_> {
             return;
         };
         let (label, _) = element_names(name, prefix);
-        let Expr::Array(a) = crate::text::strip_parentheses(e) else {
+        let array = e.strip_parentheses();
+        let ExprKind::Array(items) = array.kind() else {
             self.cx.error_spanned_by(
                 e,
                 format!(
@@ -1622,13 +1828,13 @@ impl Lowerer<'_> {
             ));
             return;
         };
-        if a.elems.len() != len {
+        if items.len() != len {
             self.cx.error_spanned_by(
-                a,
+                array,
                 format!(
                     "length mismatch: `{label}` has length {len} as declared, but its default lists {} value{}",
-                    a.elems.len(),
-                    plural(a.elems.len())
+                    items.len(),
+                    plural(items.len())
                 ),
             );
             out.extend(std::iter::repeat_n(
@@ -1637,9 +1843,9 @@ impl Lowerer<'_> {
             ));
             return;
         }
-        for (k, x) in a.elems.iter().enumerate() {
+        for (k, x) in items.iter().enumerate() {
             prefix.push(k);
-            self.collect_defaults(x, name, rest, prefix, out);
+            self.collect_defaults(array.at(*x), name, rest, prefix, out);
             prefix.pop();
         }
     }
@@ -1773,7 +1979,7 @@ impl Lowerer<'_> {
     }
 
     /// The text of `e` with the index variables in scope written as their values.
-    fn indexed_text(&self, e: &Expr) -> String {
+    fn indexed_text(&self, e: ExprRef<'_>) -> String {
         let scope = &self.indices;
         let env = &self.env;
         crate::text::expr_text_with(
@@ -1795,14 +2001,14 @@ impl Lowerer<'_> {
         let mut ok = true;
         for sub in &l.subscripts {
             match sub {
-                Subscript::Binder { var, range } => match self.eval_range(range) {
+                Subscript::Binder { var, range } => match self.eval_range(range.root()) {
                     Some((a, _)) if a < 0 => {
                         self.cx.error_spanned_by(
                             range,
                             format!(
                                 "the indices of `{}` start at 0; the range `{}` starts at {a}",
                                 l.name,
-                                expr_text(range)
+                                expr_text(range.root())
                             ),
                         );
                         ok = false;
@@ -1819,7 +2025,7 @@ impl Lowerer<'_> {
                         format!(
                             "a `let` family names each index with its range, e.g. `let {}[i in 0..N] = ...`, found `[{}]`",
                             l.name,
-                            expr_text(e)
+                            expr_text(e.root())
                         ),
                     );
                     ok = false;
@@ -1874,7 +2080,7 @@ impl Lowerer<'_> {
                     .zip(&values)
                     .map(|(v, k)| (v.unraw().to_string(), *k)),
             );
-            let expr = self.lower_expr(&l.expr, Place::Let);
+            let expr = self.lower_expr(l.expr.root(), Place::Let);
             self.indices.truncate(depth);
             let offset = values
                 .iter()
@@ -1904,7 +2110,7 @@ impl Lowerer<'_> {
         for item in items {
             match item {
                 EquationItem::Equation(e) => {
-                    let Some(eq) = self.lower_equation(e) else {
+                    let Some(eq) = self.lower_equation(e.root()) else {
                         continue;
                     };
                     if let Some((j, _)) = eq.explicit {
@@ -1923,7 +2129,7 @@ impl Lowerer<'_> {
                     out.push(eq);
                 }
                 EquationItem::For(f) => {
-                    let range = self.eval_range(&f.range);
+                    let range = self.eval_range(f.range.root());
                     if !self.check_index_var(&f.var) {
                         continue;
                     }
@@ -1952,7 +2158,7 @@ impl Lowerer<'_> {
         for sub in subscripts {
             match sub {
                 Subscript::Binder { var, range } => {
-                    let r = self.eval_range(range);
+                    let r = self.eval_range(range.root());
                     ok &= self.check_index_var(var);
                     match r {
                         Some(r) => ranges.push(r),
@@ -1961,7 +2167,7 @@ impl Lowerer<'_> {
                     vars.push(Some(var.unraw().to_string()));
                 }
                 Subscript::Index(e) => {
-                    match self.eval_int(e) {
+                    match self.eval_int(e.root()) {
                         Some(v) => ranges.push((v, v + 1)),
                         None => ok = false,
                     }
@@ -2099,7 +2305,9 @@ impl Lowerer<'_> {
                 return out;
             }
             let lowered = match &o.expr {
-                Some(e) => self.lower_expr(e, Place::Output).map(|x| (x, expr_text(e))),
+                Some(e) => self
+                    .lower_expr(e.root(), Place::Output)
+                    .map(|x| (x, expr_text(e.root()))),
                 None => match self.env.get(&base) {
                     Some(_) => self
                         .lower_name(&o.name, Place::Output)
@@ -2138,8 +2346,8 @@ impl Lowerer<'_> {
             self.indices.extend(bound);
             let lowered = match &o.expr {
                 Some(e) => {
-                    let text = self.indexed_text(e);
-                    self.lower_expr(e, Place::Output).map(|x| (x, text))
+                    let text = self.indexed_text(e.root());
+                    self.lower_expr(e.root(), Place::Output).map(|x| (x, text))
                 }
                 None => self
                     .family_element(&o.name, &values, &[], &o.name)
@@ -2163,7 +2371,7 @@ impl Lowerer<'_> {
         &mut self,
         base: &Ident,
         values: &[i64],
-        subscripts: &[&Expr],
+        subscripts: &[ExprRef<'_>],
         whole: &dyn ToTokens,
     ) -> Option<(Binding, String)> {
         let s = base.unraw().to_string();
@@ -2215,7 +2423,7 @@ impl Lowerer<'_> {
             if v < 0 || v as usize >= d {
                 let context = subscripts
                     .get(k)
-                    .map(|e| self.index_context(e))
+                    .map(|e| self.index_context(*e))
                     .unwrap_or_default();
                 let which = match (fam.dims.len(), k) {
                     (1, _) => String::new(),
@@ -2266,7 +2474,7 @@ impl Lowerer<'_> {
     }
 
     /// ` (with i = 2)`: the index variables an index expression uses, with their values.
-    fn index_context(&self, e: &Expr) -> String {
+    fn index_context(&self, e: ExprRef<'_>) -> String {
         let text = expr_text(e);
         let used: Vec<String> = self
             .indices
@@ -2285,15 +2493,16 @@ impl Lowerer<'_> {
     }
 
     /// `q[i][j + 1]`: the element it names, with its label, or `None` with errors recorded.
-    fn resolve_element(&mut self, e: &Expr) -> Option<(Binding, String)> {
-        let mut subscripts: Vec<&Expr> = Vec::new();
+    fn resolve_element(&mut self, e: ExprRef<'_>) -> Option<(Binding, String)> {
+        let mut subscripts: Vec<ExprRef<'_>> = Vec::new();
         let mut cur = e;
-        while let Expr::Index(ix) = crate::text::strip_parentheses(cur) {
-            subscripts.push(&ix.index);
-            cur = &ix.expr;
+        while let ExprKind::Index { base, index } = cur.strip_parentheses().kind() {
+            let ix = cur.strip_parentheses();
+            subscripts.push(ix.at(*index));
+            cur = ix.at(*base);
         }
         subscripts.reverse();
-        let Some(base) = path_ident(cur) else {
+        let Some(base) = cur.path_ident() else {
             self.cx.error_spanned_by(
                 cur,
                 format!(
@@ -2303,63 +2512,82 @@ impl Lowerer<'_> {
             );
             return None;
         };
-        let values: Vec<Option<i64>> = subscripts.iter().map(|s| self.eval_int(s)).collect();
+        let values: Vec<Option<i64>> = subscripts.iter().map(|s| self.eval_int(*s)).collect();
         let values: Vec<i64> = values.into_iter().collect::<Option<_>>()?;
-        self.family_element(base, &values, &subscripts, e)
+        self.family_element(base, &values, &subscripts, &e)
     }
 
     /// `sum(a..b, |j| expr)`: the sum of `expr` over `j`, unrolled (0 for an empty range).
-    fn lower_sum(&mut self, c: &syn::ExprCall, place: Place) -> Option<ExprId> {
+    /// Pushes the total so far and, per index, the tasks that lower the term and add it.
+    fn lower_sum<'a>(
+        &mut self,
+        c: ExprRef<'a>,
+        tasks: &mut Vec<Task<'a>>,
+        values: &mut Vec<Option<ExprId>>,
+    ) {
+        let ExprKind::Call { args, .. } = c.kind() else {
+            values.push(None);
+            return;
+        };
         let usage = "write sums as `sum(0..N, |j| expr)`";
-        if c.args.len() != 2 {
+        if args.len() != 2 {
             self.cx.error_spanned_by(
                 c,
                 format!(
                     "`sum` takes a range and a closure, found {} argument{}; {usage}",
-                    c.args.len(),
-                    plural(c.args.len())
+                    args.len(),
+                    plural(args.len())
                 ),
             );
-            return None;
+            values.push(None);
+            return;
         }
-        let range = self.eval_range(&c.args[0]);
-        let Expr::Closure(closure) = crate::text::strip_parentheses(&c.args[1]) else {
+        let range = self.eval_range(c.at(args[0]));
+        let second = c.at(args[1]);
+        let closure = second.strip_parentheses();
+        let ExprKind::Closure {
+            params,
+            params_spans,
+            body,
+        } = closure.kind()
+        else {
             self.cx.error_spanned_by(
-                &c.args[1],
-                format!("the second argument of `sum` is a closure naming the index, found `{}`; {usage}", expr_text(&c.args[1])),
+                second,
+                format!("the second argument of `sum` is a closure naming the index, found `{}`; {usage}", expr_text(second)),
             );
-            return None;
+            values.push(None);
+            return;
         };
-        let var = match closure.inputs.iter().collect::<Vec<_>>().as_slice() {
-            [syn::Pat::Ident(p)]
-                if p.by_ref.is_none() && p.mutability.is_none() && p.subpat.is_none() =>
-            {
-                &p.ident
-            }
+        let var = match params.as_slice() {
+            [ClosureParam {
+                ident: Some(var), ..
+            }] => var,
             _ => {
                 self.cx.error_spanned_by(
-                    &closure.inputs,
+                    params_spans,
                     format!("the closure of `sum` takes exactly one index variable, e.g. `|j|`; {usage}"),
                 );
-                return None;
+                values.push(None);
+                return;
             }
         };
         if !self.check_index_var(var) {
-            return None;
+            values.push(None);
+            return;
         }
-        let (a, b) = range?;
-        let mut total = self.graph.constant(0.0);
-        let mut ok = true;
-        for k in a..b {
-            self.indices.push((var.unraw().to_string(), k));
-            let term = self.lower_expr(&closure.body, place);
-            self.indices.pop();
-            match term {
-                Some(term) => total = self.graph.add(total, term),
-                None => ok = false,
-            }
+        let Some((a, b)) = range else {
+            values.push(None);
+            return;
+        };
+        let total = self.graph.constant(0.0);
+        values.push(Some(total));
+        let name = var.unraw().to_string();
+        for k in (a..b).rev() {
+            tasks.push(Task::AddTerm);
+            tasks.push(Task::Unbind);
+            tasks.push(Task::Lower(closure.at(*body)));
+            tasks.push(Task::Bind(name.clone(), k));
         }
-        ok.then_some(total)
     }
 }
 

@@ -1,4 +1,5 @@
-//! Syntax of the `model!` DSL, parsed with `syn`.
+//! Syntax of the `model!` DSL: the outer structure parsed with `syn`, the expressions with
+//! the DSL's own parser ([`crate::expr`]).
 //!
 //! This layer only recognises the shape of a model: sections, declared names and the
 //! expressions inside them, all with their spans. It does not resolve names or check
@@ -21,11 +22,11 @@
 //! equation   := expr ';' | 'for' Ident 'in' expr '{' equation* '}'
 //! ```
 
-use proc_macro2::{Span, TokenStream, TokenTree};
+use crate::expr::{parse_expr, parse_expr_without_brace, Expr};
+use proc_macro2::{Span, TokenStream};
 use syn::ext::IdentExt;
 use syn::parse::{Parse, ParseStream};
-use syn::punctuated::Punctuated;
-use syn::{braced, bracketed, Attribute, Expr, Ident, LitStr, Token, Visibility};
+use syn::{braced, bracketed, Attribute, Ident, LitStr, Token, Visibility};
 
 /// The sections a model may contain, in the order they must appear.
 pub const SECTION_ORDER: &[&str] = &[
@@ -220,61 +221,13 @@ pub struct TrackingEntry {
     pub roots: Vec<Expr>,
 }
 
-/// Stack that `syn` may need per unit of [`nesting_bound`]: its expression parser recurses
-/// through about ten functions per parenthesis or prefix operator, some KiB each in an
-/// unoptimised build (measured: 2.3 KiB per parenthesis and 5.6 KiB per Horner level with
-/// optimisations), so this leaves a wide margin.
-const STACK_PER_LEVEL: usize = 32 * 1024;
-
-/// Stack kept free for everything else `syn` does.
-const STACK_BASE: usize = 1024 * 1024;
-
-/// Parse the body of a `model!` invocation (call it inside [`with_front_end_stack`]).
-pub fn parse_model(input: TokenStream) -> syn::Result<ModelDef> {
-    syn::parse2(input)
-}
-
-/// Runs `f`, the work on `syn`'s trees for `input`, on a stack deep enough for them.
+/// Parse the body of a `model!` invocation.
 ///
-/// `syn` parses, prints and drops expressions by recursion, so its stack use grows with the
-/// depth of the user's expression (measured: a 1000-deep Horner expression overflowed the
-/// 8 MiB `rustc` gives a macro inside `syn`'s parser, where plain Rust compiles it). `f` runs
-/// on a stack with at least `STACK_BASE` + `STACK_PER_LEVEL` × `nesting_bound` bytes
-/// free, grown on this thread (the proc-macro API is tied to it) only when the current one
-/// has less.
-pub fn with_front_end_stack<R>(input: &TokenStream, f: impl FnOnce() -> R) -> R {
-    let need = STACK_BASE.saturating_add(STACK_PER_LEVEL.saturating_mul(nesting_bound(input)));
-    stacker::maybe_grow(need, need, f)
-}
-
-/// An upper bound on the recursion depth of a recursive-descent parse of `tokens`, in
-/// levels: along every path into the token tree, the groups entered plus, in each, the
-/// longest run of punctuation (prefix operators such as `- - x` nest without a group).
-/// Computed with an explicit stack, linear in the number of tokens.
-pub fn nesting_bound(tokens: &TokenStream) -> usize {
-    let mut deepest = 0;
-    let mut stack: Vec<(TokenStream, usize)> = vec![(tokens.clone(), 0)];
-    while let Some((stream, above)) = stack.pop() {
-        let (mut run, mut longest) = (0usize, 0usize);
-        let mut groups = Vec::new();
-        for tt in stream {
-            match tt {
-                TokenTree::Punct(_) => {
-                    run += 1;
-                    longest = longest.max(run);
-                }
-                TokenTree::Group(g) => {
-                    run = 0;
-                    groups.push(g.stream());
-                }
-                TokenTree::Ident(_) | TokenTree::Literal(_) => run = 0,
-            }
-        }
-        let here = above + 1 + longest;
-        deepest = usize::max(deepest, here);
-        stack.extend(groups.into_iter().map(|g| (g, here)));
-    }
-    deepest
+/// `syn` builds its token buffer by recursion over nested groups, so groups nested deeper
+/// than a few levels are first set aside ([`crate::expr::parser::with_stash`]); the
+/// expression parser reads them back. Nothing here recurses along an expression's depth.
+pub fn parse_model(input: TokenStream) -> syn::Result<ModelDef> {
+    crate::expr::parser::with_stash(input, syn::parse2)
 }
 
 impl Parse for ModelDef {
@@ -311,7 +264,7 @@ impl Parse for Item {
             let name: Ident = user_ident(input, "a `let` intermediate")?;
             let subscripts = subscripts(input)?;
             input.parse::<Token![=]>()?;
-            let expr: Expr = input.parse()?;
+            let expr = parse_expr(input)?;
             input.parse::<Token![;]>().map_err(|e| {
                 syn::Error::new(e.span(), "expected `;` after the `let` intermediate")
             })?;
@@ -349,7 +302,7 @@ impl Parse for Item {
                     })?;
                     Ok(ConstDef {
                         name,
-                        value: c.parse()?,
+                        value: parse_expr(c)?,
                     })
                 })?)
             }
@@ -393,7 +346,7 @@ impl Parse for Item {
                     Ok(ReferenceDef {
                         output,
                         subscripts,
-                        expr: c.parse()?,
+                        expr: parse_expr(c)?,
                     })
                 })?)
             }
@@ -412,12 +365,12 @@ impl Parse for Item {
                     c.parse::<Token![:]>()?;
                     let list;
                     let bracket = bracketed!(list in c);
-                    let roots = Punctuated::<Expr, Token![,]>::parse_terminated(&list)?;
+                    let roots = comma_list(&list, parse_expr)?;
                     Ok(TrackingEntry {
                         output,
                         subscripts,
                         bracket_span: bracket.span.join(),
-                        roots: roots.into_iter().collect(),
+                        roots,
                     })
                 })?;
                 SectionBody::Tracking(TrackingDef { type_name, entries })
@@ -497,7 +450,7 @@ fn equation_items(input: ParseStream) -> syn::Result<Vec<EquationItem>> {
                     format!("expected `in` after `for {var}`, e.g. `for {var} in 0..N {{ ... }}`"),
                 )
             })?;
-            let range = Expr::parse_without_eager_brace(input)?;
+            let range = parse_expr_without_brace(input)?;
             let content;
             braced!(content in input);
             let body = equation_items(&content)?;
@@ -513,7 +466,7 @@ fn equation_items(input: ParseStream) -> syn::Result<Vec<EquationItem>> {
             }));
             continue;
         }
-        items.push(EquationItem::Equation(input.parse::<Expr>()?));
+        items.push(EquationItem::Equation(parse_expr(input)?));
         if input.is_empty() {
             break;
         }
@@ -530,7 +483,7 @@ fn dims(input: ParseStream) -> syn::Result<Vec<Expr>> {
     while input.peek(syn::token::Bracket) {
         let content;
         bracketed!(content in input);
-        out.push(content.parse()?);
+        out.push(parse_expr(&content)?);
     }
     Ok(out)
 }
@@ -546,10 +499,10 @@ fn subscripts(input: ParseStream) -> syn::Result<Vec<Subscript>> {
             content.parse::<Token![in]>()?;
             out.push(Subscript::Binder {
                 var,
-                range: content.parse()?,
+                range: parse_expr(&content)?,
             });
         } else {
-            out.push(Subscript::Index(content.parse()?));
+            out.push(Subscript::Index(parse_expr(&content)?));
         }
     }
     Ok(out)
@@ -618,7 +571,7 @@ fn parse_param(input: ParseStream) -> syn::Result<ParamDef> {
         name,
         dims,
         unit,
-        default: input.parse()?,
+        default: parse_expr(input)?,
     })
 }
 
@@ -629,7 +582,7 @@ fn parse_output(input: ParseStream) -> syn::Result<OutputDef> {
     let unit = unit(input, &name)?;
     let expr = if input.peek(Token![=]) {
         input.parse::<Token![=]>()?;
-        Some(input.parse()?)
+        Some(parse_expr(input)?)
     } else {
         None
     };

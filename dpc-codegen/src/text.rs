@@ -4,8 +4,8 @@
 //! operators and only the parentheses that precedence requires, so that the listing reads
 //! like the model as written, independent of the user's formatting.
 
+use crate::expr::{BinaryOp, ExprKind, ExprRef, OtherPart, UnaryOp};
 use quote::ToTokens;
-use syn::{BinOp, Expr, Lit, UnOp};
 
 /// Precedence levels, higher binds tighter.
 const ASSIGN: u8 = 0;
@@ -16,7 +16,7 @@ const PREFIX: u8 = 4;
 const POSTFIX: u8 = 5;
 
 /// Normalised text of `expr`.
-pub fn expr_text(expr: &Expr) -> String {
+pub fn expr_text(expr: ExprRef<'_>) -> String {
     expr_text_with(expr, &|_| None, &|_| None)
 }
 
@@ -25,7 +25,7 @@ pub fn expr_text(expr: &Expr) -> String {
 /// `values` and `constants` is written as the number (`q[i + 1]` with `i = 2` reads `q[3]`,
 /// `q[N - 1]` with `N = 3` reads `q[2]`).
 pub fn expr_text_with(
-    expr: &Expr,
+    expr: ExprRef<'_>,
     values: &dyn Fn(&str) -> Option<i64>,
     constants: &dyn Fn(&str) -> Option<i64>,
 ) -> String {
@@ -37,66 +37,94 @@ pub fn expr_text_with(
 
 /// The value of an integer expression of literals, names known to `values`, `+ - *`,
 /// unary `-`, parentheses, `min` and `max`; `None` if any part is unknown or it overflows.
-pub fn int_value(expr: &Expr, values: &dyn Fn(&str) -> Option<i64>) -> Option<i64> {
-    match strip_parentheses(expr) {
-        Expr::Lit(l) => match &l.lit {
-            Lit::Int(i) => i.base10_parse::<i64>().ok(),
+///
+/// Evaluated with an explicit stack: operands are visited first, their values kept on a
+/// value stack.
+pub fn int_value(expr: ExprRef<'_>, values: &dyn Fn(&str) -> Option<i64>) -> Option<i64> {
+    // (node, whether its operands are already on the value stack)
+    let mut todo = vec![(expr, false)];
+    let mut stack: Vec<Option<i64>> = Vec::new();
+    while let Some((e, ready)) = todo.pop() {
+        let e = e.strip_parentheses();
+        let operands: Vec<ExprRef<'_>> = match e.kind() {
+            ExprKind::Unary {
+                op: UnaryOp::Neg,
+                operand,
+                ..
+            } => vec![e.at(*operand)],
+            ExprKind::Binary {
+                op: BinaryOp::Add | BinaryOp::Sub | BinaryOp::Mul,
+                left,
+                right,
+                ..
+            } => vec![e.at(*left), e.at(*right)],
+            ExprKind::Call { args, .. }
+                if args.len() == 2 && matches!(e.call_name().as_deref(), Some("min" | "max")) =>
+            {
+                vec![e.at(args[0]), e.at(args[1])]
+            }
+            ExprKind::Lit(syn::Lit::Int(i)) => {
+                stack.push(i.base10_parse::<i64>().ok());
+                continue;
+            }
+            ExprKind::Path { .. } => {
+                stack.push(e.path_ident().and_then(|i| values(&i.to_string())));
+                continue;
+            }
+            _ => {
+                stack.push(None);
+                continue;
+            }
+        };
+        if !ready {
+            todo.push((e, true));
+            todo.extend(operands.into_iter().rev().map(|o| (o, false)));
+            continue;
+        }
+        let n = operands.len();
+        let args: Vec<Option<i64>> = stack.split_off(stack.len().saturating_sub(n));
+        let value = match (e.kind(), args.as_slice()) {
+            (ExprKind::Unary { .. }, [a]) => a.and_then(i64::checked_neg),
+            (ExprKind::Binary { op, .. }, [Some(l), Some(r)]) => match op {
+                BinaryOp::Add => l.checked_add(*r),
+                BinaryOp::Sub => l.checked_sub(*r),
+                _ => l.checked_mul(*r),
+            },
+            (ExprKind::Call { .. }, [Some(a), Some(b)]) => {
+                if e.call_name().as_deref() == Some("min") {
+                    Some(*a.min(b))
+                } else {
+                    Some(*a.max(b))
+                }
+            }
             _ => None,
-        },
-        Expr::Path(p) => values(&p.path.get_ident()?.to_string()),
-        Expr::Unary(u) if matches!(u.op, UnOp::Neg(_)) => int_value(&u.expr, values)?.checked_neg(),
-        Expr::Binary(b) => {
-            let (l, r) = (int_value(&b.left, values)?, int_value(&b.right, values)?);
-            match b.op {
-                BinOp::Add(_) => l.checked_add(r),
-                BinOp::Sub(_) => l.checked_sub(r),
-                BinOp::Mul(_) => l.checked_mul(r),
-                _ => None,
-            }
-        }
-        Expr::Call(c) if c.args.len() == 2 => {
-            let Expr::Path(f) = &*c.func else { return None };
-            let (a, b) = (
-                int_value(&c.args[0], values)?,
-                int_value(&c.args[1], values)?,
-            );
-            match f.path.get_ident()?.to_string().as_str() {
-                "min" => Some(a.min(b)),
-                "max" => Some(a.max(b)),
-                _ => None,
-            }
-        }
-        _ => None,
+        };
+        stack.push(value);
     }
+    stack.pop().flatten()
 }
 
-fn precedence(expr: &Expr) -> u8 {
-    match expr {
-        Expr::Assign(_) => ASSIGN,
-        Expr::Binary(b) => match b.op {
-            BinOp::Add(_) | BinOp::Sub(_) => SUM,
-            BinOp::Mul(_) | BinOp::Div(_) | BinOp::Rem(_) => PRODUCT,
+fn precedence(expr: ExprRef<'_>) -> u8 {
+    let expr = expr.strip_parentheses();
+    match expr.kind() {
+        ExprKind::Assign { .. } => ASSIGN,
+        ExprKind::Binary { op, .. } => match op {
+            BinaryOp::Add | BinaryOp::Sub => SUM,
+            BinaryOp::Mul | BinaryOp::Div | BinaryOp::Rem => PRODUCT,
             _ => COMPARE,
         },
-        Expr::Unary(_) => PREFIX,
-        Expr::Paren(_) | Expr::Group(_) => precedence(strip_parentheses(expr)),
-        Expr::Lit(l) if lit_is_negative(&l.lit) => PREFIX,
+        ExprKind::Unary { .. } => PREFIX,
+        ExprKind::Lit(l) if lit_is_negative(l) => PREFIX,
         _ => POSTFIX,
     }
 }
 
 /// `expr` without the parentheses (and invisible groups) around it.
-pub fn strip_parentheses(mut expr: &Expr) -> &Expr {
-    loop {
-        match expr {
-            Expr::Paren(p) => expr = &p.expr,
-            Expr::Group(g) => expr = &g.expr,
-            _ => return expr,
-        }
-    }
+pub fn strip_parentheses(expr: ExprRef<'_>) -> ExprRef<'_> {
+    expr.strip_parentheses()
 }
 
-fn lit_is_negative(lit: &Lit) -> bool {
+fn lit_is_negative(lit: &syn::Lit) -> bool {
     lit.to_token_stream().to_string().starts_with('-')
 }
 
@@ -105,13 +133,13 @@ enum Piece<'a> {
     Text(&'static str),
     Owned(String),
     /// An expression, parenthesised if it binds more loosely than the given level.
-    Operand(&'a Expr, u8),
+    Operand(ExprRef<'a>, u8),
 }
 
 /// Writes `expr` with an explicit stack of pending pieces (pushed in reverse), so that the
 /// depth of the user's expression costs heap, not call stack.
 fn write_expr(
-    expr: &Expr,
+    expr: ExprRef<'_>,
     values: &dyn Fn(&str) -> Option<i64>,
     known: &dyn Fn(&str) -> Option<i64>,
     out: &mut String,
@@ -134,101 +162,109 @@ fn write_expr(
             todo.push(Piece::Text(")"));
         }
         // Parentheses of the source are dropped; the precedence decides.
-        let expr = strip_parentheses(expr);
+        let expr = expr.strip_parentheses();
+        let at = |id: &usize| expr.at(*id);
         // Pieces are pushed last first.
-        match expr {
-            Expr::Assign(a) => {
-                todo.push(Piece::Operand(&a.right, ASSIGN));
+        match expr.kind() {
+            ExprKind::Assign { left, right } => {
+                todo.push(Piece::Operand(at(right), ASSIGN));
                 todo.push(Piece::Text(" = "));
-                todo.push(Piece::Operand(&a.left, ASSIGN));
+                todo.push(Piece::Operand(at(left), ASSIGN));
             }
-            Expr::Binary(b) => {
+            ExprKind::Binary {
+                op, left, right, ..
+            } => {
                 let p = precedence(expr);
                 // Left-associative: the left operand may share the level, the right may not
                 // (also for `+` and `*`: `a + (b + c)` keeps the user's grouping).
-                todo.push(Piece::Operand(&b.right, p + 1));
+                todo.push(Piece::Operand(at(right), p + 1));
                 todo.push(Piece::Text(" "));
-                todo.push(Piece::Owned(b.op.to_token_stream().to_string()));
+                todo.push(Piece::Text(op.as_str()));
                 todo.push(Piece::Text(" "));
-                todo.push(Piece::Operand(&b.left, p));
+                todo.push(Piece::Operand(at(left), p));
             }
-            Expr::Unary(u) => {
-                todo.push(Piece::Operand(&u.expr, PREFIX));
-                todo.push(Piece::Text(match u.op {
-                    UnOp::Neg(_) => "-",
-                    UnOp::Not(_) => "!",
-                    _ => "*",
-                }));
+            ExprKind::Unary { op, operand, .. } => {
+                todo.push(Piece::Operand(at(operand), PREFIX));
+                todo.push(Piece::Text(op.as_str()));
             }
-            Expr::Call(c) => {
+            ExprKind::Call { func, args } => {
                 todo.push(Piece::Text(")"));
-                push_arguments(&mut todo, c.args.iter());
+                push_arguments(&mut todo, args.iter().map(at));
                 todo.push(Piece::Text("("));
-                todo.push(Piece::Operand(&c.func, ASSIGN));
+                todo.push(Piece::Operand(at(func), ASSIGN));
             }
-            Expr::MethodCall(m) => {
+            ExprKind::MethodCall {
+                receiver,
+                method,
+                args,
+                ..
+            } => {
                 todo.push(Piece::Text(")"));
-                push_arguments(&mut todo, m.args.iter());
+                push_arguments(&mut todo, args.iter().map(at));
                 todo.push(Piece::Text("("));
-                todo.push(Piece::Owned(m.method.to_string()));
+                todo.push(Piece::Owned(method.to_string()));
                 todo.push(Piece::Text("."));
-                todo.push(Piece::Operand(&m.receiver, POSTFIX));
+                todo.push(Piece::Operand(at(receiver), POSTFIX));
             }
-            Expr::Path(p)
-                if p.path
-                    .get_ident()
+            ExprKind::Path { .. }
+                if expr
+                    .path_ident()
                     .is_some_and(|i| values(&i.to_string()).is_some()) =>
             {
-                let value = p.path.get_ident().and_then(|i| values(&i.to_string()));
+                let value = expr.path_ident().and_then(|i| values(&i.to_string()));
                 out.push_str(&value.map(|v| v.to_string()).unwrap_or_default());
             }
-            Expr::Index(ix) => {
+            ExprKind::Index { base, index } => {
                 todo.push(Piece::Text("]"));
-                match int_value(&ix.index, known) {
+                match int_value(at(index), known) {
                     Some(v) => todo.push(Piece::Owned(v.to_string())),
-                    None => todo.push(Piece::Operand(&ix.index, ASSIGN)),
+                    None => todo.push(Piece::Operand(at(index), ASSIGN)),
                 }
                 todo.push(Piece::Text("["));
-                todo.push(Piece::Operand(&ix.expr, POSTFIX));
+                todo.push(Piece::Operand(at(base), POSTFIX));
             }
-            Expr::Range(r) => {
-                if let Some(end) = &r.end {
-                    todo.push(Piece::Operand(end, SUM));
+            ExprKind::Range { start, end, closed } => {
+                if let Some(end) = end {
+                    todo.push(Piece::Operand(at(end), SUM));
                 }
-                todo.push(Piece::Text(match r.limits {
-                    syn::RangeLimits::HalfOpen(_) => "..",
-                    syn::RangeLimits::Closed(_) => "..=",
-                }));
-                if let Some(start) = &r.start {
-                    todo.push(Piece::Operand(start, SUM));
+                todo.push(Piece::Text(if *closed { "..=" } else { ".." }));
+                if let Some(start) = start {
+                    todo.push(Piece::Operand(at(start), SUM));
                 }
             }
-            Expr::Closure(c) => {
-                todo.push(Piece::Operand(&c.body, ASSIGN));
-                let inputs: Vec<String> = c
-                    .inputs
-                    .iter()
-                    .map(|p| p.to_token_stream().to_string())
-                    .collect();
+            ExprKind::Closure { params, body, .. } => {
+                todo.push(Piece::Operand(at(body), ASSIGN));
+                let inputs: Vec<&str> = params.iter().map(|p| p.text.as_str()).collect();
                 todo.push(Piece::Owned(format!("|{}| ", inputs.join(", "))));
             }
-            Expr::Path(p) => {
-                let segs: Vec<String> = p
-                    .path
-                    .segments
-                    .iter()
-                    .map(|s| s.ident.to_string())
-                    .collect();
+            ExprKind::Path { segments, .. } => {
+                let segs: Vec<String> = segments.iter().map(|s| s.to_string()).collect();
                 out.push_str(&segs.join("::"));
             }
-            Expr::Lit(l) => out.push_str(&l.lit.to_token_stream().to_string()),
-            other => out.push_str(&other.to_token_stream().to_string()),
+            ExprKind::Lit(l) => out.push_str(&l.to_token_stream().to_string()),
+            ExprKind::Array(items) => {
+                todo.push(Piece::Text("]"));
+                push_arguments(&mut todo, items.iter().map(at));
+                todo.push(Piece::Text("["));
+            }
+            ExprKind::Other(parts) => {
+                for part in parts.iter().rev() {
+                    match part {
+                        OtherPart::Text(t) => todo.push(Piece::Owned(t.clone())),
+                        OtherPart::Child(c, level) => todo.push(Piece::Operand(at(c), *level)),
+                    }
+                }
+            }
+            ExprKind::Paren(_) => {}
         }
     }
 }
 
 /// Pushes `a, b, c` (reversed, for the stack).
-fn push_arguments<'a>(todo: &mut Vec<Piece<'a>>, args: impl DoubleEndedIterator<Item = &'a Expr>) {
+fn push_arguments<'a>(
+    todo: &mut Vec<Piece<'a>>,
+    args: impl DoubleEndedIterator<Item = ExprRef<'a>>,
+) {
     let mut first = true;
     for a in args.rev() {
         if !first {
@@ -243,8 +279,15 @@ fn push_arguments<'a>(todo: &mut Vec<Piece<'a>>, args: impl DoubleEndedIterator<
 mod tests {
     use super::*;
 
+    fn parse(src: &str) -> crate::expr::Expr {
+        use syn::parse::Parser;
+        (|input: syn::parse::ParseStream| crate::expr::parse_expr(input))
+            .parse_str(src)
+            .expect("parses")
+    }
+
     fn t(src: &str) -> String {
-        expr_text(&syn::parse_str(src).unwrap())
+        expr_text(parse(src).root())
     }
 
     #[test]
@@ -268,24 +311,24 @@ mod tests {
 
     #[test]
     fn writes_known_indices_as_numbers() {
-        let e: Expr = syn::parse_str("der(q[i]) == w[i + 1] * M[i][j] + i").unwrap();
+        let e = parse("der(q[i]) == w[i + 1] * M[i][j] + i");
         let values = |s: &str| (s == "i").then_some(2);
         let constants = |s: &str| (s == "N").then_some(3);
         assert_eq!(
-            expr_text_with(&e, &values, &constants),
+            expr_text_with(e.root(), &values, &constants),
             "der(q[2]) == w[3] * M[2][j] + 2"
         );
-        let e: Expr = syn::parse_str("v[N - 1] / N").unwrap();
-        assert_eq!(expr_text_with(&e, &values, &constants), "v[2] / N");
-        let range: Expr = syn::parse_str("min(i, 1)..=N - 1").unwrap();
+        let e = parse("v[N - 1] / N");
+        assert_eq!(expr_text_with(e.root(), &values, &constants), "v[2] / N");
+        let range = parse("min(i, 1)..=N - 1");
         assert_eq!(
-            expr_text_with(&range, &values, &constants),
+            expr_text_with(range.root(), &values, &constants),
             "min(2, 1)..=N - 1"
         );
         assert_eq!(
-            int_value(&syn::parse_str("max(i, 3) - 2 * (i + 1)").unwrap(), &values),
+            int_value(parse("max(i, 3) - 2 * (i + 1)").root(), &values),
             Some(-3)
         );
-        assert_eq!(int_value(&syn::parse_str("i + n").unwrap(), &values), None);
+        assert_eq!(int_value(parse("i + n").root(), &values), None);
     }
 }
