@@ -531,3 +531,89 @@ fn split_routine(
         },
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{reads, Plan};
+    use std::collections::BTreeSet;
+
+    /// The `Arm2` declaration of `models/src/arm.rs` with six links.
+    fn six_link_arm() -> proc_macro2::TokenStream {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/src/arm.rs");
+        let source = std::fs::read_to_string(path).expect("models/src/arm.rs");
+        let file = syn::parse_file(&source).expect("arm.rs parses");
+        let text = file
+            .items
+            .into_iter()
+            .find_map(|item| match item {
+                syn::Item::Macro(m) if m.mac.tokens.to_string().contains("pub Arm2 {") => {
+                    Some(m.mac.tokens.to_string())
+                }
+                _ => None,
+            })
+            .expect("Arm2 in models/src/arm.rs")
+            .replace("N = 2", "N = 6");
+        text.parse().expect("the arm tokenises")
+    }
+
+    /// A split routine computes what the one piece computes: every part reads each temporary
+    /// either from its own earlier statements or from the slot it was stored in (and not
+    /// overwritten since), every variable it reads is bound, and every root is written once.
+    #[test]
+    fn parts_read_every_temporary_where_it_was_stored() {
+        let (model, derived) = crate::derive_model(six_link_arm()).expect("the arm derives");
+        let ty = &derived.tracking.as_ref().expect("a tracking DAE").dae;
+        let roots = ty.residual_and_iteration_roots();
+        let s = model.graph.schedule(&roots);
+        for per_part in [1, 7, 100, 1000, usize::MAX] {
+            let plan = Plan::new(&model.graph, &s, per_part);
+            if per_part <= 100 {
+                assert!(
+                    plan.parts.len() > 5,
+                    "{per_part}: {} parts",
+                    plan.parts.len()
+                );
+            }
+            let mut slots: Vec<Option<usize>> = vec![None; plan.slots];
+            let mut next_temp = 0;
+            for part in &plan.parts {
+                assert_eq!(
+                    part.temps.start, next_temp,
+                    "the parts cover the temporaries"
+                );
+                next_temp = part.temps.end;
+                for &k in &part.imports {
+                    let slot = plan.slot[k].expect("an imported temporary has a slot");
+                    assert_eq!(slots[slot], Some(k), "slot {slot} holds temporary {k}");
+                }
+                let available = |j: usize, before: usize| {
+                    part.imports.contains(&j) || (part.temps.start..before).contains(&j)
+                };
+                for k in part.temps.clone() {
+                    let (mut temps, mut vars) = (BTreeSet::new(), BTreeSet::new());
+                    reads(&model.graph, &s, s.temps[k], true, &mut temps, &mut vars);
+                    assert!(temps.iter().all(|&j| available(j, k)), "temporary {k}");
+                    assert!(vars.is_subset(&part.vars), "temporary {k}");
+                }
+                for &r in &part.roots {
+                    let (mut temps, mut vars) = (BTreeSet::new(), BTreeSet::new());
+                    reads(&model.graph, &s, s.roots[r], false, &mut temps, &mut vars);
+                    assert!(
+                        temps.iter().all(|&j| available(j, part.temps.end)),
+                        "root {r}"
+                    );
+                    assert!(vars.is_subset(&part.vars), "root {r}");
+                }
+                for k in part.temps.clone() {
+                    if let Some(slot) = plan.slot[k] {
+                        slots[slot] = Some(k);
+                    }
+                }
+            }
+            assert_eq!(next_temp, s.temps.len());
+            let mut written: Vec<usize> = plan.parts.iter().flat_map(|p| p.roots.clone()).collect();
+            written.sort_unstable();
+            assert_eq!(written, (0..roots.len()).collect::<Vec<_>>());
+        }
+    }
+}
