@@ -4,30 +4,31 @@
 //! For a model `Name` this emits
 //!
 //! * `NameParams`, the parameter struct with `Default` from the declared defaults
-//!   ([`params`]);
+//!   (`emit/params.rs`);
 //! * `Name`, the model type, with inherent fixed-size conveniences (nalgebra `SVector` /
 //!   `SMatrix`) and an implementation of `dpc::core::DaeModel` whose routines take slices
 //!   and write Jacobian entries into `MatrixSink`s, and parameter access by index as
-//!   `match`es ([`model_type`]; its documentation carries the listing, [`listing`]);
+//!   `match`es (`emit/model_type.rs`; its documentation carries the listing,
+//!   `emit/listing.rs`);
 //! * with a `tracking` section, the tracking DAE type, which also holds the coefficients of
 //!   `W` in use in a fixed-size array (read in the routines' preludes, so nothing allocates)
-//!   and implements `dpc::core::TrackingDae` ([`tracking`]);
-//! * with a `references` section, the reference type ([`references`]).
+//!   and implements `dpc::core::TrackingDae` (`emit/tracking.rs`);
+//! * with a `references` section, the reference type (`emit/references.rs`).
 //!
-//! Every routine's code comes from one helper, [`routine`]: all the roots a routine needs
-//! (residual rows and Jacobian entries) are scheduled together, so subexpressions are shared
-//! across the residual and all Jacobians; structurally zero entries are never emitted, and
-//! the non-zero positions are exported as pattern constants. `residual_and_iteration_matrix`
-//! schedules the residual and the iteration matrix together for Newton loops. The routines
-//! that write into sinks are generic over the sink type, so their computation is emitted
-//! once, as non-generic methods (`__evaluate_values` and the like) that store the entries'
-//! values into an array, and the generic methods only hand the values to the sinks in a loop
-//! over the pattern: `rustc` then compiles the heavy straight-line code once per model, not
-//! once per sink type. A routine too long for the optimiser to handle quickly is split into
-//! parts (see [`routine`]). Every slice a routine reads or writes is cut to its length once
-//! at the top, so the indexing inside compiles without bounds checks. Function parameters use
-//! `__`-prefixed names, which the DSL forbids in user names, so user names can be bound as
-//! plain locals without shadowing.
+//! Every routine's code comes from one helper, `emit/routine.rs`: all the roots a routine
+//! needs (residual rows and Jacobian entries) are scheduled together, so subexpressions are
+//! shared across the residual and all Jacobians; structurally zero entries are never emitted,
+//! and the non-zero positions are exported as pattern constants.
+//! `residual_and_iteration_matrix` schedules the residual and the iteration matrix together
+//! for Newton loops. The routines that write into sinks are generic over the sink type, so
+//! their computation is emitted once, as non-generic methods (`__evaluate_values` and the
+//! like) that store the entries' values into an array, and the generic methods only hand the
+//! values to the sinks in a loop over the pattern: `rustc` then compiles the heavy
+//! straight-line code once per model, not once per sink type. A routine too long for the
+//! optimiser to handle quickly is split into parts (see `emit/routine.rs`). Every slice a
+//! routine reads or writes is cut to its length once at the top, so the indexing inside
+//! compiles without bounds checks. Function parameters use `__`-prefixed names, which the DSL
+//! forbids in user names, so user names can be bound as plain locals without shadowing.
 
 mod listing;
 mod model_type;

@@ -3,7 +3,7 @@
 //! them into the routine's output slices.
 //!
 //! A routine whose computation is long (the Jacobians of a 16-link arm's tracking DAE have
-//! some 20 000 operations) is split into parts: LLVM's optimisation and code generation of
+//! some 16 000 operations) is split into parts: LLVM's optimisation and code generation of
 //! one straight-line function grow faster than its length, and a function in one piece is
 //! compiled on one thread. The temporaries, in their scheduled order, are cut into parts of
 //! about [`PART_OPERATIONS`] operations; each part is a non-generic function of its own in a
