@@ -616,4 +616,36 @@ mod tests {
             assert_eq!(written, (0..roots.len()).collect::<Vec<_>>());
         }
     }
+
+    /// The model of `tests/split_routines.rs`, which checks split routines numerically, is
+    /// long enough to be split.
+    #[test]
+    fn the_split_routines_test_model_is_split() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/split_routines.rs");
+        let source = std::fs::read_to_string(path).expect("tests/split_routines.rs");
+        let file = syn::parse_file(&source).expect("the test parses");
+        let tokens = file
+            .items
+            .into_iter()
+            .find_map(|item| match item {
+                syn::Item::Macro(m)
+                    if m.mac
+                        .path
+                        .segments
+                        .last()
+                        .is_some_and(|s| s.ident == "model") =>
+                {
+                    Some(m.mac.tokens)
+                }
+                _ => None,
+            })
+            .expect("a model! in tests/split_routines.rs");
+        let code = crate::try_expand(tokens).expect("expands").to_string();
+        for routine in ["fused", "iteration", "evaluate"] {
+            for ty in ["Coupled", "CoupledTracking"] {
+                let module = format!("mod __dpc_{ty}_{routine} ");
+                assert!(code.contains(&module), "{module}");
+            }
+        }
+    }
 }
