@@ -4,73 +4,12 @@
 //! a closed loop with the preliminary feedback about the hanging rest (as
 //! `scenarios/arm2.toml`). Prints the table of `docs/arms.md`.
 //!
-//! The arms are declared here with the declaration of `models/src/arm.rs` (the same text,
-//! with the number of links a macro argument), so that the larger ones are compiled only for
-//! this benchmark. Run with `cargo bench --bench arms`.
+//! The arms' declaration (that of `models/src/arm.rs`, with the number of links a macro
+//! argument, so that the larger ones are compiled only for this benchmark) and the
+//! measurement are those of the compile-time examples, `examples/arm_compile/common.rs`.
+//! Run with `cargo bench --bench arms`.
 
-use dpc::core::design::{design, DesignOptions};
-use dpc::core::dpc::{Dpc, DpcOptions};
-use dpc::core::linalg::NalgebraLu;
-use dpc::core::linear::AnalysisOptions;
-use dpc::core::prefeedback::SteadyMotion;
-use dpc::core::simulate::{simulate, ClosedLoopOptions};
-use dpc::core::DaeModel;
-use std::hint::black_box;
-use std::time::{Duration, Instant};
-
-macro_rules! arm {
-    ($name:ident, $tracking:ident, $n:literal) => {
-        dpc::model! {
-            /// An arm of this benchmark.
-            pub $name {
-                consts { N = $n }
-                params {
-                    /// Link masses.
-                    m[N] = 1.0,
-                    /// Link lengths (joint to joint).
-                    l[N] = 0.5,
-                    /// Distances from each joint to its link's centre of mass.
-                    r[N] = 0.25,
-                    /// Link inertias about their centres of mass.
-                    i_link[N] = 0.02,
-                    /// Motor inertias.
-                    j_motor[N] = 0.5,
-                    /// Joint stiffnesses.
-                    ks[N] = 40.0,
-                    /// Gravity.
-                    g = 9.81
-                }
-                states { q[N], w[N], th[N], wm[N] }
-                inputs { u[N] }
-                // Absolute angle, angular velocity and angular acceleration of each link.
-                let phi[a in 0..N] = sum(0..=a, |j| q[j]);
-                let om[a in 0..N] = sum(0..=a, |j| w[j]);
-                let al[a in 0..N] = sum(0..=a, |j| der(w[j]));
-                // The acceleration of the end of a unit link at angle phi[b].
-                let ex[b in 0..N] = cos(phi[b]) * al[b] - sin(phi[b]) * om[b].powi(2);
-                let ey[b in 0..N] = sin(phi[b]) * al[b] + cos(phi[b]) * om[b].powi(2);
-                // The acceleration of the centre of mass of link c.
-                let ax[c in 0..N] = sum(0..c, |b| l[b] * ex[b]) + r[c] * ex[c];
-                let ay[c in 0..N] = sum(0..c, |b| l[b] * ey[b]) + r[c] * ey[c];
-                // The derivative of the centre of mass of link c by q[i] (for i <= c).
-                let jx[c in 0..N][i in 0..N] = sum(i..c, |a| l[a] * cos(phi[a])) + r[c] * cos(phi[c]);
-                let jy[c in 0..N][i in 0..N] = sum(i..c, |a| l[a] * sin(phi[a])) + r[c] * sin(phi[c]);
-                equations {
-                    for i in 0..N {
-                        der(q[i]) = w[i];
-                        sum(i..N, |c| m[c] * (jx[c][i] * ax[c] + jy[c][i] * (ay[c] + g)) + i_link[c] * al[c])
-                            + ks[i] * (q[i] - th[i]) == 0.0;
-                        der(th[i]) = wm[i];
-                        der(wm[i]) = (ks[i] * (q[i] - th[i]) + u[i]) / j_motor[i];
-                    }
-                }
-                outputs { q }
-                references { q[i in 0..N] = 0.3 * sin(0.8 * t + 0.5 * i) }
-                tracking $tracking { q: [4.0, 4.0] }
-            }
-        }
-    };
-}
+include!("../examples/arm_compile/common.rs");
 
 arm!(Arm2, Arm2Tracking, 2);
 arm!(Arm4, Arm4Tracking, 4);
@@ -79,120 +18,8 @@ arm!(Arm8, Arm8Tracking, 8);
 arm!(Arm12, Arm12Tracking, 12);
 arm!(Arm16, Arm16Tracking, 16);
 
-/// Median time of `f` over about half a second.
-fn median(mut f: impl FnMut()) -> Duration {
-    let mut times = Vec::new();
-    let start = Instant::now();
-    while times.len() < 5 || (start.elapsed() < Duration::from_millis(500) && times.len() < 100_000)
-    {
-        let t = Instant::now();
-        f();
-        times.push(t.elapsed());
-    }
-    times.sort();
-    times[times.len() / 2]
-}
-
-macro_rules! measure {
-    ($plant:ident, $tracking:ident, $reference:ident, $n:literal) => {{
-        let plant = $plant::default();
-        let tracking = $tracking::default();
-        let ne = $tracking::N_EQUATIONS;
-        // The tracking DAE's residual and iteration matrix at a point near the reference.
-        let s = tracking.structure();
-        let (nx, nz, nw) = (s.n_states(), s.n_algebraic(), s.n_inputs());
-        let x: Vec<f64> = (0..nx).map(|k| 0.01 * k as f64).collect();
-        let xdot = vec![0.0; nx];
-        let z = vec![0.0; nz];
-        let w = vec![0.1; nw];
-        let mut r = vec![0.0; ne];
-        let mut m = dpc::nalgebra::SMatrix::<
-            f64,
-            { $tracking::N_EQUATIONS },
-            { $tracking::N_EQUATIONS },
-        >::zeros();
-        let eval = median(|| {
-            tracking.residual(black_box(0.1), &x, &xdot, &z, &w, &mut r);
-            tracking.iteration_matrix(black_box(0.1), &x, &xdot, &z, &w, 100.0, &mut m);
-            black_box((&r, &m));
-        });
-        // The preliminary feedback about the hanging rest, poles at -40.
-        let rest = SteadyMotion {
-            state: vec![0.0; nx],
-            rate: vec![0.0; nx],
-            algebraic: vec![],
-            input: vec![0.0; $n],
-        };
-        let designed = design(
-            &plant,
-            &rest,
-            &DesignOptions {
-                analysis: AnalysisOptions {
-                    w: Some(vec![vec![4.0, 4.0]; $n]),
-                    poles: Some(vec![dpc::nalgebra::Complex::new(-40.0, 0.0); 2 * $n]),
-                    ..AnalysisOptions::default()
-                },
-                horizon: 6.0,
-                relative_degrees: $plant::RELATIVE_DEGREES.to_vec(),
-            },
-        )
-        .expect("design about the hanging rest");
-        let controller = || {
-            Dpc::new(
-                $tracking::default(),
-                $reference::default(),
-                NalgebraLu::<{ $tracking::N_EQUATIONS }>::new(),
-                DpcOptions {
-                    delta: 1e-3,
-                    ..DpcOptions::default()
-                },
-            )
-            .expect("controller")
-            .with_prefeedback(designed.prefeedback().expect("K_n"))
-            .expect("prefeedback")
-        };
-        // One update, warm (after a first one at the same point).
-        let mut dpc = controller();
-        let x0 = vec![0.0; nx];
-        let mut u = vec![0.0; $n];
-        dpc.control(0.05, &x0, &mut u).expect("warm-up update");
-        let update = median(|| {
-            dpc.control(black_box(0.05), black_box(&x0), &mut u)
-                .expect("update");
-        });
-        // The closed loop of scenarios/arm2.toml, 6 s.
-        let mut dpc = controller();
-        let run = simulate(
-            &plant,
-            &mut dpc,
-            &x0,
-            &ClosedLoopOptions {
-                h: 0.01,
-                t_end: 6.0,
-                ..ClosedLoopOptions::default()
-            },
-        )
-        .expect("run starts");
-        let late = run
-            .max_abs_error_since(4.0)
-            .into_iter()
-            .fold(0.0_f64, f64::max);
-        let outcome = match &run.divergence {
-            None => format!("{late:.1e}"),
-            Some(d) => format!("diverged at t = {:.2}", d.t),
-        };
-        // The update's time per (equations)^3, the growth of its dense LU.
-        let per_cube = update.as_secs_f64() * 1e9 / (ne as f64).powi(3);
-        println!(
-            "| {} | {ne} | {eval:.2?} | {update:.2?} | {per_cube:.3} | {outcome} |",
-            $n
-        );
-    }};
-}
-
 fn main() {
-    println!("| links n | equations | residual + iteration matrix | one DPC update | update / equations^3 (ns) | max error, t in [4, 6] |");
-    println!("| --- | --- | --- | --- | --- | --- |");
+    print_header();
     measure!(Arm2, Arm2Tracking, Arm2Reference, 2);
     measure!(Arm4, Arm4Tracking, Arm4Reference, 4);
     measure!(Arm6, Arm6Tracking, Arm6Reference, 6);

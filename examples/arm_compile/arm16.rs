@@ -4,12 +4,13 @@
 //! and a closed loop), alone in one crate, so that the time to compile this example is what a
 //! user's crate with this arm costs. Built only with the feature `arm-compile-time`, never by
 //! `cargo test`; `bench/arm_compile_time.sh` times it (see `docs/arms.md`). Running it prints
-//! the row of the benchmark's table.
+//! the row of the benchmark's table (`benches/arms.rs`, which shares `common.rs` with it).
 
 include!("common.rs");
 
 arm!(Arm16, Arm16Tracking, 16);
 
 fn main() {
+    print_header();
     measure!(Arm16, Arm16Tracking, Arm16Reference, 16);
 }

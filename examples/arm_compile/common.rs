@@ -1,5 +1,9 @@
-// The declaration and the use shared by `arm8.rs` and `arm16.rs` (included by each, so that
-// each example compiles the whole of it: its compile time is what is measured).
+// The arm and its measurement, shared by the benchmark `benches/arms.rs` and the compile-time
+// examples `arm8.rs` and `arm16.rs` (each includes this file): `arm!` declares the arm of
+// `models/src/arm.rs` with the number of links a macro argument, so that the larger ones are
+// compiled only where they are measured, and `measure!` prints one row of the benchmark's
+// table (docs/arms.md). The compile-time examples compile the whole of it: their compile time
+// is what a user's crate with this arm and this use of it costs.
 
 use dpc::core::design::{design, DesignOptions};
 use dpc::core::dpc::{Dpc, DpcOptions};
@@ -167,6 +171,17 @@ macro_rules! measure {
             None => format!("{late:.1e}"),
             Some(d) => format!("diverged at t = {:.2}", d.t),
         };
-        println!("| {} | {ne} | {eval:.2?} | {update:.2?} | {outcome} |", $n);
+        // The update's time per (equations)^3, the growth of its dense LU.
+        let per_cube = update.as_secs_f64() * 1e9 / (ne as f64).powi(3);
+        println!(
+            "| {} | {ne} | {eval:.2?} | {update:.2?} | {per_cube:.3} | {outcome} |",
+            $n
+        );
     }};
+}
+
+/// The header of the table whose rows `measure!` prints.
+fn print_header() {
+    println!("| links n | equations | residual + iteration matrix | one DPC update | update / equations^3 (ns) | max error, t in [4, 6] |");
+    println!("| --- | --- | --- | --- | --- | --- |");
 }
