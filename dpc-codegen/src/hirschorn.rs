@@ -720,7 +720,7 @@ pub struct TrackingSystem {
     /// tracking DAE's additional algebraic unknowns, by order, then by state.
     pub higher_derivatives: Vec<Symbol>,
     /// The position constraints of an index-3 plant and the first total derivatives that
-    /// replace them in the tracking DAE (see [`velocity_constraints`]), by equation.
+    /// replace them in the tracking DAE (see `velocity_constraints`), by equation.
     pub velocity_constraints: Vec<(usize, ExprId)>,
 }
 

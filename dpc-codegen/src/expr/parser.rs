@@ -1,7 +1,7 @@
 //! An operator-precedence parser for DSL expressions over `proc_macro2` token trees.
 //!
 //! The parser is a shunting-yard loop: per group of tokens being read (the expression itself,
-//! the inside of `( )`, `[ ]`, call arguments) a [`Frame`] on an explicit stack holds the
+//! the inside of `( )`, `[ ]`, call arguments) a `Frame` on an explicit stack holds the
 //! pending operators and finished operands; entering a group pushes a frame, leaving it pops
 //! one. Nothing recurses, so the depth of the expression costs heap only. Precedence and
 //! associativity are Rust's (as `syn` parses them): `=` (right), `..`, `||`, `&&`,
