@@ -614,10 +614,15 @@ impl<'a> Iterator for Trajectory<'a> {
 
 impl ExactSizeIterator for Trajectory<'_> {}
 
-/// The work of a run's plant integration: one integrator for the whole run, restarted at every
-/// sample (where the held input jumps) from a consistent point.
+/// The work of a run's plant integration without constraints: one integrator for the whole
+/// run, restarted at every sample (where the held input jumps). For BDF the counts include
+/// the consistent initialisations at the samples; a Radau step's factorisation is one real
+/// and one complex LU. (A constrained plant's integration is not counted here.)
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct PlantWork {
+    /// The integrator used ([`PlantIntegration::Auto`] resolved; `Auto` only when no interval
+    /// was integrated this way).
+    pub integrator: PlantIntegration,
     /// Sampling intervals integrated.
     pub intervals: usize,
     /// Accepted integrator steps.
@@ -1389,6 +1394,11 @@ impl<'h, 'p, M: DaeModel> PlantIntegrator<'h, 'p, M> {
         };
         let (steps, residuals, jacobians, factorisations) = s;
         PlantWork {
+            integrator: if self.intervals > 0 {
+                self.method
+            } else {
+                PlantIntegration::Auto
+            },
             intervals: self.intervals,
             steps,
             rejected_steps: rejected,
