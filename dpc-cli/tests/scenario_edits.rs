@@ -98,6 +98,7 @@ const EDITS: &[(&str, &[&str])] = &[
     ("plant.rtol", SCALAR),
     ("plant.atol", SCALAR),
     ("plant.max_consecutive_failures", &["0", "1", "3", "100"]),
+    ("plant.integrator", &["auto", "bdf", "radau", "euler"]),
     ("divergence.tracking_error", SCALAR),
     ("divergence.state.dphi", SCALAR),
     ("divergence.output.theta", SCALAR),

@@ -3,9 +3,24 @@
 //! At each sample `t_k = k h` the controller measures the plant state and computes a control
 //! ([`crate::dpc::Dpc::control`]); the plant, which may be a different model or have different
 //! parameters than the controller's (to study mismatch), is then integrated accurately to
-//! `t_(k+1)` by the variable-step BDF integrator with the control held (zero-order hold).
-//! Two hold variants: hold the whole input `u`, or, with a preliminary feedback, apply
-//! `u = u0 + K_n (x - x0) + v` continuously and hold only `v`.
+//! `t_(k+1)` with the control held (zero-order hold). Two hold variants: hold the whole input
+//! `u`, or, with a preliminary feedback, apply `u = u0 + K_n (x - x0) + v` continuously and
+//! hold only `v`.
+//!
+//! # The plant integrator
+//! Either hold makes the plant's input jump at every sample, and with it the derivative of
+//! its solution. One integrator serves the whole run and is restarted at every sample
+//! ([`ClosedLoopOptions::plant_integration`]):
+//! * by default ([`PlantIntegration::Auto`]) Radau IIA ([`crate::radau`]), a one-step method
+//!   of order 5 that loses nothing at a restart: each interval starts at full order with the
+//!   step the last one reached and, while Newton converges fast with it, the Jacobian and
+//!   factorisations of the last interval. A plant without algebraic unknowns is restarted
+//!   from the state and derivative the last step ended with (Radau needs no consistent
+//!   derivative); one with algebraic unknowns is first made consistent for the new input;
+//! * [`PlantIntegration::Bdf`], the variable-order BDF ([`crate::bdf`]), must discard its
+//!   history at every sample and restart at order 1 after a consistent initialisation: on
+//!   the wheel at `h = 0.01` about fifteen steps per sample where Radau takes one, and less
+//!   accurate at the same tolerance (`docs/performance.md`).
 //!
 //! # Constrained plants
 //! A plant with constraint rows (no `x'` and no algebraic unknown in the row: a mechanism's
@@ -113,6 +128,30 @@ pub struct ClosedLoopOptions {
     /// are bit for bit those of a run without it. It must be positive, finite and at least
     /// [`MIN_OUTPUT_STEP_RATIO`] times the run's length. `None` (default): the samples only.
     pub output_step: Option<f64>,
+    /// The integrator of a plant without constraint rows between the samples (a constrained
+    /// plant is always integrated by Radau IIA). Default [`PlantIntegration::Auto`].
+    pub plant_integration: PlantIntegration,
+}
+
+/// Which integrator carries a plant without constraint rows from one sample to the next
+/// ([`ClosedLoopOptions::plant_integration`]).
+///
+/// The held input jumps at every sample, and with it the solution's derivative: a multistep
+/// method (BDF) must restart there at order 1 with its history discarded, while a one-step
+/// method (Radau IIA) loses nothing and starts each interval at its full order 5 with the step
+/// it had reached (see `docs/performance.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlantIntegration {
+    /// Radau IIA, the rule for every closed loop: the input is held piecewise constant, so it
+    /// jumps at every sample.
+    #[default]
+    Auto,
+    /// Variable-order BDF ([`crate::bdf::Bdf`]), restarted at every sample.
+    Bdf,
+    /// Radau IIA ([`crate::radau::Radau`]), restarted at every sample with the step it had
+    /// reached.
+    Radau,
 }
 
 /// The smallest [`ClosedLoopOptions::output_step`] relative to the run's length `t_end`:
@@ -158,6 +197,7 @@ impl Default for ClosedLoopOptions {
             max_consecutive_failures: 3,
             constraint_tolerance: 1e-6,
             output_step: None,
+            plant_integration: PlantIntegration::Auto,
         }
     }
 }
@@ -295,6 +335,10 @@ pub enum DivergenceCause {
     /// The plant could not be integrated over a sampling interval.
     #[error("plant integration failed: {0}")]
     Plant(BdfError),
+    /// The plant could not be integrated by Radau IIA over a sampling interval
+    /// ([`PlantIntegration::Radau`]).
+    #[error("plant integration (Radau IIA) failed: {0}")]
+    PlantRadau(RadauError),
     /// The constrained plant could not be integrated over a sampling interval.
     #[error("integration of the constrained plant failed: {0}")]
     ConstrainedPlant(RadauError),
@@ -570,10 +614,15 @@ impl<'a> Iterator for Trajectory<'a> {
 
 impl ExactSizeIterator for Trajectory<'_> {}
 
-/// The work of a run's plant integration: one integrator for the whole run, restarted at every
-/// sample (where the held input jumps) from a consistent point.
+/// The work of a run's plant integration without constraints: one integrator for the whole
+/// run, restarted at every sample (where the held input jumps). For BDF the counts include
+/// the consistent initialisations at the samples; a Radau step's factorisation is one real
+/// and one complex LU. (A constrained plant's integration is not counted here.)
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct PlantWork {
+    /// The integrator used ([`PlantIntegration::Auto`] resolved; `Auto` only when no interval
+    /// was integrated this way).
+    pub integrator: PlantIntegration,
     /// Sampling intervals integrated.
     pub intervals: usize,
     /// Accepted integrator steps.
@@ -1013,7 +1062,7 @@ where
             Hold::Correction => dpc.shared_prefeedback(),
         },
     );
-    let mut integrator = PlantIntegrator::new(&held_plant, bdf_opts);
+    let mut integrator = PlantIntegrator::new(&held_plant, bdf_opts, opts.plant_integration);
     let stabilised = match &constrained {
         Some(c) => Some(c.stabilise(&held_plant)?),
         None => None,
@@ -1153,9 +1202,7 @@ where
             (Some(c), Some(dae)) => c
                 .integrate(dae, t, t + opts.h, &mut y, &mut yp, dense_interval)
                 .map_err(DivergenceCause::ConstrainedPlant),
-            _ => integrator
-                .interval(t, t + opts.h, &mut y, &mut yp, dense_interval)
-                .map_err(DivergenceCause::Plant),
+            _ => integrator.interval(t, t + opts.h, &mut y, &mut yp, dense_interval),
         };
         if let Err(cause) = integrated {
             result.divergence = Some(Divergence { t, cause });
@@ -1167,29 +1214,47 @@ where
 }
 
 /// The plant's integrator for a whole run: created at the first sampling interval, restarted
-/// ([`Bdf::reinit`]) at each later one after the state is made consistent for the new held
-/// input, so that a sample allocates nothing.
+/// ([`Bdf::reinit`], [`Radau::reinit`]) at each later one after the state is made consistent
+/// for the new held input, so that a sample allocates nothing.
 struct PlantIntegrator<'h, 'p, M: DaeModel> {
     held: &'h HeldPlant<'p, M>,
     opts: Options,
+    radau_opts: radau::Options,
+    /// [`PlantIntegration::Auto`] resolved.
+    method: PlantIntegration,
+    /// The plant has algebraic unknowns (to be made consistent at every sample).
+    algebraic: bool,
     /// The solver and work vectors of the consistent initialisation.
     init_solver: FaerDenseLu,
     init: InitWorkspace,
     bdf: Option<Bdf<&'h HeldPlant<'p, M>, FaerDenseLu>>,
+    radau: Option<Radau<&'h HeldPlant<'p, M>, FaerDenseLu>>,
     /// Work of the initialisations (the integrator counts its own).
     init_work: crate::bdf::Stats,
     intervals: usize,
 }
 
 impl<'h, 'p, M: DaeModel> PlantIntegrator<'h, 'p, M> {
-    fn new(held: &'h HeldPlant<'p, M>, opts: Options) -> Self {
+    fn new(held: &'h HeldPlant<'p, M>, opts: Options, method: PlantIntegration) -> Self {
         let n = held.dimension();
+        let radau_opts = radau::Options {
+            rtol: opts.rtol.clone(),
+            atol: opts.atol.clone(),
+            ..radau::Options::default()
+        };
         Self {
             held,
             opts,
+            radau_opts,
+            method: match method {
+                PlantIntegration::Auto => PlantIntegration::Radau,
+                m => m,
+            },
+            algebraic: held.model.structure().n_algebraic() > 0,
             init_solver: FaerDenseLu::new(n),
             init: InitWorkspace::new(n),
             bdf: None,
+            radau: None,
             init_work: crate::bdf::Stats::default(),
             intervals: 0,
         }
@@ -1204,68 +1269,253 @@ impl<'h, 'p, M: DaeModel> PlantIntegrator<'h, 'p, M> {
         y: &mut [f64],
         yp: &mut [f64],
         dense: Option<DenseInterval<'_, '_>>,
-    ) -> Result<(), BdfError> {
-        let init = self.init.consistent_initial_values(
-            self.held,
-            &mut self.init_solver,
-            &self.opts,
-            t0,
-            y,
-            yp,
-        )?;
+    ) -> Result<(), DivergenceCause> {
+        self.intervals += 1;
+        if self.method == PlantIntegration::Radau && self.radau.is_some() && !self.algebraic {
+            // Radau needs no consistent derivative (it enters only Newton's first guess and
+            // a Jacobian, if one is due), and a plant without algebraic unknowns has nothing
+            // else to make consistent: the derivative of the last step serves.
+            return self.radau_interval(t0, t1, y, yp, dense);
+        }
+        let init = self
+            .init
+            .consistent_initial_values(self.held, &mut self.init_solver, &self.opts, t0, y, yp)
+            .map_err(DivergenceCause::Plant)?;
         let w = &mut self.init_work;
         w.residual_evaluations += init.residual_evaluations;
         w.jacobian_evaluations += init.jacobian_evaluations;
         w.factorisations += init.factorisations;
-        self.intervals += 1;
-        let bdf = match &mut self.bdf {
-            Some(bdf) => {
-                bdf.reinit(t0, y, yp)?;
-                bdf
+        let n = self.held.dimension();
+        if self.method == PlantIntegration::Bdf {
+            let bdf = match &mut self.bdf {
+                Some(bdf) => {
+                    bdf.reinit(t0, y, yp).map_err(DivergenceCause::Plant)?;
+                    bdf
+                }
+                None => self.bdf.insert(
+                    Bdf::new(self.held, FaerDenseLu::new(n), self.opts.clone(), t0, y, yp)
+                        .map_err(DivergenceCause::Plant)?,
+                ),
+            };
+            bdf.set_stop_time(t1).map_err(DivergenceCause::Plant)?;
+            return match dense {
+                None => bdf.solve_to(t1, y, Some(yp)).map(|_| ()),
+                Some((grid, record)) => {
+                    step_with_dense_output(bdf, t1, self.opts.max_steps, grid, record, y, yp)
+                        .map_err(|e| {
+                            e.into_error(|max_steps, t| BdfError::TooManySteps {
+                                max_steps,
+                                tout: t1,
+                                t,
+                            })
+                        })
+                }
             }
-            None => {
-                let ls = FaerDenseLu::new(self.held.dimension());
-                self.bdf
-                    .insert(Bdf::new(self.held, ls, self.opts.clone(), t0, y, yp)?)
+            .map_err(DivergenceCause::Plant);
+        }
+        self.radau_interval(t0, t1, y, yp, dense)
+    }
+
+    /// [`interval`](Self::interval) by Radau IIA from `(y, yp)` as they are.
+    fn radau_interval(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        y: &mut [f64],
+        yp: &mut [f64],
+        dense: Option<DenseInterval<'_, '_>>,
+    ) -> Result<(), DivergenceCause> {
+        let n = self.held.dimension();
+        let radau = match &mut self.radau {
+            Some(radau) => {
+                radau
+                    .reinit(t0, y, yp)
+                    .map_err(DivergenceCause::PlantRadau)?;
+                radau
             }
+            None => self.radau.insert(
+                Radau::new(
+                    self.held,
+                    FaerDenseLu::new(n),
+                    self.radau_opts.clone(),
+                    t0,
+                    y,
+                    yp,
+                )
+                .map_err(DivergenceCause::PlantRadau)?,
+            ),
         };
-        bdf.set_stop_time(t1)?;
-        let Some((grid, record)) = dense else {
-            return bdf.solve_to(t1, y, Some(yp)).map(|_| ());
-        };
-        // The steps of `solve_to(t1)` (the first one sized for the stop time t1, every one
-        // ending at or before it), one at a time, the grid's times interpolated after each.
-        let mut steps = 0;
-        while bdf.t() < t1 {
-            if steps >= self.opts.max_steps {
-                return Err(BdfError::TooManySteps {
-                    max_steps: self.opts.max_steps,
-                    tout: t1,
-                    t: bdf.t(),
-                });
-            }
-            bdf.step()?;
-            steps += 1;
-            while let Some(td) = grid.due(bdf.t(), t1) {
-                bdf.interpolate(td, &mut grid.y, None)?;
-                record(td, &grid.y);
-                grid.advance();
+        radau
+            .set_stop_time(t1)
+            .map_err(DivergenceCause::PlantRadau)?;
+        match dense {
+            None => radau.solve_to(t1, y, Some(yp)).map(|_| ()),
+            Some((grid, record)) => {
+                step_with_dense_output(radau, t1, self.radau_opts.max_steps, grid, record, y, yp)
+                    .map_err(|e| {
+                        e.into_error(|max_steps, t| RadauError::TooManySteps {
+                            max_steps,
+                            tout: t1,
+                            t,
+                        })
+                    })
             }
         }
-        bdf.interpolate(t1, y, Some(yp))
+        .map_err(DivergenceCause::PlantRadau)
     }
 
     fn work(&self) -> PlantWork {
-        let s = self.bdf.as_ref().map(|b| b.stats()).unwrap_or_default();
+        let (s, rejected) = match (&self.bdf, &self.radau) {
+            (Some(b), _) => {
+                let s = b.stats();
+                (
+                    (
+                        s.steps,
+                        s.residual_evaluations,
+                        s.jacobian_evaluations,
+                        s.factorisations,
+                    ),
+                    s.error_test_failures + s.newton_failures,
+                )
+            }
+            (None, Some(r)) => {
+                let s = r.stats();
+                (
+                    (
+                        s.steps,
+                        s.residual_evaluations,
+                        s.jacobian_evaluations,
+                        s.factorisations,
+                    ),
+                    s.error_test_failures + s.newton_failures,
+                )
+            }
+            (None, None) => ((0, 0, 0, 0), 0),
+        };
+        let (steps, residuals, jacobians, factorisations) = s;
         PlantWork {
+            integrator: if self.intervals > 0 {
+                self.method
+            } else {
+                PlantIntegration::Auto
+            },
             intervals: self.intervals,
-            steps: s.steps,
-            rejected_steps: s.error_test_failures + s.newton_failures,
-            residual_evaluations: s.residual_evaluations + self.init_work.residual_evaluations,
-            jacobian_evaluations: s.jacobian_evaluations + self.init_work.jacobian_evaluations,
-            factorisations: s.factorisations + self.init_work.factorisations,
+            steps,
+            rejected_steps: rejected,
+            residual_evaluations: residuals + self.init_work.residual_evaluations,
+            jacobian_evaluations: jacobians + self.init_work.jacobian_evaluations,
+            factorisations: factorisations + self.init_work.factorisations,
         }
     }
+}
+
+/// An integrator taken one step at a time, with the interpolating polynomial of its last
+/// step: what the dense output between two samples needs of BDF and of Radau.
+trait DenseStepper {
+    /// The integrator's own error.
+    type Error;
+    /// The number of unknowns it integrates.
+    fn dimension(&self) -> usize;
+    /// The time reached.
+    fn t(&self) -> f64;
+    /// One step (never past the stop time).
+    fn step(&mut self) -> Result<(), Self::Error>;
+    /// The solution (and its derivative) at `t` within the last step.
+    fn interpolate(&self, t: f64, y: &mut [f64], yp: Option<&mut [f64]>)
+        -> Result<(), Self::Error>;
+}
+
+impl<D: ImplicitDae, L: LinearSolver> DenseStepper for Bdf<D, L> {
+    type Error = BdfError;
+    fn dimension(&self) -> usize {
+        self.dae().dimension()
+    }
+    fn t(&self) -> f64 {
+        Bdf::t(self)
+    }
+    fn step(&mut self) -> Result<(), BdfError> {
+        Bdf::step(self).map(|_| ())
+    }
+    fn interpolate(&self, t: f64, y: &mut [f64], yp: Option<&mut [f64]>) -> Result<(), BdfError> {
+        Bdf::interpolate(self, t, y, yp)
+    }
+}
+
+impl<D: ImplicitDae, L: LinearSolver> DenseStepper for Radau<D, L> {
+    type Error = RadauError;
+    fn dimension(&self) -> usize {
+        self.dae().dimension()
+    }
+    fn t(&self) -> f64 {
+        Radau::t(self)
+    }
+    fn step(&mut self) -> Result<(), RadauError> {
+        Radau::step(self).map(|_| ())
+    }
+    fn interpolate(&self, t: f64, y: &mut [f64], yp: Option<&mut [f64]>) -> Result<(), RadauError> {
+        Radau::interpolate(self, t, y, yp)
+    }
+}
+
+/// Why [`step_with_dense_output`] stopped.
+enum DenseStepError<E> {
+    /// `max_steps` steps did not reach the end; the time reached.
+    TooManySteps { max_steps: usize, t: f64 },
+    /// The integrator's own failure.
+    Integrator(E),
+}
+
+impl<E> From<E> for DenseStepError<E> {
+    fn from(e: E) -> Self {
+        Self::Integrator(e)
+    }
+}
+
+impl<E> DenseStepError<E> {
+    /// The integrator's error, with `too_many(max_steps, t)` its own for the step limit.
+    fn into_error(self, too_many: impl FnOnce(usize, f64) -> E) -> E {
+        match self {
+            Self::TooManySteps { max_steps, t } => too_many(max_steps, t),
+            Self::Integrator(e) => e,
+        }
+    }
+}
+
+/// The steps `solve_to(t1)` would take (the integrator's stop time is `t1`, so the first step
+/// is sized for it and none passes it), one at a time, each of the grid's times due after a
+/// step interpolated and recorded (the first `grid`-dimension unknowns of the integrator's);
+/// then `(y, yp)` at `t1` (their lengths: the integrator's dimension).
+fn step_with_dense_output<S: DenseStepper>(
+    stepper: &mut S,
+    t1: f64,
+    max_steps: usize,
+    grid: &mut DenseGrid,
+    record: &mut dyn FnMut(f64, &[f64]),
+    y: &mut [f64],
+    yp: &mut [f64],
+) -> Result<(), DenseStepError<S::Error>> {
+    let (recorded, dimension) = (grid.dimension, stepper.dimension());
+    if grid.y.len() < dimension {
+        // Once per run at most (a constrained plant's stabilised form has more unknowns).
+        grid.y.resize(dimension, 0.0);
+    }
+    let mut steps = 0;
+    while stepper.t() < t1 {
+        if steps >= max_steps {
+            return Err(DenseStepError::TooManySteps {
+                max_steps,
+                t: stepper.t(),
+            });
+        }
+        stepper.step()?;
+        steps += 1;
+        while let Some(td) = grid.due(stepper.t(), t1) {
+            stepper.interpolate(td, &mut grid.y[..dimension], None)?;
+            record(td, &grid.y[..recorded]);
+            grid.advance();
+        }
+    }
+    Ok(stepper.interpolate(t1, y, Some(yp))?)
 }
 
 /// The times of the dense output, `j * step`, and the work vector they are interpolated into.
@@ -1275,7 +1525,9 @@ struct DenseGrid {
     next: u64,
     /// Times within this of a sample instant are that sample.
     tolerance: f64,
-    /// The plant's `(x, z)` at a time of the grid.
+    /// The plant's unknowns `(x, z)`: the first this many of [`y`](Self::y) are recorded.
+    dimension: usize,
+    /// The integrator's unknowns at a time of the grid (the plant's `(x, z)` first).
     y: Vec<f64>,
 }
 
@@ -1298,6 +1550,7 @@ impl DenseGrid {
             step,
             next: 1,
             tolerance: Self::tolerance(step),
+            dimension,
             y: vec![0.0; dimension],
         })
     }
@@ -1474,34 +1727,24 @@ impl Constrained {
         let mut radau = Radau::new(dae, ls, self.radau.clone(), t0, &ys, &yps)?;
         radau.set_stop_time(t1)?;
         match dense {
-            None => {
-                radau.solve_to(t1, &mut ys, Some(&mut yps))?;
-            }
-            Some((grid, record)) => {
-                // The steps of `solve_to(t1)` one at a time (Radau sizes the first for the
-                // stop time), the grid's times interpolated after each.
-                let mut all = vec![0.0; ys.len()];
-                let mut steps = 0;
-                while radau.t() < t1 {
-                    if steps >= self.radau.max_steps {
-                        return Err(RadauError::TooManySteps {
-                            max_steps: self.radau.max_steps,
-                            tout: t1,
-                            t: radau.t(),
-                        });
-                    }
-                    radau.step()?;
-                    steps += 1;
-                    while let Some(td) = grid.due(radau.t(), t1) {
-                        radau.interpolate(td, &mut all, None)?;
-                        grid.y.copy_from_slice(&all[..n]);
-                        record(td, &grid.y);
-                        grid.advance();
-                    }
-                }
-                radau.interpolate(t1, &mut ys, Some(&mut yps))?;
-            }
-        }
+            None => radau.solve_to(t1, &mut ys, Some(&mut yps)).map(|_| ()),
+            Some((grid, record)) => step_with_dense_output(
+                &mut radau,
+                t1,
+                self.radau.max_steps,
+                grid,
+                record,
+                &mut ys,
+                &mut yps,
+            )
+            .map_err(|e| {
+                e.into_error(|max_steps, t| RadauError::TooManySteps {
+                    max_steps,
+                    tout: t1,
+                    t,
+                })
+            }),
+        }?;
         y.copy_from_slice(&ys[..n]);
         yp.copy_from_slice(&yps[..n]);
         Ok(())

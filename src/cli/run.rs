@@ -511,6 +511,7 @@ where
         tracking_bounds: runner.tracking_bounds(outputs)?,
         max_consecutive_failures: s.plant.max_consecutive_failures,
         output_step: s.output_step,
+        plant_integration: s.plant.integrator,
         ..ClosedLoopOptions::default()
     };
     let start = Instant::now();

@@ -56,7 +56,7 @@ use std::path::Path;
 
 use dpc::core::dpc::Extraction;
 use dpc::core::reference::{AtanIntegral, Constant, Polynomial, ScalarReference, Sinusoid, Sum};
-use dpc::core::simulate::{ClosedLoopOptions, Hold, MIN_OUTPUT_STEP_RATIO};
+use dpc::core::simulate::{ClosedLoopOptions, Hold, PlantIntegration, MIN_OUTPUT_STEP_RATIO};
 use dpc::nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -570,6 +570,10 @@ pub struct PlantOptions {
     /// controller keeps its own); an unknown name is an error listing the model's parameters.
     #[serde(default)]
     pub params: BTreeMap<String, f64>,
+    /// The integrator between samples of a plant without constraints: `auto` (Radau IIA),
+    /// `bdf` or `radau` (a constrained plant always uses Radau IIA).
+    #[serde(default)]
+    pub integrator: PlantIntegration,
 }
 
 fn default_rtol() -> f64 {
@@ -589,6 +593,7 @@ impl Default for PlantOptions {
             atol: default_atol(),
             max_consecutive_failures: default_failures(),
             params: BTreeMap::new(),
+            integrator: PlantIntegration::Auto,
         }
     }
 }

@@ -21,51 +21,88 @@ use faer::perm::PermRef;
 use faer::{c64, Mat, MatMut, Par};
 
 use super::error::StageSystem;
-use crate::linalg::{FactorError, LinearSolver};
+use crate::linalg::{FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
 use crate::sink::MatrixSink;
 use crate::ImplicitDae;
 
-/// Dense complex LU with partial pivoting, workspace allocated at construction.
+/// Dense complex LU with partial pivoting, workspace allocated at construction: up to
+/// [`UNBLOCKED_MAX_DIMENSION`] an unblocked elimination with the dimension a constant (as the
+/// real [`crate::linalg::FaerDenseLu`] does; faer's blocked LU spent most of a small system's
+/// solve in set-up), above it faer's blocked LU.
 pub(crate) struct ComplexLu {
     matrix: Mat<c64>,
-    perm: Vec<usize>,
-    perm_inv: Vec<usize>,
-    mem: MemBuffer,
+    factors: ComplexFactors,
     factored: bool,
+}
+
+/// The factors of [`ComplexLu`] and their work memory.
+enum ComplexFactors {
+    /// Column-major factors and LAPACK-style row interchanges.
+    Unblocked { lu: Vec<c64>, pivots: Vec<usize> },
+    /// faer's blocked LU (in place in the matrix).
+    Blocked {
+        perm: Vec<usize>,
+        perm_inv: Vec<usize>,
+        mem: MemBuffer,
+    },
 }
 
 impl ComplexLu {
     pub fn new(n: usize) -> Self {
-        let par = Par::Seq;
-        let req = factor::lu_in_place_scratch::<usize, c64>(n, n, par, Default::default())
-            .or(solve::solve_in_place_scratch::<usize, c64>(n, 1, par));
+        let factors = if n <= UNBLOCKED_MAX_DIMENSION {
+            ComplexFactors::Unblocked {
+                lu: vec![c64::new(0.0, 0.0); n * n],
+                pivots: vec![0; n],
+            }
+        } else {
+            let par = Par::Seq;
+            let req = factor::lu_in_place_scratch::<usize, c64>(n, n, par, Default::default())
+                .or(solve::solve_in_place_scratch::<usize, c64>(n, 1, par));
+            ComplexFactors::Blocked {
+                perm: vec![0; n],
+                perm_inv: vec![0; n],
+                mem: MemBuffer::new(req),
+            }
+        };
         Self {
             matrix: Mat::zeros(n, n),
-            perm: vec![0; n],
-            perm_inv: vec![0; n],
-            mem: MemBuffer::new(req),
+            factors,
             factored: false,
         }
     }
 
-    /// Factorise the matrix in place; the unfactorised matrix is not kept (the caller can
-    /// rebuild it from `J` and `M` to name a zero row).
+    /// Factorise the matrix; the first column whose pivot is zero or not finite is an error.
+    /// The blocked LU works in place (the caller can rebuild the matrix from `J` and `M` to
+    /// name a zero row).
     fn factor(&mut self) -> Result<(), Option<usize>> {
         let n = self.matrix.nrows();
-        factor::lu_in_place(
-            self.matrix.as_mut(),
-            &mut self.perm,
-            &mut self.perm_inv,
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-            Default::default(),
-        );
-        let m = &self.matrix;
-        if let Some(k) = (0..n).find(|&k| {
-            let d = m[(k, k)];
-            d == c64::new(0.0, 0.0) || !(d.re.is_finite() && d.im.is_finite())
-        }) {
-            self.factored = false;
+        self.factored = false;
+        let regular = |d: c64| d != c64::new(0.0, 0.0) && d.re.is_finite() && d.im.is_finite();
+        let first_irregular = match &mut self.factors {
+            ComplexFactors::Unblocked { lu, pivots } => {
+                for j in 0..n {
+                    lu[j * n..(j + 1) * n].copy_from_slice(self.matrix.col_as_slice(j));
+                }
+                complex_factor_dispatched(lu, n, pivots);
+                (0..n).find(|&k| !regular(lu[k * n + k]))
+            }
+            ComplexFactors::Blocked {
+                perm,
+                perm_inv,
+                mem,
+            } => {
+                factor::lu_in_place(
+                    self.matrix.as_mut(),
+                    perm,
+                    perm_inv,
+                    Par::Seq,
+                    MemStack::new(mem),
+                    Default::default(),
+                );
+                (0..n).find(|&k| !regular(self.matrix[(k, k)]))
+            }
+        };
+        if let Some(k) = first_irregular {
             return Err(Some(k));
         }
         self.factored = true;
@@ -77,17 +114,136 @@ impl ComplexLu {
             return;
         }
         let n = b.len();
-        let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
-        let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
-        solve::solve_in_place(
-            self.matrix.as_ref(),
-            self.matrix.as_ref(),
-            perm,
-            rhs,
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-        );
+        match &mut self.factors {
+            ComplexFactors::Unblocked { lu, pivots } => {
+                complex_solve_dispatched(lu, n, pivots, b);
+            }
+            ComplexFactors::Blocked {
+                perm,
+                perm_inv,
+                mem,
+            } => {
+                let perm = PermRef::new_checked(perm, perm_inv, n);
+                let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
+                solve::solve_in_place(
+                    self.matrix.as_ref(),
+                    self.matrix.as_ref(),
+                    perm,
+                    rhs,
+                    Par::Seq,
+                    MemStack::new(mem),
+                );
+            }
+        }
     }
+}
+
+/// `|re| + |im|`, the pivot size of LAPACK's complex LU.
+#[inline(always)]
+fn abs1(v: c64) -> f64 {
+    v.re.abs() + v.im.abs()
+}
+
+/// `P A = L U` in place for the column-major `n x n` complex `a` (as the real
+/// [`crate::linalg::unblocked`] elimination), `pivots[k]` the row interchanged with row `k`. A
+/// zero pivot is left in place (the caller checks the diagonal); elimination stops there.
+#[inline(always)]
+fn complex_factor(a: &mut [c64], n: usize, pivots: &mut [usize]) {
+    let a = &mut a[..n * n];
+    let pivots = &mut pivots[..n];
+    for k in 0..n {
+        let (left, right) = a.split_at_mut((k + 1) * n);
+        let col_k = &mut left[k * n..];
+        let mut pivot_row = k;
+        let mut best = abs1(col_k[k]);
+        for (i, v) in col_k.iter().enumerate().skip(k + 1) {
+            if abs1(*v) > best {
+                best = abs1(*v);
+                pivot_row = i;
+            }
+        }
+        pivots[k] = pivot_row;
+        if !(best > 0.0 && best.is_finite()) {
+            // Singular or overflowed: leave the rest (the diagonal check reports column k).
+            pivots[k + 1..]
+                .iter_mut()
+                .enumerate()
+                .for_each(|(i, p)| *p = k + 1 + i);
+            return;
+        }
+        if pivot_row != k {
+            for col in left.chunks_exact_mut(n).chain(right.chunks_exact_mut(n)) {
+                col.swap(k, pivot_row);
+            }
+        }
+        let (_, col_k) = left.split_at_mut(k * n);
+        let d = col_k[k].finv();
+        for v in &mut col_k[k + 1..] {
+            *v *= d;
+        }
+        let multipliers = &col_k[k + 1..];
+        for col in right.chunks_exact_mut(n) {
+            let akj = col[k];
+            if akj != c64::new(0.0, 0.0) {
+                for (c, l) in col[k + 1..].iter_mut().zip(multipliers) {
+                    *c -= l * akj;
+                }
+            }
+        }
+    }
+}
+
+/// Overwrite `b` with the solution of `A x = b` from [`complex_factor`].
+#[inline(always)]
+fn complex_solve(lu: &[c64], n: usize, pivots: &[usize], b: &mut [c64]) {
+    let lu = &lu[..n * n];
+    let b = &mut b[..n];
+    for (k, &p) in pivots[..n].iter().enumerate() {
+        if p != k {
+            b.swap(k, p);
+        }
+    }
+    for j in 0..n {
+        let col = &lu[j * n..j * n + n];
+        let bj = b[j];
+        for (bi, l) in b[j + 1..].iter_mut().zip(&col[j + 1..]) {
+            *bi -= l * bj;
+        }
+    }
+    for j in (0..n).rev() {
+        let col = &lu[j * n..j * n + n];
+        b[j] /= col[j];
+        let bj = b[j];
+        for (bi, u) in b[..j].iter_mut().zip(&col[..j]) {
+            *bi -= u * bj;
+        }
+    }
+}
+
+/// [`complex_factor`] with `n` a constant for each size up to [`UNBLOCKED_MAX_DIMENSION`].
+fn complex_factor_dispatched(a: &mut [c64], n: usize, pivots: &mut [usize]) {
+    macro_rules! sizes {
+        ($($k:literal)*) => {
+            match n {
+                $($k => complex_factor(a, $k, pivots),)*
+                _ => complex_factor(a, n, pivots),
+            }
+        };
+    }
+    sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+/// [`complex_solve`] with `n` a constant, as [`complex_factor_dispatched`].
+fn complex_solve_dispatched(lu: &[c64], n: usize, pivots: &[usize], b: &mut [c64]) {
+    macro_rules! sizes {
+        ($($k:literal)*) => {
+            match n {
+                $($k => complex_solve(lu, $k, pivots, b),)*
+                _ => complex_solve(lu, n, pivots, b),
+            }
+        };
+    }
+    sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
 /// Why the stage matrices could not be formed.

@@ -88,6 +88,10 @@ use crate::ImplicitDae;
 /// 1e-8` go from 2.4 / 3.7 / 5.2 to 3.9 / 4.4 / 5.7 with this factor, for 10-20% more steps.
 const HIGHER_INDEX_NEWTON_FACTOR: f64 = 0.03;
 
+/// Relative difference below which a step size counts as the one the stage matrices were
+/// factorised for.
+const SAME_STEP_TOLERANCE: f64 = 1e-12;
+
 /// Weighted RMS norm `sqrt(sum (v_i w_i)^2 / n)`.
 #[inline]
 pub(crate) fn wrms(v: &[f64], w: &[f64]) -> f64 {
@@ -118,6 +122,13 @@ pub struct Radau<D: ImplicitDae, L: LinearSolver> {
     yp: Vec<f64>,
     /// Step size of the next attempt (0 before the first step is chosen).
     h: f64,
+    /// The first step after [`Radau::reinit`]: the step proposed after the last accepted one
+    /// (0: none yet).
+    restart_step: f64,
+    /// The current integration started with [`restart_step`](Self::restart_step): a failed
+    /// first step is then retried with the controller's step, not a tenth (RADAU5's rule
+    /// for a guessed first step).
+    carried_step: bool,
     tstop: Option<f64>,
     /// Polynomial of the last accepted step (valid when `stats.steps > steps_at_start`).
     poly: Collocation,
@@ -234,6 +245,8 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             y: y0.to_vec(),
             yp: yp0.to_vec(),
             h: 0.0,
+            restart_step: 0.0,
+            carried_step: false,
             tstop: None,
             poly,
             steps_at_start: 0,
@@ -251,8 +264,22 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     }
 
     /// Restart from a new point `(t0, y0, yp0)` without allocating (for example after a jump of
-    /// the model's inputs). Statistics keep accumulating; the stop time is cleared, the step
-    /// size is chosen afresh and the Jacobian is evaluated at the first step.
+    /// the model's inputs). Statistics keep accumulating; the stop time is cleared.
+    ///
+    /// The Jacobian and its factorisations are kept when the last step would have kept them
+    /// for its successor (its Newton iteration contracted by at most
+    /// [`Options::jacobian_reuse_rate`]): at the first step Newton's rate decides as at any
+    /// other, and if Newton fails there with the kept Jacobian, the step is retried at the same
+    /// size with a fresh one before it is reduced.
+    ///
+    /// Radau IIA is a one-step method: nothing of the old integration enters the new steps
+    /// except the size of the first one (and the Jacobian, below). Unless
+    /// [`Options::initial_step`] is set, that is the step the controller proposed after the
+    /// last accepted step, cut to the stop time as any step is: a solution whose derivative
+    /// jumps at `t0` but is as smooth as before on either side needs the steps it needed
+    /// before. Should that step fail the error test, it is reduced by the controller's ratio
+    /// (not to a tenth, RADAU5's rule for a guessed first step). Before any step the rule of
+    /// [`Radau::new`] applies.
     ///
     /// # Errors
     /// [`RadauError::DimensionMismatch`], [`RadauError::NonFiniteResidual`] or
@@ -285,14 +312,19 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         self.poly.t0 = t0;
         self.poly.h = 0.0;
         self.poly.y0.copy_from_slice(y0);
-        self.h = 0.0;
+        self.h = match self.opts.initial_step {
+            Some(_) => 0.0,
+            None => self.restart_step,
+        };
+        self.carried_step = self.h > 0.0;
         self.tstop = None;
         self.steps_at_start = self.stats.steps;
         self.faccon = 1.0;
         self.theta = 0.0;
-        self.need_jacobian = true;
+        // The Jacobian (and with an unchanged step the factorisations) is kept when the last
+        // step would have kept it: a restart on the same trajectory moves it little, and a
+        // kept Jacobian that makes Newton fail is replaced at once (`step_internal`).
         self.sm.current = false;
-        self.sm.factored = false;
         self.controller.reset();
         Ok(())
     }
@@ -596,7 +628,10 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 self.stats.jacobian_evaluations += 1;
             }
             self.update_weights(h)?;
-            if !self.sm.factored || self.sm.h_factored != h {
+            // A factorisation for a step within round-off of this one serves it (a step cut
+            // to a stop time differs from the same step a sample earlier by a few ulps).
+            let refactor = (self.sm.h_factored - h).abs() > SAME_STEP_TOLERANCE * h;
+            if !self.sm.factored || refactor {
                 self.stats.factorisations += 1;
                 if let Err(f) = self
                     .sm
@@ -641,6 +676,13 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 NewtonOutcome::Failed { factor } => {
                     self.stats.newton_failures += 1;
                     newton_failures += 1;
+                    if self.nst() == 0 && !self.sm.current && !rejected {
+                        // The Jacobian kept across a restart does not fit the new point:
+                        // the same step with a fresh one.
+                        self.need_jacobian = true;
+                        rejected = true;
+                        continue;
+                    }
                     if newton_failures >= self.opts.max_newton_failures {
                         return Err(RadauError::RepeatedFailures {
                             t: self.t,
@@ -713,7 +755,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                     cause: StepFailure::ErrorTest,
                 });
             }
-            h = if self.nst() == 0 {
+            h = if self.nst() == 0 && !self.carried_step {
                 0.1 * h
             } else {
                 h / Controller::quotient(&self.opts, err, iterations)
@@ -747,6 +789,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             h_new = h_new.min(h);
         }
         h_new = h_new.min(self.opts.max_step);
+        self.restart_step = h_new;
         let keep_jacobian = theta <= self.opts.jacobian_reuse_rate;
         let (q1, q2) = self.opts.keep_step_window;
         let ratio = h_new / h;

@@ -111,10 +111,13 @@ fn transformed_norm(dw: &[f64], dc: &[c64], w: &[f64]) -> f64 {
 /// Stage derivatives `Y'_i = (1/h) sum_j (A^{-1})_ij Z_j`.
 pub(crate) fn stage_derivatives(tab: &Tableau, h: f64, z: &[Vec<f64>; 3], yp: &mut [Vec<f64>; 3]) {
     let r = 1.0 / h;
+    let n = z[0].len();
+    // Cut to one length so that the loop compiles without bounds checks.
+    let (z0, z1, z2) = (&z[0][..n], &z[1][..n], &z[2][..n]);
     for (i, ypi) in yp.iter_mut().enumerate() {
         let a = tab.a_inv[i];
-        for (k, v) in ypi.iter_mut().enumerate() {
-            *v = r * (a[0] * z[0][k] + a[1] * z[1][k] + a[2] * z[2][k]);
+        for (k, v) in ypi[..n].iter_mut().enumerate() {
+            *v = r * (a[0] * z0[k] + a[1] * z1[k] + a[2] * z2[k]);
         }
     }
 }
@@ -146,8 +149,8 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
         // Residuals at the stages.
         stage_derivatives(tab, p.h, &work.z, &mut work.yp);
         for i in 0..3 {
-            for k in 0..n {
-                work.ys[k] = p.y[k] + work.z[i][k];
+            for ((s, y), z) in work.ys.iter_mut().zip(p.y).zip(&work.z[i]) {
+                *s = y + z;
             }
             let ti = p.t + tab.c[i] * p.h;
             dae.residual(ti, &work.ys, &work.yp[i], &mut work.f[i]);
@@ -158,12 +161,16 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
         }
         // Transformed residuals R = (T^{-1} ⊗ I) F, and the two solves for -ΔW.
         let ti = tab.t_inv;
-        for k in 0..n {
-            let (f0, f1, f2) = (work.f[0][k], work.f[1][k], work.f[2][k]);
-            dz[0][k] = -(ti[0][0] * f0 + ti[0][1] * f1 + ti[0][2] * f2);
-            let r1 = ti[1][0] * f0 + ti[1][1] * f1 + ti[1][2] * f2;
-            let r2 = ti[2][0] * f0 + ti[2][1] * f1 + ti[2][2] * f2;
-            work.rc[k] = c64::new(-r1, -r2);
+        {
+            let (f0, f1, f2) = (&work.f[0][..n], &work.f[1][..n], &work.f[2][..n]);
+            let (dw, rc) = (&mut dz[0][..n], &mut work.rc[..n]);
+            for k in 0..n {
+                let (f0, f1, f2) = (f0[k], f1[k], f2[k]);
+                dw[k] = -(ti[0][0] * f0 + ti[0][1] * f1 + ti[0][2] * f2);
+                let r1 = ti[1][0] * f0 + ti[1][1] * f1 + ti[1][2] * f2;
+                let r2 = ti[2][0] * f0 + ti[2][1] * f1 + ti[2][2] * f2;
+                rc[k] = c64::new(-r1, -r2);
+            }
         }
         sm.solve_real(&mut dz[0]);
         sm.solve_complex(&mut work.rc);
@@ -175,10 +182,14 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
         };
         // ΔZ = (T ⊗ I) ΔW, written over dz.
         let t = tab.t;
-        for k in 0..n {
-            let (w0, w1, w2) = (dz[0][k], work.rc[k].re, work.rc[k].im);
-            for (i, row) in t.iter().enumerate() {
-                dz[i][k] = row[0] * w0 + row[1] * w1 + row[2] * w2;
+        {
+            let [d0, d1, d2] = dz;
+            let (d0, d1, d2, rc) = (&mut d0[..n], &mut d1[..n], &mut d2[..n], &work.rc[..n]);
+            for k in 0..n {
+                let (w0, w1, w2) = (d0[k], rc[k].re, rc[k].im);
+                d0[k] = t[0][0] * w0 + t[0][1] * w1 + t[0][2] * w2;
+                d1[k] = t[1][0] * w0 + t[1][1] * w1 + t[1][2] * w2;
+                d2[k] = t[2][0] * w0 + t[2][1] * w1 + t[2][2] * w2;
             }
         }
         let dyno = if p.transformed_norm {
