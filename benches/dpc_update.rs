@@ -22,8 +22,8 @@
 mod wheel_loop;
 
 use criterion::{criterion_group, Criterion};
-use dpc::core::dpc::{Dpc, DpcOptions, Extraction};
-use dpc::core::linalg::{LinearSolver, NalgebraLu};
+use dpc::core::controller::{Dpc, DpcOptions, Extraction};
+use dpc::core::linear_solver::{LinearSolver, NalgebraLu};
 use dpc::core::model::DaeModel;
 use dpc::core::simulate::Hold;
 use dpc_models::wheel_design;

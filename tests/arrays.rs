@@ -6,10 +6,10 @@
 mod common;
 
 use common::{check_model, dims};
+use dpc::core::controller::{Dpc, DpcOptions};
 use dpc::core::design::{design, DesignOptions};
-use dpc::core::dpc::{Dpc, DpcOptions};
-use dpc::core::linalg::NalgebraLu;
-use dpc::core::linear::AnalysisOptions;
+use dpc::core::linear_analysis::AnalysisOptions;
+use dpc::core::linear_solver::NalgebraLu;
 use dpc::core::model::{parameter_by_name, set_parameter_by_name, DaeModel};
 use dpc::core::prefeedback::SteadyMotion;
 use dpc::core::simulate::{simulate, ClosedLoopOptions};

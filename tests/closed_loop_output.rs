@@ -10,8 +10,8 @@
 //! * A bad output step is a typed error before the run.
 
 use dpc::core::bdf::{consistent_initial_values, Bdf, Options};
-use dpc::core::dpc::{Dpc, DpcOptions};
-use dpc::core::linalg::{FaerDenseLu, NalgebraLu};
+use dpc::core::controller::{Dpc, DpcOptions};
+use dpc::core::linear_solver::{FaerDenseLu, NalgebraLu};
 use dpc::core::simulate::{
     simulate, simulate_with_progress, ClosedLoop, ClosedLoopOptions, Hold, OutputStepProblem,
     SimulateError,

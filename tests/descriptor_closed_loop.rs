@@ -15,11 +15,11 @@
 //! plant tolerance, not bit for bit: at `delta = 1e-7` to the plant tolerance (the
 //! descriptor form's tracking DAE is of index 2, its rope constraint differentiated once).
 
+use dpc::core::controller::{Dpc, DpcOptions};
 use dpc::core::design::{check_relative_degrees, design, Design, DesignOptions};
-use dpc::core::dpc::{Dpc, DpcOptions};
-use dpc::core::linalg::FaerDenseLu;
-use dpc::core::linear::descriptor::DescriptorError;
-use dpc::core::linear::AnalysisOptions;
+use dpc::core::linear_analysis::descriptor::DescriptorError;
+use dpc::core::linear_analysis::AnalysisOptions;
+use dpc::core::linear_solver::FaerDenseLu;
 use dpc::core::prefeedback::{Prefeedback, SteadyMotion};
 use dpc::core::simulate::{
     simulate, ClosedLoop, ClosedLoopOptions, DivergenceCause, Hold, SimulateError,

@@ -14,11 +14,11 @@
 //! of the minimal-coordinate model at the same physical state.
 
 use dpc::core::consistent::{consistent_state, ConsistentError, ConsistentOptions};
-use dpc::core::linear::descriptor::{
+use dpc::core::linear_analysis::descriptor::{
     linearize_descriptor, DescriptorError, DescriptorOptions, ManifoldRealisation,
 };
-use dpc::core::linear::transfer::transfer_matrix;
-use dpc::core::linear::{analyze, eigenvalues, Analysis, AnalysisOptions, LinearSystem};
+use dpc::core::linear_analysis::transfer::transfer_matrix;
+use dpc::core::linear_analysis::{analyze, eigenvalues, Analysis, AnalysisOptions, LinearSystem};
 use dpc::core::linearize::{linearize, OperatingPoint};
 use dpc::nalgebra::Complex;
 use dpc::nalgebra::DMatrix;

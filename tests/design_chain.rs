@@ -7,7 +7,7 @@ use dpc::core::design::{
     check_relative_degrees, design, trim, DesignError, DesignOptions, TrimOptions, TrimProblem,
     TrimValue,
 };
-use dpc::core::linear::AnalysisOptions;
+use dpc::core::linear_analysis::AnalysisOptions;
 use dpc::core::{DaeModel, TrackingDae};
 
 dpc::model! {

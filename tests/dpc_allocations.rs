@@ -7,8 +7,8 @@ use std::alloc::{GlobalAlloc, Layout, System};
 
 use std::sync::{Arc, Mutex};
 
-use dpc::core::dpc::{Dpc, DpcOptions, Extraction};
-use dpc::core::linalg::NalgebraLu;
+use dpc::core::controller::{Dpc, DpcOptions, Extraction};
+use dpc::core::linear_solver::NalgebraLu;
 use dpc::core::simulate::{simulate, ClosedLoopOptions, Hold};
 use dpc_models::wheel_design;
 use dpc_models::{Wheel, WheelReference, WheelTracking};

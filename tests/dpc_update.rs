@@ -2,9 +2,9 @@
 //! limit `delta -> 0` of the extracted control is known from the linear analysis:
 //! `u = K_J x + R_xi(d/dt) xi` (paper, (3.8)-(3.10)).
 
-use dpc::core::dpc::{Dpc, DpcError, DpcOptions, Extraction};
-use dpc::core::linalg::NalgebraLu;
-use dpc::core::linear::{analyze, AnalysisOptions, LinearSystem};
+use dpc::core::controller::{Dpc, DpcError, DpcOptions, Extraction};
+use dpc::core::linear_analysis::{analyze, AnalysisOptions, LinearSystem};
+use dpc::core::linear_solver::NalgebraLu;
 use dpc::core::reference::{Components, Constant, Sinusoid};
 use dpc::nalgebra::{DMatrix, DVector};
 use dpc_models::WheelLinearTracking;

@@ -7,10 +7,10 @@
 
 mod common;
 
+use dpc::core::controller::{Dpc, DpcOptions};
 use dpc::core::design::{design, DesignOptions};
-use dpc::core::dpc::{Dpc, DpcOptions};
-use dpc::core::linalg::{LinearSolver, NalgebraLu};
-use dpc::core::linear::AnalysisOptions;
+use dpc::core::linear_analysis::AnalysisOptions;
+use dpc::core::linear_solver::{LinearSolver, NalgebraLu};
 use dpc::core::model::DaeModel;
 use dpc::core::prefeedback::SteadyMotion;
 use dpc::core::simulate::{simulate, ClosedLoopOptions};
@@ -331,7 +331,7 @@ fn the_derivative_rows_vanish_along_a_plant_trajectory() {
 /// error over `t` in `[4, 6]`. Two steps keep the mass matrix implicit (index 3); three and
 /// four differentiate the link equations once and twice (index 2 and 1).
 fn arm2_late_error(steps: usize) -> f64 {
-    use dpc::core::linalg::FaerDenseLu;
+    use dpc::core::linear_solver::FaerDenseLu;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/src/arm.rs");
     let source = std::fs::read_to_string(path).unwrap();
     let body = common::model_text::invocations(&source)

@@ -3,7 +3,7 @@
 //! paper's invariants: `eig(Abar_4) = {5, 2.5 +- 5.2163 i}` with `W = s + 5`, DPC unstable
 //! without preliminary feedback and stable with it.
 
-use dpc::core::linear::{analyze, AnalysisOptions};
+use dpc::core::linear_analysis::{analyze, AnalysisOptions};
 use dpc::core::linearize::{linearize, LinearizeError, OperatingPoint};
 use dpc::nalgebra::DMatrix;
 use dpc_models::{Pendulum, Wheel};

@@ -7,13 +7,13 @@
 //!
 //! The sampling-period study compares the period at which the nonlinear loop starts to
 //! diverge with the linear sampled-data prediction for the same `K_n` and hold variant
-//! (`dpc::core::linear::sampled`). The bisection itself is an example:
+//! (`dpc::core::linear_analysis::sampled`). The bisection itself is an example:
 //! `cargo run --release --example sampling_period`.
 
 #[path = "common/wheel_loop.rs"]
 mod wheel_loop;
 
-use dpc::core::dpc::Extraction;
+use dpc::core::controller::Extraction;
 use dpc::core::simulate::{ControllerEvent, Hold};
 use wheel_loop::*;
 

@@ -5,7 +5,7 @@
 use std::process::ExitCode;
 
 use dpc::cli::registry::{Entry, Registry};
-use dpc::core::linalg::NalgebraLu;
+use dpc::core::linear_solver::NalgebraLu;
 use dpc_models::{
     Arm2, Arm2Reference, Arm2Tracking, Arm6, Arm6Reference, Arm6Tracking, CartPendulum,
     CartPendulumJoint, CartPendulumJointReference, CartPendulumJointTracking,

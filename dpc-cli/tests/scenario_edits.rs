@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use dpc::cli::registry::{Entry, Registry};
-use dpc::core::linalg::NalgebraLu;
+use dpc::core::linear_solver::NalgebraLu;
 use dpc_models::{
     FlexibleJoint, FlexibleJointReference, FlexibleJointTracking, Wheel, WheelReference,
     WheelTracking,

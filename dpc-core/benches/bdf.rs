@@ -9,7 +9,7 @@ mod problems;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use dpc_core::bdf::{Bdf, FixedBdf, Options, Tolerance};
-use dpc_core::linalg::{FaerDenseLu, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, NalgebraLu};
 use problems::*;
 use std::hint::black_box;
 

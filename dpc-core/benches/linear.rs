@@ -2,7 +2,7 @@
 //! states (normal form with zero dynamics, random orthogonal coordinates).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
+use dpc_core::linear_analysis::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
 use nalgebra::DMatrix;
 
 fn rng(seed: &mut u64) -> f64 {

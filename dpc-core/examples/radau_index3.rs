@@ -13,7 +13,7 @@
 #[path = "../tests/common/testset_index3.rs"]
 mod testset;
 
-use dpc_core::linalg::FaerDenseLu;
+use dpc_core::linear_solver::FaerDenseLu;
 use dpc_core::radau::{Options, Radau, Stats};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;

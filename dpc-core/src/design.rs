@@ -26,12 +26,12 @@
 //!   relative degree is not its true one is reported before a closed loop runs into a
 //!   singular iteration matrix.
 
-use crate::linear::descriptor::{
+use crate::linear_analysis::descriptor::{
     descriptor_system, linearize_descriptor, DescriptorError, DescriptorOptions,
     ManifoldRealisation,
 };
-use crate::linear::sampled::SampledLoop;
-use crate::linear::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
+use crate::linear_analysis::sampled::SampledLoop;
+use crate::linear_analysis::{analyze, Analysis, AnalysisOptions, LinearError, LinearSystem};
 use crate::linearize::{linearize, LinearizeError, OperatingPoint};
 use crate::model::{DaeModel, Names, Structure};
 use crate::numeric::max_or_nan;
@@ -741,7 +741,7 @@ impl Design {
     }
 
     /// DPC's limit law on this linearisation held by `hold` (see
-    /// [`crate::linear::sampled`]): with the preliminary feedback `K_n` when `prefeedback` is
+    /// [`crate::linear_analysis::sampled`]): with the preliminary feedback `K_n` when `prefeedback` is
     /// set (and the analysis built one), else plain DPC.
     ///
     /// # Errors
@@ -812,7 +812,7 @@ impl Design {
     /// compiled relative degrees: the closed loop gives the controller a state on the constraint
     /// manifold (positions and velocities consistent), so the constraint chain starts consistent
     /// and adds no unusable inner steps; only the output chains do, as for the plant in minimal
-    /// coordinates. Pass it as [`DpcOptions::nu`](crate::dpc::DpcOptions::nu).
+    /// coordinates. Pass it as [`DpcOptions::nu`](crate::controller::DpcOptions::nu).
     ///
     /// # Errors
     /// [`DesignError::Unreached`] for an output no input reaches at the nominal.

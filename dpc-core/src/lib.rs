@@ -11,11 +11,11 @@
 //! * [`design`]: the design chain of a preliminary feedback (trim, linearise, analyse, `K_n`)
 //!   and the check of the relative degrees at the nominal;
 //! * [`error`]: errors shared by the layers (an option out of range);
-//! * [`dpc`]: one sampled update of the Descriptor Predictive Controller;
+//! * [`controller`]: one sampled update of the Descriptor Predictive Controller;
 //! * [`bdf`]: the variable-step variable-order BDF integrator and its fixed-step mode;
 //! * [`radau`]: the Radau IIA integrator (order 5) for DAEs of index up to 3 as declared;
-//! * [`linalg`]: the linear solvers behind the integrator's Newton iteration;
-//! * [`linear`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
+//! * [`linear_solver`]: the linear solvers behind the integrator's Newton iteration;
+//! * [`linear_analysis`]: the linear DPC analysis of Section 3 (pencil split, `K_J`, `R_xi`, `Abar_4`,
 //!   verdict, preliminary feedback `K_n`);
 //! * [`linearize`]: state-space linearisation of a generated model from its Jacobians;
 //! * [`numeric`]: floating-point helpers (a maximum that keeps NaN);
@@ -28,12 +28,12 @@
 
 pub mod bdf;
 pub mod consistent;
+pub mod controller;
 pub mod dae;
 pub mod design;
-pub mod dpc;
 pub mod error;
-pub mod linalg;
-pub mod linear;
+pub mod linear_analysis;
+pub mod linear_solver;
 pub mod linearize;
 pub mod model;
 pub mod numeric;

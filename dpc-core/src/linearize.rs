@@ -7,7 +7,7 @@
 //! The solve uses a column-pivoted QR factorisation, and the rank decision is relative to the
 //! norm of `[F_x' F_z]`; no Jacobian comes from finite differences.
 
-use crate::linear::LinearSystem;
+use crate::linear_analysis::LinearSystem;
 use crate::model::DaeModel;
 use nalgebra::DMatrix;
 use thiserror::Error;
@@ -42,7 +42,7 @@ pub enum LinearizeError {
     /// The linear system could not be formed (for example outputs and inputs differ in
     /// number).
     #[error(transparent)]
-    System(#[from] crate::linear::LinearError),
+    System(#[from] crate::linear_analysis::LinearError),
 }
 
 /// A point `(t, x, x', z, u)` of a model.
@@ -62,7 +62,7 @@ pub struct OperatingPoint<'a> {
 
 /// The residual and every Jacobian block of a model at one [`OperatingPoint`]: what the
 /// state-space linearisation ([`linearize`]) and the descriptor linearisation
-/// ([`crate::linear::descriptor::descriptor_system`]) are built from.
+/// ([`crate::linear_analysis::descriptor::descriptor_system`]) are built from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Jacobians {
     /// `F` at the point (checked by the callers that need it to vanish).

@@ -9,7 +9,7 @@
 //! * [`Prefeedback`]: the law itself, with the one chain rule `dF/dx + dF/du K_n` that both the
 //!   controller (on the tracking DAE) and the closed loop (on the plant) need.
 //!
-//! `K_n` comes from [`crate::linear::analyze`] on a linearisation about the nominal; the whole
+//! `K_n` comes from [`crate::linear_analysis::analyze`] on a linearisation about the nominal; the whole
 //! chain from a model to a law is [`crate::design`].
 
 use crate::reference::{Reference, ReferenceError};
@@ -254,7 +254,7 @@ impl<N: Nominal, R: Reference> Nominal for ReferenceNominal<N, R> {
 /// A preliminary feedback `u = u0(t) + K_n (x - x0(t)) + v` (paper, Section 3.1), applied in
 /// deviation coordinates about a nominal trajectory.
 pub struct Prefeedback {
-    /// `K_n` (`inputs x states`), from [`crate::linear::analyze`] on the linearisation.
+    /// `K_n` (`inputs x states`), from [`crate::linear_analysis::analyze`] on the linearisation.
     pub k_n: DMatrix<f64>,
     /// The nominal trajectory.
     pub nominal: Box<dyn Nominal + Send + Sync>,

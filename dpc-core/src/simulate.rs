@@ -1,7 +1,7 @@
 //! Closed-loop simulation of sampled DPC (paper, Section 5).
 //!
 //! At each sample `t_k = k h` the controller measures the plant state and computes a control
-//! ([`crate::dpc::Dpc::control`]); the plant, which may be a different model or have different
+//! ([`crate::controller::Dpc::control`]); the plant, which may be a different model or have different
 //! parameters than the controller's (to study mismatch), is then integrated accurately to
 //! `t_(k+1)` with the control held (zero-order hold). Two hold variants: hold the whole input
 //! `u`, or, with a preliminary feedback, apply `u = u0 + K_n (x - x0) + v` continuously and
@@ -27,7 +27,7 @@
 //! position constraints with their multipliers, index 3, or velocity constraints, index 2;
 //! classified by [`ConstraintStructure`]) is handled as follows:
 //! * before the run, the pencil of its linearisation at the given state is checked
-//!   ([`crate::linear::descriptor`]): a singular pencil or an index above 3 is a
+//!   ([`crate::linear_analysis::descriptor`]): a singular pencil or an index above 3 is a
 //!   [`SimulateError::Descriptor`]; the given state is then made consistent
 //!   ([`consistent_state`]: positions onto the constraints, velocities onto their hidden
 //!   derivatives), and how far it moved is reported in [`ClosedLoop::constraints`];
@@ -65,11 +65,13 @@ use crate::bdf::{Bdf, BdfError, InitWorkspace, Options};
 use crate::consistent::{
     consistent_state, ConsistentError, ConsistentOptions, ConstraintStructure,
 };
+use crate::controller::{Dpc, DpcError};
 use crate::dae::ImplicitDae;
-use crate::dpc::{Dpc, DpcError};
 use crate::error::InvalidOption;
-use crate::linalg::{FaerDenseLu, LinearSolver};
-use crate::linear::descriptor::{descriptor_system, realise, DescriptorError, DescriptorOptions};
+use crate::linear_analysis::descriptor::{
+    descriptor_system, realise, DescriptorError, DescriptorOptions,
+};
+use crate::linear_solver::{FaerDenseLu, LinearSolver};
 use crate::linearize::OperatingPoint;
 use crate::model::DaeModel;
 use crate::numeric::{max_or_nan, Readable};
@@ -429,7 +431,7 @@ pub struct ClosedLoop {
     /// Every sample at which the controller retried or failed, in time order.
     pub events: Vec<ControllerEvent>,
     /// The largest round-off level `eps * delta^-nu` of an update over the run (see
-    /// [`crate::dpc::UpdateReport::roundoff`]).
+    /// [`crate::controller::UpdateReport::roundoff`]).
     pub max_roundoff: f64,
     /// For a constrained plant: its constraint structure and how far states were moved onto
     /// the constraint manifold; `None` for an ODE or index-1 plant.

@@ -11,7 +11,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use dpc_core::bdf::{Bdf, FixedBdf, Options, Tolerance};
-use dpc_core::linalg::{FaerDenseLu, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, NalgebraLu};
 use problems::{robertson_atol, Pendulum, Robertson, PENDULUM_INDEX};
 
 struct Counting;

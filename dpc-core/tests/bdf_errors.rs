@@ -4,7 +4,7 @@
 mod problems;
 
 use dpc_core::bdf::{consistent_initial_values, Bdf, BdfError, FixedBdf, Options, Tolerance};
-use dpc_core::linalg::{FaerDenseLu, FaerSparseLu, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, FaerSparseLu, NalgebraLu};
 use dpc_core::{ImplicitDae, MatrixSink};
 use problems::Robertson;
 
@@ -63,7 +63,11 @@ impl ImplicitDae for Broken {
     }
 }
 
-fn run<L: dpc_core::linalg::LinearSolver>(kind: u8, ls: L, y0: [f64; 2]) -> Result<(), BdfError> {
+fn run<L: dpc_core::linear_solver::LinearSolver>(
+    kind: u8,
+    ls: L,
+    y0: [f64; 2],
+) -> Result<(), BdfError> {
     let yp0 = [-y0[0], 0.0];
     let mut bdf = Bdf::new(Broken { kind }, ls, Options::default(), 0.0, &y0, &yp0)?;
     let mut y = [0.0; 2];

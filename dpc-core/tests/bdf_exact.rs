@@ -2,7 +2,7 @@
 //! convergence order of the fixed-step mode.
 
 use dpc_core::bdf::{Bdf, FixedBdf, HigherIndexControl, Options};
-use dpc_core::linalg::{FaerDenseLu, FaerSparseLu, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, FaerSparseLu, NalgebraLu};
 use dpc_core::{ImplicitDae, MatrixSink};
 
 #[derive(Clone, Copy)]

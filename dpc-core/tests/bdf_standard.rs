@@ -6,7 +6,7 @@
 mod problems;
 
 use dpc_core::bdf::{consistent_initial_values, Bdf, Options, Tolerance};
-use dpc_core::linalg::{FaerDenseLu, FaerLu, FaerSparseLu, LinearSolver, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, FaerLu, FaerSparseLu, LinearSolver, NalgebraLu};
 use dpc_core::ImplicitDae;
 use problems::*;
 use std::time::Instant;

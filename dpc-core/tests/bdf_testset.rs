@@ -8,7 +8,7 @@
 mod testset_index1;
 
 use dpc_core::bdf::{Bdf, Options, Stats};
-use dpc_core::linalg::NalgebraLu;
+use dpc_core::linear_solver::NalgebraLu;
 use testset_index1::*;
 
 /// To `t = 0.2` at `rtol = atol = tol`: (scd over all eight components, stats).
@@ -84,7 +84,7 @@ fn andrews_bdf(
     };
     let mut bdf = Bdf::new(
         Andrews,
-        dpc_core::linalg::FaerDenseLu::new(27),
+        dpc_core::linear_solver::FaerDenseLu::new(27),
         opts,
         0.0,
         &y0,

@@ -1,6 +1,6 @@
 //! Every error of the linear analysis, with a message that says what was found.
 
-use dpc_core::linear::{analyze, place, AnalysisOptions, LinearError, LinearSystem};
+use dpc_core::linear_analysis::{analyze, place, AnalysisOptions, LinearError, LinearSystem};
 use nalgebra::DMatrix;
 use num_complex::Complex;
 
@@ -169,14 +169,14 @@ fn bad_poles() {
     let sys = double_integrator();
     let opts = AnalysisOptions {
         poles: Some(vec![Complex::new(-1.0, 1.0), Complex::new(-2.0, 0.0)]),
-        prefeedback: dpc_core::linear::PrefeedbackPolicy::Always,
+        prefeedback: dpc_core::linear_analysis::PrefeedbackPolicy::Always,
         ..Default::default()
     };
     let e = analyze(&sys, &opts).unwrap_err();
     assert!(matches!(e, LinearError::BadPoles { .. }), "{e}");
     let opts = AnalysisOptions {
         poles: Some(vec![Complex::new(-1.0, 0.0)]),
-        prefeedback: dpc_core::linear::PrefeedbackPolicy::Always,
+        prefeedback: dpc_core::linear_analysis::PrefeedbackPolicy::Always,
         ..Default::default()
     };
     let e = analyze(&sys, &opts).unwrap_err();
@@ -201,7 +201,7 @@ fn place_handles_multiplicity_above_rank_b_and_complex_pairs() {
         Complex::new(-3.0, 0.0),
     ];
     let k = place::place(&a, &b2, &poles, 100.0).unwrap();
-    let ev = dpc_core::linear::eigenvalues(&(&a + &b2 * &k)).unwrap();
+    let ev = dpc_core::linear_analysis::eigenvalues(&(&a + &b2 * &k)).unwrap();
     for p in poles {
         assert!(ev.iter().any(|z| (z - p).norm() < 1e-8), "{ev:?}");
     }

@@ -2,7 +2,7 @@
 //! compared (eigenvalues, transfer matrices, `R_xi`), never coordinate-dependent entries: the
 //! paper's printed `Kbar_n` has a sign error with its printed `Q`.
 
-use dpc_core::linear::{
+use dpc_core::linear_analysis::{
     analyze, eigenvalues, transfer::polynomial_at, transfer::transfer_matrix, zeros,
     AnalysisOptions, LinearSystem,
 };

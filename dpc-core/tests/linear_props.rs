@@ -7,7 +7,7 @@
 //! and c), closed loop = zeros ∪ eig(Abar_4), Theorem 3.3, and after the preliminary feedback
 //! eig(Abar_4 + Bbar_2 K_2) = the requested poles.
 
-use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
+use dpc_core::linear_analysis::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
 use nalgebra::DMatrix;
 use num_complex::Complex;
 use proptest::prelude::*;
@@ -160,7 +160,7 @@ proptest! {
             "zeros {:?} vs {:?}", r.transmission_zeros, k.zeros);
         for z in &r.transmission_zeros {
             let hat = &k.sys;
-            prop_assert!(dpc_core::linear::zeros::rosenbrock_sigma_min(hat, *z) < 1e-8,
+            prop_assert!(dpc_core::linear_analysis::zeros::rosenbrock_sigma_min(hat, *z) < 1e-8,
                 "Rosenbrock matrix keeps full rank at the zero {}", z);
         }
         let law = &r.law;

@@ -1,7 +1,7 @@
 //! The verdict of Theorem 3.2 in the three typical situations: stable without help, stable only
 //! with the preliminary feedback, and non-minimum phase (no preliminary feedback can help).
 
-use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
+use dpc_core::linear_analysis::{analyze, AnalysisOptions, LinearSystem, PrefeedbackPolicy};
 use nalgebra::DMatrix;
 use num_complex::Complex;
 

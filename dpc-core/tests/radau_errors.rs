@@ -2,7 +2,7 @@
 //! user wrote, never a panic.
 
 use dpc_core::bdf::Tolerance;
-use dpc_core::linalg::{FaerDenseLu, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, NalgebraLu};
 use dpc_core::radau::{Options, Radau, RadauError, StageSystem, StepFailure};
 use dpc_core::{ImplicitDae, MatrixSink};
 
@@ -66,7 +66,7 @@ impl ImplicitDae for Broken {
     }
 }
 
-fn run<L: dpc_core::linalg::LinearSolver>(
+fn run<L: dpc_core::linear_solver::LinearSolver>(
     kind: u8,
     ls: L,
     opts: Options,

@@ -2,7 +2,7 @@
 //! the observed order of the method in constant-step runs, the scaling of the error with the
 //! tolerance, and the accuracy of the dense output.
 
-use dpc_core::linalg::{FaerDenseLu, FaerSparseLu, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, FaerSparseLu, NalgebraLu};
 use dpc_core::radau::{Options, Radau};
 use dpc_core::{ImplicitDae, MatrixSink};
 

@@ -9,7 +9,7 @@ mod bdf_problems;
 mod testset;
 
 use bdf_problems::{Pendulum, PENDULUM_INDEX};
-use dpc_core::linalg::{FaerDenseLu, FaerSparseLu, LinearSolver, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, FaerSparseLu, LinearSolver, NalgebraLu};
 use dpc_core::radau::{Options, Radau, Stats};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;

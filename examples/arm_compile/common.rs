@@ -6,9 +6,9 @@
 // is what a user's crate with this arm and this use of it costs.
 
 use dpc::core::design::{design, DesignOptions};
-use dpc::core::dpc::{Dpc, DpcOptions};
-use dpc::core::linalg::NalgebraLu;
-use dpc::core::linear::AnalysisOptions;
+use dpc::core::controller::{Dpc, DpcOptions};
+use dpc::core::linear_solver::NalgebraLu;
+use dpc::core::linear_analysis::AnalysisOptions;
 use dpc::core::prefeedback::SteadyMotion;
 use dpc::core::simulate::{simulate, ClosedLoopOptions};
 use dpc::core::DaeModel;

@@ -10,7 +10,7 @@
 use std::f64::consts::FRAC_PI_2;
 
 use dpc::core::design::{self, Design, DesignError, DesignOptions};
-use dpc::core::linear::AnalysisOptions;
+use dpc::core::linear_analysis::AnalysisOptions;
 use dpc::core::prefeedback::{
     NominalError, Prefeedback, ReferenceNominal, ReferenceState, SteadyMotion,
 };

@@ -43,9 +43,9 @@ pub mod text;
 
 pub use command::main;
 
+use dpc::core::controller::DpcError;
 use dpc::core::design::DesignError;
-use dpc::core::dpc::DpcError;
-use dpc::core::linear::LinearError;
+use dpc::core::linear_analysis::LinearError;
 use dpc::core::reference::ReferenceError;
 use dpc::core::simulate::SimulateError;
 use dpc::core::tracking::TrackingError;

@@ -24,7 +24,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use dpc::core::linalg::{FaerDenseLu, LinearSolver};
+use dpc::core::linear_solver::{FaerDenseLu, LinearSolver};
 use dpc::core::model::DaeModel;
 use dpc::core::reference::Reference;
 use dpc::core::TrackingDae;
@@ -76,7 +76,7 @@ type SolverFactory<L> = Box<dyn Fn() -> L + Send + Sync>;
 
 /// One compiled model: a plant, its tracking DAE, optionally the model's own reference, and
 /// the linear solver of the controller's Newton iteration (by default a dense LU sized at run
-/// time, [`FaerDenseLu`]; a fixed-size [`dpc::core::linalg::NalgebraLu`] through
+/// time, [`FaerDenseLu`]; a fixed-size [`dpc::core::linear_solver::NalgebraLu`] through
 /// [`Entry::solver`] avoids every heap allocation in the update).
 pub struct Entry<P, T, L = FaerDenseLu> {
     pub(crate) name: String,

@@ -13,14 +13,14 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
+use dpc::core::controller::{Dpc, DpcOptions};
 use dpc::core::design::{
     check_steady, design, trim, Design, DesignError, DesignOptions, Trim, TrimError, TrimOptions,
     TrimProblem, TrimValue,
 };
-use dpc::core::dpc::{Dpc, DpcOptions};
-use dpc::core::linalg::LinearSolver;
-use dpc::core::linear::sampled::CriticalPeriod;
-use dpc::core::linear::AnalysisOptions;
+use dpc::core::linear_analysis::sampled::CriticalPeriod;
+use dpc::core::linear_analysis::AnalysisOptions;
+use dpc::core::linear_solver::LinearSolver;
 use dpc::core::model::{self, set_parameter_by_name, DaeModel, Structure};
 use dpc::core::prefeedback::{ReferenceNominal, ReferenceState, SteadyMotion};
 use dpc::core::reference::{Components, Reference, ReferenceError};
@@ -132,7 +132,7 @@ pub struct NominalReport {
 }
 
 /// DPC's limit law on the linearisation, held by the scenario's zero-order hold
-/// ([`dpc::core::linear::sampled`]).
+/// ([`dpc::core::linear_analysis::sampled`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SampledPrediction {
     /// Spectral radius of the transition matrix over one period `h` (stable below 1).

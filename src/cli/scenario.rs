@@ -54,7 +54,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use dpc::core::dpc::Extraction;
+use dpc::core::controller::Extraction;
 use dpc::core::reference::{AtanIntegral, Constant, Polynomial, ScalarReference, Sinusoid, Sum};
 use dpc::core::simulate::{ClosedLoopOptions, Hold, PlantIntegration, MIN_OUTPUT_STEP_RATIO};
 use dpc::nalgebra::Complex;

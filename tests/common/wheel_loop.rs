@@ -3,10 +3,10 @@
 //! bisection of the period where it stops tracking.
 #![allow(dead_code)]
 
-use dpc::core::dpc::{Dpc, DpcOptions, Extraction};
-use dpc::core::linalg::NalgebraLu;
-use dpc::core::linear::sampled::{CriticalPeriod, SampledLoop};
-use dpc::core::linear::{Analysis, LinearSystem};
+use dpc::core::controller::{Dpc, DpcOptions, Extraction};
+use dpc::core::linear_analysis::sampled::{CriticalPeriod, SampledLoop};
+use dpc::core::linear_analysis::{Analysis, LinearSystem};
+use dpc::core::linear_solver::NalgebraLu;
 use dpc::core::prefeedback::{Nominal, Prefeedback};
 use dpc::core::simulate::{simulate, ClosedLoop, ClosedLoopOptions, Hold};
 use dpc_models::wheel_design;

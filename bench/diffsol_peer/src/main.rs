@@ -23,7 +23,7 @@ mod testset_index1;
 use bdf_problems::{robertson_atol, Robertson, ROBERTSON_REF, ROBERTSON_T_END};
 use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod};
 use dpc_core::bdf::{Bdf, Options, Tolerance};
-use dpc_core::linalg::NalgebraLu;
+use dpc_core::linear_solver::NalgebraLu;
 use dpc_core::ImplicitDae;
 use std::time::Instant;
 use testset_index1::{TransistorAmplifier, TRANSAMP_REF, TRANSAMP_T_END};

@@ -12,7 +12,7 @@
 use super::newton::{self, error_weights, JacState, NewtonProblem};
 use super::{BdfError, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
-use crate::linalg::LinearSolver;
+use crate::linear_solver::LinearSolver;
 use crate::ImplicitDae;
 
 /// Coefficients `a_0..a_q` of constant-step BDF of order `q` (`a_0` multiplies `y_{n+1}`).

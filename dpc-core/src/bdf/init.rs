@@ -16,7 +16,7 @@
 
 use super::newton::{error_weights, first_non_finite, wrms};
 use super::{BdfError, Options, Stats};
-use crate::linalg::{FactorError, LinearSolver};
+use crate::linear_solver::{FactorError, LinearSolver};
 use crate::{ImplicitDae, MatrixSink};
 
 /// A power of two, so the scalings by `1/C_BIG` are exact.

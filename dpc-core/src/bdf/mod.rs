@@ -17,7 +17,7 @@
 //! error test by default ([`HigherIndexControl::Exclude`], as DASSL and IDA's `suppressalg`),
 //! or have their weight scaled by `h^(m-1)` ([`HigherIndexControl::Scale`]).
 //!
-//! The linear algebra is chosen by type through [`crate::linalg::LinearSolver`].
+//! The linear algebra is chosen by type through [`crate::linear_solver::LinearSolver`].
 //!
 //! A DAE is anything that implements [`crate::ImplicitDae`] (a plant of `dpc::model!` does,
 //! through its adapter; here one written by hand): the index-1 system `y0' = -y0 + y1`,
@@ -26,7 +26,7 @@
 //!
 //! ```
 //! use dpc_core::bdf::{Bdf, Options};
-//! use dpc_core::linalg::NalgebraLu;
+//! use dpc_core::linear_solver::NalgebraLu;
 //! use dpc_core::{ImplicitDae, MatrixSink};
 //!
 //! struct Quadratic;

@@ -9,7 +9,7 @@
 //! `s |delta| <= epcon` in the weighted RMS norm (IDA's `IDANewtonIter`).
 
 use super::{BdfError, Options, Stats};
-use crate::linalg::{FactorError, LinearSolver};
+use crate::linear_solver::{FactorError, LinearSolver};
 use crate::ImplicitDae;
 
 /// State of the iteration matrix and its factorisation.

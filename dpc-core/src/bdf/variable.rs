@@ -17,7 +17,7 @@
 use super::newton::{self, error_weights, wrms, JacState, NewtonFailure, NewtonProblem};
 use super::{BdfError, HigherIndexControl, Options, Stats};
 use crate::error::InvalidOption;
-use crate::linalg::LinearSolver;
+use crate::linear_solver::LinearSolver;
 use crate::ImplicitDae;
 
 const MAXORD: usize = 5;
@@ -28,7 +28,7 @@ const KEEP_ORDER_FAILURES: usize = 5;
 /// Variable-step, variable-order BDF integrator for `F(t, y, y') = 0`.
 ///
 /// All work vectors are allocated in [`Bdf::new`]; with an allocation-free linear solver
-/// (such as [`crate::linalg::NalgebraLu`]) and model, [`Bdf::step`] and [`Bdf::solve_to`]
+/// (such as [`crate::linear_solver::NalgebraLu`]) and model, [`Bdf::step`] and [`Bdf::solve_to`]
 /// never touch the heap (error paths excepted, which build names for the message).
 pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
     dae: D,

@@ -19,7 +19,7 @@ use super::newton::StageWork;
 use super::tableau::Tableau;
 use super::wrms;
 use super::Stats;
-use crate::linalg::LinearSolver;
+use crate::linear_solver::LinearSolver;
 use crate::ImplicitDae;
 
 /// Work vectors of the estimate.

@@ -21,13 +21,13 @@ use faer::perm::PermRef;
 use faer::{c64, Mat, MatMut, Par};
 
 use super::error::StageSystem;
-use crate::linalg::{FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
+use crate::linear_solver::{FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
 use crate::sink::MatrixSink;
 use crate::ImplicitDae;
 
 /// Dense complex LU with partial pivoting, workspace allocated at construction: up to
 /// [`UNBLOCKED_MAX_DIMENSION`] an unblocked elimination with the dimension a constant (as the
-/// real [`crate::linalg::FaerDenseLu`] does; faer's blocked LU spent most of a small system's
+/// real [`crate::linear_solver::FaerDenseLu`] does; faer's blocked LU spent most of a small system's
 /// solve in set-up), above it faer's blocked LU.
 pub(crate) struct ComplexLu {
     matrix: Mat<c64>,
@@ -145,7 +145,7 @@ fn abs1(v: c64) -> f64 {
 }
 
 /// `P A = L U` in place for the column-major `n x n` complex `a` (as the real
-/// [`crate::linalg::unblocked`] elimination), `pivots[k]` the row interchanged with row `k`. A
+/// [`crate::linear_solver::unblocked`] elimination), `pivots[k]` the row interchanged with row `k`. A
 /// zero pivot is left in place (the caller checks the diagonal); elimination stops there.
 #[inline(always)]
 fn complex_factor(a: &mut [c64], n: usize, pivots: &mut [usize]) {
@@ -340,7 +340,7 @@ impl<L: LinearSolver> StageMatrices<L> {
         }
         if let Err(col) = self.complex.factor() {
             let (jy, jyp) = (&self.jy, &self.jyp);
-            let row = crate::linalg::zero_row(n, |i, j| {
+            let row = crate::linear_solver::zero_row(n, |i, j| {
                 (jy[(i, j)] + ca * jyp[(i, j)]).abs() + (cb * jyp[(i, j)]).abs()
             });
             return Err(SetupFailure::Singular(StageSystem::Complex, col, row));
@@ -373,7 +373,7 @@ impl<L: LinearSolver> StageMatrices<L> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::linalg::NalgebraLu;
+    use crate::linear_solver::NalgebraLu;
 
     /// `F = M y' - K y` with a singular `M`, so `dF/dy' = M`, `dF/dy = -K`.
     struct Linear;

@@ -29,7 +29,7 @@
 //! needlessly small steps or no convergence at all.
 //!
 //! ```
-//! use dpc_core::linalg::NalgebraLu;
+//! use dpc_core::linear_solver::NalgebraLu;
 //! use dpc_core::radau::{Options, Radau};
 //! use dpc_core::{ImplicitDae, MatrixSink};
 //!
@@ -77,7 +77,7 @@ use linear::{SetupFailure, StageMatrices};
 use newton::{NewtonOutcome, StageProblem, StageWork};
 use tableau::Tableau;
 
-use crate::linalg::LinearSolver;
+use crate::linear_solver::LinearSolver;
 use crate::ImplicitDae;
 
 /// Factor on RADAU5's Newton tolerance when some component has index 2 or 3 (see
@@ -806,7 +806,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::linalg::NalgebraLu;
+    use crate::linear_solver::NalgebraLu;
     use crate::MatrixSink;
 
     /// `y' = lambda y` (one component).

@@ -31,7 +31,7 @@ use faer::c64;
 use super::linear::StageMatrices;
 use super::tableau::Tableau;
 use super::Stats;
-use crate::linalg::LinearSolver;
+use crate::linear_solver::LinearSolver;
 use crate::ImplicitDae;
 
 /// Work vectors of the stage iteration.

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use dpc_core::bdf::{Bdf, Options, Tolerance};
-use dpc_core::linalg::NalgebraLu;
+use dpc_core::linear_solver::NalgebraLu;
 use dpc_core::{ImplicitDae, MatrixSink};
 use std::time::Instant;
 

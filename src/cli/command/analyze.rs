@@ -1,4 +1,4 @@
-//! `dpc analyze SYSTEM.toml [--json]`: the linear DPC analysis of `dpc_core::linear`.
+//! `dpc analyze SYSTEM.toml [--json]`: the linear DPC analysis of `dpc_core::linear_analysis`.
 //!
 //! Input keys: `a`, `b`, `c` (arrays of rows), optional `d` (zero if absent), optional `w`
 //! (per output the numbers `w_ij >= 0` of `W_i(s) = prod_j (s + w_ij)`), optional `poles` for
@@ -18,8 +18,8 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::cli::command::sayln;
-use dpc::core::linear::transfer::transfer_matrix;
-use dpc::core::linear::{
+use dpc::core::linear_analysis::transfer::transfer_matrix;
+use dpc::core::linear_analysis::{
     analyze, Analysis, AnalysisOptions, LinearError, LinearSystem, PrefeedbackPolicy,
 };
 use dpc::nalgebra::{Complex, DMatrix};

@@ -16,7 +16,7 @@ use clap::Args;
 use dpc::core::numeric::Time;
 
 use crate::cli::command::sayln;
-use dpc::core::linear::sampled::CriticalPeriod;
+use dpc::core::linear_analysis::sampled::CriticalPeriod;
 
 /// Arguments of `dpc simulate`.
 #[derive(Args)]

@@ -33,11 +33,11 @@
 //! the nominal motion are evaluated once per inner step.
 //!
 //! All buffers are allocated at construction: with the fixed-size
-//! [`NalgebraLu`](crate::linalg::NalgebraLu) back end an update allocates nothing.
+//! [`NalgebraLu`](crate::linear_solver::NalgebraLu) back end an update allocates nothing.
 
 use crate::consistent::ConstraintStructure;
 use crate::error::InvalidOption;
-use crate::linalg::{FactorError, LinearSolver};
+use crate::linear_solver::{FactorError, LinearSolver};
 use crate::numeric::{max_or_nan, Readable, Time};
 use crate::prefeedback::{FeedbackChain, Prefeedback};
 use crate::reference::{Reference, ReferenceError};
@@ -374,7 +374,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     ///
     /// The term `dG/du K_n` fills the columns of the states in the rows where an input
     /// appears, beyond the generated pattern of `dG/dX`: use a dense solver
-    /// ([`NalgebraLu`](crate::linalg::NalgebraLu), [`FaerDenseLu`](crate::linalg::FaerDenseLu));
+    /// ([`NalgebraLu`](crate::linear_solver::NalgebraLu), [`FaerDenseLu`](crate::linear_solver::FaerDenseLu));
     /// a sparse one built on the generated pattern reports the first such entry as
     /// [`FactorError::OutsidePattern`] through [`DpcError::Singular`] instead of dropping it.
     ///

@@ -10,7 +10,7 @@ use super::{zero_row, FactorError, LinearSolver};
 /// The matrix is an `SMatrix<f64, N, N>` (the sink the generated code writes into); the
 /// factors overwrite a second `SMatrix` and the row interchanges are a `[usize; N]`.
 /// Construction, factorisation and solves never touch the heap. The elimination is the
-/// unblocked one shared with [`super::FaerDenseLu`]'s small sizes (`linalg/unblocked.rs`): a
+/// unblocked one shared with [`super::FaerDenseLu`]'s small sizes (`linear_solver/unblocked.rs`): a
 /// pivot at most `N eps max |a_ij|` is reported as [`FactorError::Singular`].
 #[derive(Debug, Clone)]
 pub struct NalgebraLu<const N: usize> {

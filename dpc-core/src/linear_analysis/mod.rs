@@ -17,7 +17,7 @@
 //!   manifold, the input of [`analyze`] for constrained plants.
 //!
 //! ```
-//! use dpc_core::linear::{analyze, AnalysisOptions, LinearSystem};
+//! use dpc_core::linear_analysis::{analyze, AnalysisOptions, LinearSystem};
 //! use nalgebra::DMatrix;
 //! // x1' = x2, x2' = u, y = x1, stabilised by W = s + 2.
 //! let sys = LinearSystem::without_feedthrough(

@@ -396,8 +396,8 @@ pub fn linearize_descriptor<M: DaeModel>(
 /// documentation for the algorithm). `state_name(i)` names state `i` in errors.
 ///
 /// ```
-/// use dpc_core::linear::descriptor::{realise, DescriptorOptions, DescriptorSystem};
-/// use dpc_core::linear::eigenvalues;
+/// use dpc_core::linear_analysis::descriptor::{realise, DescriptorOptions, DescriptorSystem};
+/// use dpc_core::linear_analysis::eigenvalues;
 /// use nalgebra::DMatrix;
 /// // A unit mass on a line x = 0 held by the multiplier lambda, with a horizontal force u and
 /// // a spring k = 4: w = (x, y, vx, vy, lambda); x' = vx, y' = vy, vx' = -4 x + u,

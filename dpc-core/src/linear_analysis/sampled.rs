@@ -23,7 +23,7 @@
 use nalgebra::DMatrix;
 
 use crate::error::InvalidOption;
-use crate::linear::{eigenvalues, Analysis, LinearError, LinearSystem};
+use crate::linear_analysis::{eigenvalues, Analysis, LinearError, LinearSystem};
 pub use crate::simulate::Hold;
 
 /// The linearised plant under DPC's limit law with a zero-order hold.
