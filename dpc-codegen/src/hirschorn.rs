@@ -1361,6 +1361,7 @@ mod tests {
         // Not square (two inputs, one output): use the reduction directly.
         let mut cx = Ctxt::new();
         assert!(tracking_rows(&mut m, &mut cx).is_none());
+        assert!(cx.check().is_err(), "refused with a diagnostic");
         let orders = BTreeMap::from([(1, 2)]);
         let Ok((differentiated, higher)) = differentiate_implicit_equations(&mut m, &orders) else {
             panic!("the coupled equations are differentiated");

@@ -54,15 +54,30 @@ pub fn try_expand(input: TokenStream) -> syn::Result<TokenStream> {
 /// expression) and everything to be evaluated ([`derive::Derived`]), or all errors found.
 /// [`try_expand`] emits Rust from the result; a run-time model evaluates the same roots.
 pub fn derive_model(input: TokenStream) -> syn::Result<(ir::Model, derive::Derived)> {
-    let mut model = lower_model(input)?;
+    let def = parse::parse_model(input)?;
+    // One error context for the whole model: lowering, then (on a model that lowered
+    // cleanly) the Hirschorn steps of its tracking section.
     let mut cx = ctxt::Ctxt::new();
-    let tracking = match model.tracking {
-        Some(_) => hirschorn::tracking_rows(&mut model, &mut cx),
-        None => None,
-    };
+    let lowered = lower::lower(def, &mut cx).map(|mut model| {
+        let tracking = match model.tracking {
+            Some(_) => hirschorn::tracking_rows(&mut model, &mut cx),
+            None => None,
+        };
+        (model, tracking)
+    });
     cx.check()?;
+    let (mut model, tracking) = lowered.ok_or_else(lowering_without_diagnostic)?;
     let derived = derive::derive(&mut model, tracking.as_ref());
     Ok((model, derived))
+}
+
+/// The error of a lowering that failed without recording why (a bug of the macro, reported
+/// as a compile error rather than a panic).
+fn lowering_without_diagnostic() -> syn::Error {
+    syn::Error::new(
+        proc_macro2::Span::call_site(),
+        "internal error: model lowering failed without a diagnostic",
+    )
 }
 
 /// Lower a model without emitting code, for inspection and tests.
@@ -75,10 +90,5 @@ pub fn lower_model(input: TokenStream) -> syn::Result<ir::Model> {
     let mut cx = ctxt::Ctxt::new();
     let model = lower::lower(def, &mut cx);
     cx.check()?;
-    model.ok_or_else(|| {
-        syn::Error::new(
-            proc_macro2::Span::call_site(),
-            "internal error: model lowering failed without a diagnostic",
-        )
-    })
+    model.ok_or_else(lowering_without_diagnostic)
 }

@@ -186,8 +186,28 @@ struct Lowerer<'a> {
     code_names: HashMap<String, String>,
 }
 
+/// What lowering collects from the model's items, section by section.
+#[derive(Default)]
+struct Sections {
+    params: Vec<Param>,
+    states: Vec<Decl>,
+    algebraic: Vec<Decl>,
+    inputs: Vec<Decl>,
+    intermediates: Vec<Intermediate>,
+    equations: Vec<Equation>,
+    outputs: Vec<Output>,
+    references: Vec<Reference>,
+    tracking: Option<Tracking>,
+    /// The `equations` keyword, where the count of equations is reported.
+    equations_keyword: Option<Ident>,
+}
+
 /// Lower a parsed model, recording every problem in `cx`. Returns `None` if there were
 /// errors that make the IR meaningless.
+///
+/// The items are lowered in the order written (a `let` or an output may use only what is
+/// declared before it), one section at a time; then the checks that need the whole model
+/// run, each a small pass of its own.
 pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
     let mut lw = Lowerer {
         cx,
@@ -202,368 +222,24 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
     let attrs = lw.doc_attrs(&def.attrs, "the model");
     check_section_order(&def, lw.cx);
 
-    let mut params = Vec::new();
-    let mut states = Vec::new();
-    let mut algebraic = Vec::new();
-    let mut inputs = Vec::new();
-    let mut intermediates = Vec::new();
-    let mut equations = Vec::new();
-    let mut outputs: Vec<Output> = Vec::new();
-    let mut references = Vec::new();
-    let mut tracking = None;
-    let mut equations_keyword: Option<Ident> = None;
-
     for item in &def.items {
         if let Item::Let(l) = item {
             lw.pending_lets.insert(l.name.to_string());
         }
     }
-
+    let mut sx = Sections::default();
     for item in &def.items {
         match item {
-            Item::Let(l) => {
-                lw.pending_lets.remove(&l.name.to_string());
-                let text = expr_text(l.expr.root());
-                let label = if l.subscripts.is_empty() {
-                    if let Some(expr) = lw.lower_expr(l.expr.root(), Place::Let) {
-                        let uses_der = lw.uses_derivatives(expr);
-                        lw.declare(&l.name, Binding::Let { expr, uses_der });
-                    }
-                    l.name.to_string()
-                } else {
-                    lw.lower_let_family(l)
-                };
-                intermediates.push(Intermediate {
-                    name: l.name.clone(),
-                    label,
-                    text,
-                });
-            }
-            Item::Section(section) => {
-                let empty = match &section.body {
-                    SectionBody::Consts(v) => v.is_empty(),
-                    SectionBody::Params(v) => v.is_empty(),
-                    SectionBody::States(v) | SectionBody::Algebraic(v) | SectionBody::Inputs(v) => {
-                        v.is_empty()
-                    }
-                    SectionBody::Equations(v) => v.is_empty(),
-                    SectionBody::Outputs(v) => v.is_empty(),
-                    SectionBody::References(v) => v.is_empty(),
-                    SectionBody::Tracking(t) => t.entries.is_empty(),
-                };
-                if empty {
-                    lw.cx.error_at(
-                        section.brace_span,
-                        format!(
-                            "empty section `{}`: declare at least one entry or remove the section",
-                            section.keyword
-                        ),
-                    );
-                }
-                match &section.body {
-                    SectionBody::Consts(list) => {
-                        for c in list {
-                            if let Some(v) = lw.eval_int(c.value.root()) {
-                                lw.declare(&c.name, Binding::Const(v));
-                            }
-                        }
-                    }
-                    SectionBody::Params(list) => {
-                        for p in list {
-                            let docs = lw.doc_attrs(&p.attrs, "a parameter");
-                            if p.dims.is_empty() {
-                                let default =
-                                    lw.param_default(p.default.root(), &p.name.to_string());
-                                lw.declare(&p.name, Binding::Param(params.len()));
-                                lw.claim_code_name(&p.name, &p.name.unraw().to_string(), None);
-                                params.push(Param {
-                                    name: p.name.clone(),
-                                    label: p.name.unraw().to_string(),
-                                    unit: unit_text(p.unit.as_ref()),
-                                    default,
-                                    docs,
-                                });
-                                continue;
-                            }
-                            let Some(dims) = lw.eval_dims(&p.dims) else {
-                                lw.declare_family(
-                                    &p.name,
-                                    Binding::Param(0),
-                                    Vec::new(),
-                                    Vec::new(),
-                                );
-                                continue;
-                            };
-                            let defaults = lw.param_defaults(p.default.root(), &p.name, &dims);
-                            let elements = multi_indices(&dims)
-                                .into_iter()
-                                .zip(defaults)
-                                .map(|(ix, default)| {
-                                    let (label, name) = element_names(&p.name, &ix);
-                                    lw.claim_code_name(&name, &label, Some(&p.name));
-                                    params.push(Param {
-                                        name,
-                                        label,
-                                        unit: unit_text(p.unit.as_ref()),
-                                        default,
-                                        docs: docs.clone(),
-                                    });
-                                    Some(Binding::Param(params.len() - 1))
-                                })
-                                .collect();
-                            lw.declare_family(&p.name, Binding::Param(0), dims, elements);
-                        }
-                    }
-                    SectionBody::States(list) => {
-                        lw.declare_decls(list, &mut states, Binding::State);
-                    }
-                    SectionBody::Algebraic(list) => {
-                        lw.declare_decls(list, &mut algebraic, Binding::Algebraic);
-                    }
-                    SectionBody::Inputs(list) => {
-                        lw.declare_decls(list, &mut inputs, Binding::Input);
-                    }
-                    SectionBody::Equations(list) => {
-                        equations_keyword = Some(section.keyword.clone());
-                        let mut explicit_seen: HashMap<usize, Span> = HashMap::new();
-                        lw.lower_equation_items(list, &states, &mut explicit_seen, &mut equations);
-                    }
-                    SectionBody::Outputs(list) => {
-                        for o in list {
-                            if let Some(msg) = crate::names::check(&o.name, "an output") {
-                                lw.cx.error_spanned_by(&o.name, msg);
-                                continue;
-                            }
-                            let docs = lw.doc_attrs(&o.attrs, "an output");
-                            for (label, name, expr, text) in lw.lower_output(o) {
-                                if outputs.iter().any(|p| p.label == label || p.name == name) {
-                                    lw.cx.error_spanned_by(
-                                        &o.name,
-                                        format!("duplicate output `{label}`"),
-                                    );
-                                    continue;
-                                }
-                                let unit = match &o.expr {
-                                    Some(_) => unit_text(o.unit.as_ref()),
-                                    None => lw.bare_output_unit(
-                                        o,
-                                        &text,
-                                        [&states, &algebraic, &inputs],
-                                        &params,
-                                    ),
-                                };
-                                outputs.push(Output {
-                                    name,
-                                    label,
-                                    unit,
-                                    expr,
-                                    text,
-                                    docs: docs.clone(),
-                                });
-                            }
-                        }
-                    }
-                    SectionBody::References(list) => {
-                        let mut seen = HashSet::new();
-                        for r in list {
-                            let Some(targets) = lw.target_outputs(
-                                &r.output,
-                                &r.subscripts,
-                                &outputs,
-                                "references are given per output",
-                            ) else {
-                                continue;
-                            };
-                            for (index, bound) in targets {
-                                if !seen.insert(index) {
-                                    lw.cx.error_spanned_by(
-                                        &r.output,
-                                        format!(
-                                            "duplicate reference for output `{}`",
-                                            outputs[index].label
-                                        ),
-                                    );
-                                    continue;
-                                }
-                                let depth = lw.indices.len();
-                                lw.indices.extend(bound);
-                                let text = lw.indexed_text(r.expr.root());
-                                let expr = lw.lower_expr(r.expr.root(), Place::Reference);
-                                lw.indices.truncate(depth);
-                                if let Some(expr) = expr {
-                                    references.push(Reference {
-                                        output: index,
-                                        expr,
-                                        text,
-                                    });
-                                }
-                            }
-                        }
-                        let missing: Vec<String> = outputs
-                            .iter()
-                            .enumerate()
-                            .filter(|(i, _)| !seen.contains(i))
-                            .map(|(_, o)| format!("`{}`", o.label))
-                            .collect();
-                        if !missing.is_empty() && !list.is_empty() {
-                            lw.cx.error_spanned_by(
-                                &section.keyword,
-                                format!(
-                                    "`references` must give every output a reference; missing: {}",
-                                    missing.join(", ")
-                                ),
-                            );
-                        }
-                    }
-                    SectionBody::Tracking(t) => {
-                        let mut entries: Vec<TrackingEntry> = Vec::new();
-                        for entry in &t.entries {
-                            let Some(targets) = lw.target_outputs(
-                                &entry.output,
-                                &entry.subscripts,
-                                &outputs,
-                                "`tracking` names outputs declared in `outputs`",
-                            ) else {
-                                continue;
-                            };
-                            let mut roots = Vec::new();
-                            for r in &entry.roots {
-                                match numeric_literal(r.root()) {
-                                    Some(a) if !a.is_finite() => lw.cx.error_spanned_by(
-                                        r,
-                                        format!(
-                                            "`{}` is out of range for `f64` (it overflows to infinity); a negated root of W(s) must be a finite number",
-                                            expr_text(r.root())
-                                        ),
-                                    ),
-                                    Some(a) if a >= 0.0 => roots.push(a),
-                                    Some(a) => lw.cx.error_spanned_by(
-                                        r,
-                                        format!(
-                                            "`{a}` would put a root of W(s) at s = {}, which is unstable; entries are the negated roots and must be >= 0 (e.g. `5.0` for `s + 5`, `0.0` for plain differentiation)",
-                                            -a
-                                        ),
-                                    ),
-                                    None => lw.cx.error_spanned_by(
-                                        r,
-                                        format!(
-                                            "expected a number (a negated root of W(s), e.g. `5.0` for `s + 5`), found `{}`",
-                                            expr_text(r.root())
-                                        ),
-                                    ),
-                                }
-                            }
-                            let coefficients =
-                                crate::hirschorn::polynomial_from_negated_roots(&roots);
-                            if coefficients.iter().any(|c| !c.is_finite()) {
-                                lw.cx.error_at(
-                                    entry.bracket_span,
-                                    format!(
-                                        "the coefficients of W(s) = {} overflow `f64`; use smaller roots",
-                                        crate::hirschorn::polynomial_text(&roots)
-                                    ),
-                                );
-                            }
-                            let span = entry
-                                .output
-                                .span()
-                                .join(entry.bracket_span)
-                                .unwrap_or_else(|| entry.output.span());
-                            for (index, _) in targets {
-                                if entries.iter().any(|e| e.output == index) {
-                                    lw.cx.error_spanned_by(
-                                        &entry.output,
-                                        format!(
-                                            "duplicate tracking entry for output `{}`",
-                                            outputs[index].label
-                                        ),
-                                    );
-                                    continue;
-                                }
-                                entries.push(TrackingEntry {
-                                    output: index,
-                                    roots: roots.clone(),
-                                    span,
-                                });
-                            }
-                        }
-                        entries.sort_by_key(|e| e.output);
-                        tracking = Some(Tracking {
-                            type_name: t.type_name.clone(),
-                            entries,
-                            span: section.keyword.span(),
-                        });
-                    }
-                }
-            }
+            Item::Let(l) => lw.lower_let(l, &mut sx.intermediates),
+            Item::Section(section) => lw.lower_section(section, &mut sx),
         }
     }
 
-    check_generated_names(&def, &tracking, !references.is_empty(), lw.cx);
-
-    // Required sections.
-    if states.is_empty() && !def.items.iter().any(|i| is_section(i, "states")) {
-        lw.cx.error_spanned_by(
-            &def.name,
-            format!("model `{}` has no `states` section; declare its differential unknowns, e.g. `states {{ x, v }}`", def.name),
-        );
-    }
-    let Some(equations_keyword) = equations_keyword else {
-        lw.cx.error_spanned_by(
-            &def.name,
-            format!(
-                "model `{}` has no `equations` section; add `equations {{ der(x) = ...; }}`",
-                def.name
-            ),
-        );
-        return None;
-    };
-
-    // Count: as many equations as unknowns.
-    let unknowns = states.len() + algebraic.len();
-    if !equations.is_empty() && !lw.cx.has_errors() && equations.len() != unknowns {
-        lw.cx.error_spanned_by(
-            &equations_keyword,
-            format!(
-                "found {} equation{} for {} unknown{} ({} state{} + {} algebraic); the number of equations must equal the number of unknowns",
-                equations.len(),
-                plural(equations.len()),
-                unknowns,
-                plural(unknowns),
-                states.len(),
-                plural(states.len()),
-                algebraic.len()
-            ),
-        );
-    }
-
-    // Every state differentiated, every algebraic unknown used.
+    check_generated_names(&def, &sx.tracking, !sx.references.is_empty(), lw.cx);
+    let equations_keyword = check_required_sections(&def, &sx, lw.cx)?;
+    check_equation_count(&sx, &equations_keyword, lw.cx);
     if !lw.cx.has_errors() {
-        let mut used = HashSet::new();
-        for eq in &equations {
-            for v in lw.graph.vars(eq.residual) {
-                used.insert(lw.symbols.symbol(v));
-            }
-        }
-        for (i, s) in states.iter().enumerate() {
-            if !used.contains(&Symbol::StateDot(i)) {
-                lw.cx.error_spanned_by(
-                    &s.name,
-                    format!(
-                        "state `{}` is never differentiated: no equation contains `der({0})`; add its equation or declare it in `algebraic`",
-                        s.name
-                    ),
-                );
-            }
-        }
-        for (i, a) in algebraic.iter().enumerate() {
-            if !used.contains(&Symbol::Algebraic(i)) {
-                lw.cx.error_spanned_by(
-                    &a.name,
-                    format!("algebraic unknown `{}` appears in no equation, so the system cannot determine it", a.name),
-                );
-            }
-        }
+        check_unknowns_used(&sx, &lw.graph, &lw.symbols, lw.cx);
     }
 
     if lw.cx.has_errors() {
@@ -573,18 +249,394 @@ pub fn lower(def: ModelDef, cx: &mut Ctxt) -> Option<Model> {
         attrs,
         vis: def.vis,
         name: def.name,
-        params,
-        states,
-        algebraic,
-        inputs,
-        intermediates,
-        equations,
-        outputs,
-        references,
-        tracking,
+        params: sx.params,
+        states: sx.states,
+        algebraic: sx.algebraic,
+        inputs: sx.inputs,
+        intermediates: sx.intermediates,
+        equations: sx.equations,
+        outputs: sx.outputs,
+        references: sx.references,
+        tracking: sx.tracking,
         graph: lw.graph,
         symbols: lw.symbols,
     })
+}
+
+/// A section with no entry is refused: it is a leftover or a mistake.
+fn check_not_empty(section: &crate::parse::Section, cx: &mut Ctxt) {
+    let empty = match &section.body {
+        SectionBody::Consts(v) => v.is_empty(),
+        SectionBody::Params(v) => v.is_empty(),
+        SectionBody::States(v) | SectionBody::Algebraic(v) | SectionBody::Inputs(v) => v.is_empty(),
+        SectionBody::Equations(v) => v.is_empty(),
+        SectionBody::Outputs(v) => v.is_empty(),
+        SectionBody::References(v) => v.is_empty(),
+        SectionBody::Tracking(t) => t.entries.is_empty(),
+    };
+    if empty {
+        cx.error_at(
+            section.brace_span,
+            format!(
+                "empty section `{}`: declare at least one entry or remove the section",
+                section.keyword
+            ),
+        );
+    }
+}
+
+/// A model needs `states` and `equations`; returns the `equations` keyword (`None`, with the
+/// error recorded, when there is no such section).
+fn check_required_sections(def: &ModelDef, sx: &Sections, cx: &mut Ctxt) -> Option<Ident> {
+    if sx.states.is_empty() && !def.items.iter().any(|i| is_section(i, "states")) {
+        cx.error_spanned_by(
+            &def.name,
+            format!("model `{}` has no `states` section; declare its differential unknowns, e.g. `states {{ x, v }}`", def.name),
+        );
+    }
+    if sx.equations_keyword.is_none() {
+        cx.error_spanned_by(
+            &def.name,
+            format!(
+                "model `{}` has no `equations` section; add `equations {{ der(x) = ...; }}`",
+                def.name
+            ),
+        );
+    }
+    sx.equations_keyword.clone()
+}
+
+/// As many equations as unknowns (checked only on an otherwise correct model, where the
+/// count is meaningful).
+fn check_equation_count(sx: &Sections, keyword: &Ident, cx: &mut Ctxt) {
+    let (states, algebraic) = (sx.states.len(), sx.algebraic.len());
+    let (equations, unknowns) = (sx.equations.len(), states + algebraic);
+    if equations != 0 && !cx.has_errors() && equations != unknowns {
+        cx.error_spanned_by(
+            keyword,
+            format!(
+                "found {} equation{} for {} unknown{} ({} state{} + {} algebraic); the number of equations must equal the number of unknowns",
+                equations,
+                plural(equations),
+                unknowns,
+                plural(unknowns),
+                states,
+                plural(states),
+                algebraic
+            ),
+        );
+    }
+}
+
+/// Every state differentiated somewhere, every algebraic unknown used somewhere.
+fn check_unknowns_used(sx: &Sections, graph: &Graph, symbols: &Symbols, cx: &mut Ctxt) {
+    let mut used = HashSet::new();
+    for eq in &sx.equations {
+        for v in graph.vars(eq.residual) {
+            used.insert(symbols.symbol(v));
+        }
+    }
+    for (i, s) in sx.states.iter().enumerate() {
+        if !used.contains(&Symbol::StateDot(i)) {
+            cx.error_spanned_by(
+                &s.name,
+                format!(
+                    "state `{}` is never differentiated: no equation contains `der({0})`; add its equation or declare it in `algebraic`",
+                    s.name
+                ),
+            );
+        }
+    }
+    for (i, a) in sx.algebraic.iter().enumerate() {
+        if !used.contains(&Symbol::Algebraic(i)) {
+            cx.error_spanned_by(
+                &a.name,
+                format!("algebraic unknown `{}` appears in no equation, so the system cannot determine it", a.name),
+            );
+        }
+    }
+}
+
+/// Lowering, one item or section at a time.
+impl Lowerer<'_> {
+    fn lower_let(&mut self, l: &crate::parse::LetDef, out: &mut Vec<Intermediate>) {
+        self.pending_lets.remove(&l.name.to_string());
+        let text = expr_text(l.expr.root());
+        let label = if l.subscripts.is_empty() {
+            if let Some(expr) = self.lower_expr(l.expr.root(), Place::Let) {
+                let uses_der = self.uses_derivatives(expr);
+                self.declare(&l.name, Binding::Let { expr, uses_der });
+            }
+            l.name.to_string()
+        } else {
+            self.lower_let_family(l)
+        };
+        out.push(Intermediate {
+            name: l.name.clone(),
+            label,
+            text,
+        });
+    }
+
+    fn lower_section(&mut self, section: &crate::parse::Section, sx: &mut Sections) {
+        check_not_empty(section, self.cx);
+        match &section.body {
+            SectionBody::Consts(list) => {
+                for c in list {
+                    if let Some(v) = self.eval_int(c.value.root()) {
+                        self.declare(&c.name, Binding::Const(v));
+                    }
+                }
+            }
+            SectionBody::Params(list) => self.lower_params(list, &mut sx.params),
+            SectionBody::States(list) => self.declare_decls(list, &mut sx.states, Binding::State),
+            SectionBody::Algebraic(list) => {
+                self.declare_decls(list, &mut sx.algebraic, Binding::Algebraic)
+            }
+            SectionBody::Inputs(list) => self.declare_decls(list, &mut sx.inputs, Binding::Input),
+            SectionBody::Equations(list) => {
+                sx.equations_keyword = Some(section.keyword.clone());
+                let mut explicit_seen: HashMap<usize, Span> = HashMap::new();
+                self.lower_equation_items(list, &sx.states, &mut explicit_seen, &mut sx.equations);
+            }
+            SectionBody::Outputs(list) => self.lower_outputs(list, sx),
+            SectionBody::References(list) => {
+                sx.references = self.lower_references(&section.keyword, list, &sx.outputs)
+            }
+            SectionBody::Tracking(t) => {
+                sx.tracking = Some(self.lower_tracking(&section.keyword, t, &sx.outputs))
+            }
+        }
+    }
+
+    fn lower_params(&mut self, list: &[crate::parse::ParamDef], params: &mut Vec<Param>) {
+        for p in list {
+            let docs = self.doc_attrs(&p.attrs, "a parameter");
+            if p.dims.is_empty() {
+                let default = self.param_default(p.default.root(), &p.name.to_string());
+                self.declare(&p.name, Binding::Param(params.len()));
+                self.claim_code_name(&p.name, &p.name.unraw().to_string(), None);
+                params.push(Param {
+                    name: p.name.clone(),
+                    label: p.name.unraw().to_string(),
+                    unit: unit_text(p.unit.as_ref()),
+                    default,
+                    docs,
+                });
+                continue;
+            }
+            let Some(dims) = self.eval_dims(&p.dims) else {
+                self.declare_family(&p.name, Binding::Param(0), Vec::new(), Vec::new());
+                continue;
+            };
+            let defaults = self.param_defaults(p.default.root(), &p.name, &dims);
+            let elements = multi_indices(&dims)
+                .into_iter()
+                .zip(defaults)
+                .map(|(ix, default)| {
+                    let (label, name) = element_names(&p.name, &ix);
+                    self.claim_code_name(&name, &label, Some(&p.name));
+                    params.push(Param {
+                        name,
+                        label,
+                        unit: unit_text(p.unit.as_ref()),
+                        default,
+                        docs: docs.clone(),
+                    });
+                    Some(Binding::Param(params.len() - 1))
+                })
+                .collect();
+            self.declare_family(&p.name, Binding::Param(0), dims, elements);
+        }
+    }
+
+    fn lower_outputs(&mut self, list: &[crate::parse::OutputDef], sx: &mut Sections) {
+        for o in list {
+            if let Some(msg) = crate::names::check(&o.name, "an output") {
+                self.cx.error_spanned_by(&o.name, msg);
+                continue;
+            }
+            let docs = self.doc_attrs(&o.attrs, "an output");
+            for (label, name, expr, text) in self.lower_output(o) {
+                if sx
+                    .outputs
+                    .iter()
+                    .any(|p| p.label == label || p.name == name)
+                {
+                    self.cx
+                        .error_spanned_by(&o.name, format!("duplicate output `{label}`"));
+                    continue;
+                }
+                let unit = match &o.expr {
+                    Some(_) => unit_text(o.unit.as_ref()),
+                    None => self.bare_output_unit(
+                        o,
+                        &text,
+                        [&sx.states, &sx.algebraic, &sx.inputs],
+                        &sx.params,
+                    ),
+                };
+                sx.outputs.push(Output {
+                    name,
+                    label,
+                    unit,
+                    expr,
+                    text,
+                    docs: docs.clone(),
+                });
+            }
+        }
+    }
+
+    /// The references, one per output (every output needs one when the section is given).
+    fn lower_references(
+        &mut self,
+        keyword: &Ident,
+        list: &[crate::parse::ReferenceDef],
+        outputs: &[Output],
+    ) -> Vec<Reference> {
+        let mut references = Vec::new();
+        let mut seen = HashSet::new();
+        for r in list {
+            let Some(targets) = self.target_outputs(
+                &r.output,
+                &r.subscripts,
+                outputs,
+                "references are given per output",
+            ) else {
+                continue;
+            };
+            for (index, bound) in targets {
+                if !seen.insert(index) {
+                    self.cx.error_spanned_by(
+                        &r.output,
+                        format!("duplicate reference for output `{}`", outputs[index].label),
+                    );
+                    continue;
+                }
+                let depth = self.indices.len();
+                self.indices.extend(bound);
+                let text = self.indexed_text(r.expr.root());
+                let expr = self.lower_expr(r.expr.root(), Place::Reference);
+                self.indices.truncate(depth);
+                if let Some(expr) = expr {
+                    references.push(Reference {
+                        output: index,
+                        expr,
+                        text,
+                    });
+                }
+            }
+        }
+        let missing: Vec<String> = outputs
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !seen.contains(i))
+            .map(|(_, o)| format!("`{}`", o.label))
+            .collect();
+        if !missing.is_empty() && !list.is_empty() {
+            self.cx.error_spanned_by(
+                keyword,
+                format!(
+                    "`references` must give every output a reference; missing: {}",
+                    missing.join(", ")
+                ),
+            );
+        }
+        references
+    }
+
+    /// The tracking section: per output, the negated roots of `W(s)`.
+    fn lower_tracking(
+        &mut self,
+        keyword: &Ident,
+        t: &crate::parse::TrackingDef,
+        outputs: &[Output],
+    ) -> Tracking {
+        let mut entries: Vec<TrackingEntry> = Vec::new();
+        for entry in &t.entries {
+            let Some(targets) = self.target_outputs(
+                &entry.output,
+                &entry.subscripts,
+                outputs,
+                "`tracking` names outputs declared in `outputs`",
+            ) else {
+                continue;
+            };
+            let roots = self.negated_roots(entry);
+            let span = entry
+                .output
+                .span()
+                .join(entry.bracket_span)
+                .unwrap_or_else(|| entry.output.span());
+            for (index, _) in targets {
+                if entries.iter().any(|e| e.output == index) {
+                    self.cx.error_spanned_by(
+                        &entry.output,
+                        format!(
+                            "duplicate tracking entry for output `{}`",
+                            outputs[index].label
+                        ),
+                    );
+                    continue;
+                }
+                entries.push(TrackingEntry {
+                    output: index,
+                    roots: roots.clone(),
+                    span,
+                });
+            }
+        }
+        entries.sort_by_key(|e| e.output);
+        Tracking {
+            type_name: t.type_name.clone(),
+            entries,
+            span: keyword.span(),
+        }
+    }
+
+    /// The negated roots of one tracking entry's `W(s)`: finite numbers `>= 0` whose
+    /// polynomial's coefficients fit `f64`.
+    fn negated_roots(&mut self, entry: &crate::parse::TrackingEntry) -> Vec<f64> {
+        let mut roots = Vec::new();
+        for r in &entry.roots {
+            match numeric_literal(r.root()) {
+                Some(a) if !a.is_finite() => self.cx.error_spanned_by(
+                    r,
+                    format!(
+                        "`{}` is out of range for `f64` (it overflows to infinity); a negated root of W(s) must be a finite number",
+                        expr_text(r.root())
+                    ),
+                ),
+                Some(a) if a >= 0.0 => roots.push(a),
+                Some(a) => self.cx.error_spanned_by(
+                    r,
+                    format!(
+                        "`{a}` would put a root of W(s) at s = {}, which is unstable; entries are the negated roots and must be >= 0 (e.g. `5.0` for `s + 5`, `0.0` for plain differentiation)",
+                        -a
+                    ),
+                ),
+                None => self.cx.error_spanned_by(
+                    r,
+                    format!(
+                        "expected a number (a negated root of W(s), e.g. `5.0` for `s + 5`), found `{}`",
+                        expr_text(r.root())
+                    ),
+                ),
+            }
+        }
+        let coefficients = crate::hirschorn::polynomial_from_negated_roots(&roots);
+        if coefficients.iter().any(|c| !c.is_finite()) {
+            self.cx.error_at(
+                entry.bracket_span,
+                format!(
+                    "the coefficients of W(s) = {} overflow `f64`; use smaller roots",
+                    crate::hirschorn::polynomial_text(&roots)
+                ),
+            );
+        }
+        roots
+    }
 }
 
 /// The model's name, the tracking type's name and the items the expansion declares from
