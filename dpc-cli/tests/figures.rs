@@ -131,3 +131,47 @@ fn a_sweep_over_decades_has_a_logarithmic_parameter_axis() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// The most vertices of one polyline of an SVG (plotters draws each curve as one).
+fn longest_polyline(svg: &str) -> usize {
+    svg.split("points=\"")
+        .skip(1)
+        .map(|rest| {
+            rest.split('"')
+                .next()
+                .unwrap_or("")
+                .split_whitespace()
+                .count()
+        })
+        .max()
+        .unwrap_or(0)
+}
+
+#[test]
+fn with_an_output_step_the_figure_draws_the_motion_between_the_samples() {
+    let draw = |name: &str, extra: &[&str]| {
+        let out = scratch(name);
+        let mut args = vec![
+            "simulate",
+            scenario("wheel.toml").to_str().unwrap().to_owned().leak(),
+            "--out",
+            out.to_str().unwrap().to_owned().leak(),
+            "--set",
+            "t_end=1",
+            "--set",
+            "compare=[]",
+        ];
+        args.extend_from_slice(extra);
+        dpc(&args);
+        check_png(&out.join("closed-loop.png"));
+        let svg = std::fs::read_to_string(out.join("closed-loop.svg")).unwrap();
+        let _ = std::fs::remove_dir_all(&out);
+        longest_polyline(&svg)
+    };
+    // h = 0.05: 21 samples; the held input is drawn as steps, 2 vertices a sample.
+    let samples = draw("samples", &[]);
+    // Four more points in each of the 20 intervals: 101 points on each output curve.
+    let dense = draw("dense", &["--set", "output_step=0.01"]);
+    assert!(samples <= 2 * 21, "{samples}");
+    assert!(dense >= 101, "{dense}");
+}

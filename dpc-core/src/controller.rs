@@ -34,6 +34,49 @@
 //!
 //! All buffers are allocated at construction: with the fixed-size
 //! [`NalgebraLu`](crate::linear_solver::NalgebraLu) back end an update allocates nothing.
+//!
+//! # Example
+//! One update for a mass on a spring whose position is to follow `sin t` with the error
+//! dynamics `W(d/dt) e = (d/dt + 5)^2 e = 0`, from a state off the reference: the control
+//! pushes the mass toward it; from the reference itself it is the inverse's input
+//! `f = m x'' + k x`.
+//!
+//! ```
+//! use dpc::core::controller::{Dpc, DpcOptions};
+//! use dpc::core::linear_solver::NalgebraLu;
+//!
+//! dpc::model! {
+//!     /// A mass on a spring, pushed by `f`.
+//!     Mass {
+//!         params { m = 1.0, k = 4.0 }
+//!         states { x, v }
+//!         inputs { f }
+//!         equations { der(x) = v; m * der(v) == f - k * x; }
+//!         outputs { x }
+//!         references { x = sin(t) }
+//!         tracking MassTracking { x: [5.0, 5.0] } // W = (s + 5)^2: nu = 0
+//!     }
+//! }
+//!
+//! let mut dpc = Dpc::new(
+//!     MassTracking::default(),
+//!     MassReference::default(),
+//!     NalgebraLu::<{ MassTracking::N_EQUATIONS }>::new(),
+//!     DpcOptions { delta: 1e-3, ..DpcOptions::default() },
+//! )?;
+//! let mut u = [0.0];
+//! // At t = 0.5 the reference is at sin(0.5) = 0.48; the mass is at rest at 0.
+//! let report = dpc.control(0.5, &[0.0, 0.0], &mut u)?;
+//! // f = m (xi'' + 10 (xi' - v) + 25 (xi - x)) + k x at t = 0.5.
+//! let (xi, dxi, ddxi) = (0.5_f64.sin(), 0.5_f64.cos(), -0.5_f64.sin());
+//! assert!((u[0] - (ddxi + 10.0 * dxi + 25.0 * xi)).abs() < 1e-2, "{u:?}");
+//! assert!(report.residual <= DpcOptions::default().residual_tolerance);
+//! // On the reference the control is the inverse's, up to O(delta^2).
+//! let t = 1.0_f64;
+//! dpc.control(t, &[t.sin(), t.cos()], &mut u)?;
+//! assert!((u[0] - 3.0 * t.sin()).abs() < 1e-4, "{u:?}");
+//! # Ok::<(), dpc::core::controller::DpcError>(())
+//! ```
 
 use crate::consistent::ConstraintStructure;
 use crate::error::InvalidOption;

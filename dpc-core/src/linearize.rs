@@ -6,6 +6,39 @@
 //! `dx' = A dx + B du`, `dz = Z_x dx + Z_u du`, `dy = (h_x + h_z Z_x) dx + (h_u + h_z Z_u) du`.
 //! The solve uses a column-pivoted QR factorisation, and the rank decision is relative to the
 //! norm of `[F_x' F_z]`; no Jacobian comes from finite differences.
+//!
+//! # Example
+//! A cart pushed by a force `f` through a first-order actuator, written with an algebraic
+//! unknown (the actuator's output `a`), linearised at rest:
+//!
+//! ```
+//! use dpc::core::linearize::{linearize, OperatingPoint};
+//!
+//! dpc::model! {
+//!     /// A cart of mass `m`, accelerated by `a`, the lagged force.
+//!     Cart {
+//!         params { m = 2.0, tau = 0.1 }
+//!         states { p, v, f }
+//!         algebraic { a }
+//!         inputs { u }
+//!         equations {
+//!             der(p) = v;
+//!             der(v) = a;
+//!             tau * der(f) == u - f;
+//!             m * a == f;
+//!         }
+//!         outputs { p }
+//!     }
+//! }
+//!
+//! let point = OperatingPoint { t: 0.0, x: &[0.0; 3], xdot: &[0.0; 3], z: &[0.0], u: &[0.0] };
+//! let sys = linearize(&Cart::default(), point)?;
+//! // The algebraic unknown is eliminated: dv' = f / m, df' = (u - f) / tau.
+//! assert!((sys.a[(1, 2)] - 0.5).abs() < 1e-15 && (sys.a[(2, 2)] + 10.0).abs() < 1e-14);
+//! assert!((sys.b[(2, 0)] - 10.0).abs() < 1e-14);
+//! assert_eq!(sys.c.as_slice(), &[1.0, 0.0, 0.0]);
+//! # Ok::<(), dpc::core::linearize::LinearizeError>(())
+//! ```
 
 use crate::linear_analysis::LinearSystem;
 use crate::model::DaeModel;

@@ -9,6 +9,45 @@
 //! The *degree* of each `W_i` is fixed at compile time (it decides which total derivatives
 //! of `h_i` are generated); the coefficients are read from the tracking value at run time, so
 //! the roots of `W_i(s) = prod_k (s + a_k)` can be changed with [`TrackingDae::set_w_roots`].
+//!
+//! # Example
+//! A mass on a spring whose position follows `sin t`: the tracking DAE's unknowns are the
+//! plant's states and, as algebraic unknowns, its inputs; its inputs are the `w` computed from
+//! the reference. On the exact inverse motion (`x = sin t`, `v = cos t`,
+//! `f = m x'' + k x = 3 sin t`) its residual vanishes.
+//!
+//! ```
+//! use dpc::core::{DaeModel, TrackingDae};
+//!
+//! dpc::model! {
+//!     /// A mass on a spring, pushed by `f`.
+//!     Mass {
+//!         params { m = 1.0, k = 4.0 }
+//!         states { x, v }
+//!         inputs { f }
+//!         equations { der(x) = v; m * der(v) == f - k * x; }
+//!         outputs { x }
+//!         references { x = sin(t) }
+//!         tracking MassTracking { x: [5.0] }
+//!     }
+//! }
+//!
+//! let tracking = MassTracking::default();
+//! let s = tracking.structure();
+//! assert_eq!((s.n_states(), s.n_algebraic(), s.n_inputs()), (2, 1, 1)); // X = (x, v), U = f
+//! assert_eq!(tracking.relative_degrees(), &[Some(2)]);
+//! assert_eq!(tracking.remaining_relative_degree(), Some(1)); // one step applied: nu = 1
+//!
+//! let t = 0.7_f64;
+//! let mut scratch = [0.0; 4];
+//! let mut w = [0.0];
+//! tracking.tracking_inputs(&MassReference::default(), t, &mut scratch, &mut w)?;
+//! let (x, xdot, u) = ([t.sin(), t.cos()], [t.cos(), -t.sin()], [3.0 * t.sin()]);
+//! let mut g = [1.0; 3];
+//! tracking.residual(t, &x, &xdot, &u, &w, &mut g);
+//! assert!(g.iter().all(|r| r.abs() < 1e-12), "{g:?}");
+//! # Ok::<(), dpc::core::reference::ReferenceError>(())
+//! ```
 
 use crate::model::DaeModel;
 use crate::reference::{Reference, ReferenceError};

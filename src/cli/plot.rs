@@ -18,6 +18,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::cli::run::RunResult;
 use crate::cli::ScenarioError;
+use crate::core::simulate::TrajectoryPoint;
 
 const PALETTE: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
@@ -378,12 +379,20 @@ fn tick(v: f64, span: f64) -> String {
     format!("{v:.decimals$}")
 }
 
+/// A quantity at the samples (the held inputs, drawn as steps).
 fn series(run: &RunResult, f: impl Fn(&dpc::core::simulate::Sample) -> f64) -> Vec<(f64, f64)> {
     run.closed_loop
         .samples
         .iter()
         .map(|s| (s.t, f(s)))
         .collect()
+}
+
+/// A quantity of the plant's motion: at the samples and, where the run recorded it
+/// (`output_step`), between them, so that the curve is the continuous motion and not a
+/// polygon through the samples.
+fn motion(run: &RunResult, f: impl Fn(&TrajectoryPoint<'_>) -> f64) -> Vec<(f64, f64)> {
+    run.closed_loop.trajectory().map(|p| (p.t, f(&p))).collect()
 }
 
 fn column_title(run: &RunResult) -> String {
@@ -455,13 +464,13 @@ fn draw_closed_loop<DB: DrawingBackend>(
                 &[
                     Curve {
                         name: name.clone(),
-                        points: series(run, |s| s.y[i]),
+                        points: motion(run, |p| p.y[i]),
                         color: PALETTE[0],
                         dashed: false,
                     },
                     Curve {
                         name: "reference".to_string(),
-                        points: series(run, |s| s.reference[i]),
+                        points: motion(run, |p| p.reference[i]),
                         color: BLACK,
                         dashed: true,
                     },
@@ -476,7 +485,7 @@ fn draw_closed_loop<DB: DrawingBackend>(
             .enumerate()
             .map(|(i, name)| Curve {
                 name: labelled(&format!("e_{name}"), unit(name)),
-                points: series(run, |s| s.error[i]),
+                points: motion(run, |p| p.error[i]),
                 color: PALETTE[i % PALETTE.len()],
                 dashed: false,
             })
