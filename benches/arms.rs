@@ -11,12 +11,12 @@
 
 include!("../examples/arm_compile/common.rs");
 
-arm!(Arm2, Arm2Tracking, 2);
-arm!(Arm4, Arm4Tracking, 4);
-arm!(Arm6, Arm6Tracking, 6);
-arm!(Arm8, Arm8Tracking, 8);
-arm!(Arm12, Arm12Tracking, 12);
-arm!(Arm16, Arm16Tracking, 16);
+flexible_joint_arm!("An arm of this benchmark.", Arm2, Arm2Tracking, 2);
+flexible_joint_arm!("An arm of this benchmark.", Arm4, Arm4Tracking, 4);
+flexible_joint_arm!("An arm of this benchmark.", Arm6, Arm6Tracking, 6);
+flexible_joint_arm!("An arm of this benchmark.", Arm8, Arm8Tracking, 8);
+flexible_joint_arm!("An arm of this benchmark.", Arm12, Arm12Tracking, 12);
+flexible_joint_arm!("An arm of this benchmark.", Arm16, Arm16Tracking, 16);
 
 fn main() {
     print_header();

@@ -8,26 +8,23 @@
 
 mod common;
 
-use common::model_text::invocations;
+use common::model_text::template_models;
 use dpc::core::design::{check_relative_degrees, linear_relative_degrees};
 use dpc::core::linearize::{linearize, OperatingPoint};
 use dpc::core::DaeModel;
 use dpc::runtime::RuntimePlant;
 use std::path::Path;
 
-/// The arm of `models/src/arm.rs` with `n` links.
+/// The arm of `models/src/arm.rs` with `n` links: its declaration with `n` for the number of
+/// links.
 fn arm(n: usize) -> RuntimePlant {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/src/arm.rs");
-    let source = std::fs::read_to_string(path).expect("models/src/arm.rs");
-    let body = invocations(&source)
-        .into_iter()
-        .map(|m| m.body)
-        .find(|b| b.contains("pub Arm2 {"))
-        .expect("Arm2 in models/src/arm.rs");
-    let text = body
-        .replace("Arm2", &format!("Arm{n}"))
-        .replace("N = 2", &format!("N = {n}"));
-    dpc::runtime::parse("arm.rs", &text)
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/src/arm_declaration.rs");
+    let template = std::fs::read_to_string(path).expect("models/src/arm_declaration.rs");
+    let call = format!("flexible_joint_arm!(\"The arm.\", Arm{n}, Arm{n}Tracking, {n});");
+    let [text] = &template_models(&call, &template)[..] else {
+        panic!("one arm in {call}");
+    };
+    dpc::runtime::parse("arm.rs", text)
         .expect("the arm reads as a plant file")
         .plant()
 }

@@ -332,11 +332,11 @@ fn the_derivative_rows_vanish_along_a_plant_trajectory() {
 /// four differentiate the link equations once and twice (index 2 and 1).
 fn arm2_late_error(steps: usize) -> f64 {
     use dpc::core::linear_solver::FaerDenseLu;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/src/arm.rs");
-    let source = std::fs::read_to_string(path).unwrap();
-    let body = common::model_text::invocations(&source)
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/src");
+    let source = std::fs::read_to_string(root.join("arm.rs")).unwrap();
+    let template = std::fs::read_to_string(root.join("arm_declaration.rs")).unwrap();
+    let body = common::model_text::template_models(&source, &template)
         .into_iter()
-        .map(|m| m.body)
         .find(|b| b.contains("pub Arm2 {"))
         .expect("Arm2 in models/src/arm.rs");
     let roots = vec!["4.0"; steps].join(", ");

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::model_text::invocations;
+use common::model_text::{invocations, template_models};
 use dpc::core::model::{DaeModel, Structure};
 use dpc::core::{Reference, TrackingDae};
 use dpc::nalgebra::{DMatrix, DVector};
@@ -44,11 +44,27 @@ fn read_repository_models() -> Vec<(String, String, RuntimeModel)> {
         .collect();
     files.sort();
     let mut out = Vec::new();
-    for file in files {
-        let source = std::fs::read_to_string(&file).unwrap();
-        let name = file.file_name().unwrap().to_string_lossy().to_string();
-        for m in invocations(&source) {
-            let model = dpc::runtime::parse(&name, &m.body).unwrap_or_else(|e| {
+    let sources: Vec<(String, String)> = files
+        .iter()
+        .map(|file| {
+            let name = file.file_name().unwrap().to_string_lossy().to_string();
+            (name, std::fs::read_to_string(file).unwrap())
+        })
+        .collect();
+    // A template (`macro_rules!` around a model, as the arm's declaration) is read through
+    // its invocations, with their arguments.
+    let templates: String = sources
+        .iter()
+        .filter(|(_, source)| source.contains("macro_rules!"))
+        .map(|(_, source)| source.as_str())
+        .collect();
+    for (name, source) in sources.iter().filter(|(_, s)| !s.contains("macro_rules!")) {
+        let bodies = invocations(source)
+            .into_iter()
+            .map(|m| m.body)
+            .chain(template_models(source, &templates));
+        for body in bodies {
+            let model = dpc::runtime::parse(name, &body).unwrap_or_else(|e| {
                 panic!("a model of {name} does not read as a plant file:\n{e}")
             });
             out.push((name.clone(), model.name().to_string(), model));

@@ -2,39 +2,43 @@
 //! and numbers of stabilised Hirschorn steps per joint: the time of the macro's passes
 //! (`dpc_codegen::try_expand`: parse, lower, relative degrees, the tracking rows, derive and
 //! emit), and the generated code's size in lines (formatted with prettyplease). The arm is
-//! the repository's own declaration, `Arm2` with `N = 2` replaced by `N = n`, so the numbers
-//! are those of the models users compile. Prints the table of `docs/arms.md`.
+//! the repository's own declaration (`models/src/arm_declaration.rs`) with `n` links, so the
+//! numbers are those of the models users compile. Prints the table of `docs/arms.md`.
 //!
 //! Run with `cargo bench -p dpc-codegen --bench arms` (`-- 16` for a different largest `n`).
 
 use proc_macro2::TokenStream;
 use std::time::{Duration, Instant};
 
-/// The `Arm2` declaration of `models/src/arm.rs`, as written.
-fn arm2_text() -> String {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/src/arm.rs");
-    let source = std::fs::read_to_string(path).expect("models/src/arm.rs");
-    let file = syn::parse_file(&source).expect("arm.rs parses");
-    file.items
-        .into_iter()
-        .find_map(|item| match item {
-            syn::Item::Macro(m) if m.mac.tokens.to_string().contains("pub Arm2 {") => {
-                Some(m.mac.tokens.to_string())
-            }
-            _ => None,
-        })
-        .expect("Arm2 in models/src/arm.rs")
+/// The arm's declaration (`models/src/arm_declaration.rs`, the one `models/src/arm.rs`
+/// instantiates): the `model! { ... }` inside its `macro_rules!`, with its parameters `$doc`,
+/// `$name`, `$tracking` and `$n` still to be replaced.
+fn arm_template() -> String {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/src/arm_declaration.rs"
+    );
+    let source = std::fs::read_to_string(path).expect("models/src/arm_declaration.rs");
+    let start = source
+        .find("dpc::model! {")
+        .expect("a model in the declaration")
+        + 13;
+    let end = source.rfind("};").expect("the end of the macro rule");
+    let body = &source[start..end];
+    body[..body.rfind('}').expect("the model's closing brace")].to_string()
 }
 
 /// The arm with `n` links and `steps` roots `4.0` in `W` per joint.
 fn arm(template: &str, n: usize, steps: usize) -> TokenStream {
     let roots = vec!["4.0"; steps].join(", ");
     let text = template
-        .replace("Arm2", &format!("Arm{n}"))
-        .replace("N = 2", &format!("N = {n}"))
-        .replace("[4.0 , 4.0]", &format!("[{roots}]"));
+        .replace("$doc", "\"The arm.\"")
+        .replace("$name", &format!("Arm{n}"))
+        .replace("$tracking", &format!("Arm{n}Tracking"))
+        .replace("$n", &n.to_string())
+        .replace("[4.0, 4.0]", &format!("[{roots}]"));
     assert!(
-        text.contains(&format!("N = {n}")),
+        text.contains(&format!("N = {n}")) && text.contains(&format!("[{roots}]")),
         "the template changed: {text}"
     );
     text.parse().expect("arm tokenises")
@@ -58,7 +62,7 @@ fn main() {
         .filter_map(|a| a.parse().ok())
         .next()
         .unwrap_or(16);
-    let template = arm2_text();
+    let template = arm_template();
     println!("| links n | steps per joint | expansion | generated lines | result |");
     println!("| --- | --- | --- | --- | --- |");
     for n in [1, 2, 4, 6, 8, 12, 16, 24, 32]

@@ -8,7 +8,7 @@
 
 include!("common.rs");
 
-arm!(Arm16, Arm16Tracking, 16);
+flexible_joint_arm!("An arm of this benchmark.", Arm16, Arm16Tracking, 16);
 
 fn main() {
     print_header();

@@ -8,7 +8,7 @@
 
 include!("common.rs");
 
-arm!(Arm8, Arm8Tracking, 8);
+flexible_joint_arm!("An arm of this benchmark.", Arm8, Arm8Tracking, 8);
 
 fn main() {
     print_header();

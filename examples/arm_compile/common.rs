@@ -1,9 +1,10 @@
 // The arm and its measurement, shared by the benchmark `benches/arms.rs` and the compile-time
-// examples `arm8.rs` and `arm16.rs` (each includes this file): `arm!` declares the arm of
-// `models/src/arm.rs` with the number of links a macro argument, so that the larger ones are
-// compiled only where they are measured, and `measure!` prints one row of the benchmark's
-// table (docs/arms.md). The compile-time examples compile the whole of it: their compile time
-// is what a user's crate with this arm and this use of it costs.
+// examples `arm8.rs` and `arm16.rs` (each includes this file): `flexible_joint_arm!` (the
+// declaration `models/src/arm.rs` instantiates, included) declares the arm with the number of
+// links a macro argument, so that the larger ones are compiled only where they are measured,
+// and `measure!` prints one row of the benchmark's table (docs/arms.md). The compile-time
+// examples compile the whole of it: their compile time is what a user's crate with this arm
+// and this use of it costs.
 
 use dpc::core::design::{design, DesignOptions};
 use dpc::core::controller::{Dpc, DpcOptions};
@@ -15,59 +16,7 @@ use dpc::core::DaeModel;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-macro_rules! arm {
-    ($name:ident, $tracking:ident, $n:literal) => {
-        dpc::model! {
-            /// An arm of this benchmark.
-            pub $name {
-                consts { N = $n }
-                params {
-                    /// Link masses.
-                    m[N] = 1.0,
-                    /// Link lengths (joint to joint).
-                    l[N] = 0.5,
-                    /// Distances from each joint to its link's centre of mass.
-                    r[N] = 0.25,
-                    /// Link inertias about their centres of mass.
-                    i_link[N] = 0.02,
-                    /// Motor inertias.
-                    j_motor[N] = 0.5,
-                    /// Joint stiffnesses.
-                    ks[N] = 40.0,
-                    /// Gravity.
-                    g = 9.81
-                }
-                states { q[N], w[N], th[N], wm[N] }
-                inputs { u[N] }
-                // Absolute angle, angular velocity and angular acceleration of each link.
-                let phi[a in 0..N] = sum(0..=a, |j| q[j]);
-                let om[a in 0..N] = sum(0..=a, |j| w[j]);
-                let al[a in 0..N] = sum(0..=a, |j| der(w[j]));
-                // The acceleration of the end of a unit link at angle phi[b].
-                let ex[b in 0..N] = cos(phi[b]) * al[b] - sin(phi[b]) * om[b].powi(2);
-                let ey[b in 0..N] = sin(phi[b]) * al[b] + cos(phi[b]) * om[b].powi(2);
-                // The acceleration of the centre of mass of link c.
-                let ax[c in 0..N] = sum(0..c, |b| l[b] * ex[b]) + r[c] * ex[c];
-                let ay[c in 0..N] = sum(0..c, |b| l[b] * ey[b]) + r[c] * ey[c];
-                // The derivative of the centre of mass of link c by q[i] (for i <= c).
-                let jx[c in 0..N][i in 0..N] = sum(i..c, |a| l[a] * cos(phi[a])) + r[c] * cos(phi[c]);
-                let jy[c in 0..N][i in 0..N] = sum(i..c, |a| l[a] * sin(phi[a])) + r[c] * sin(phi[c]);
-                equations {
-                    for i in 0..N {
-                        der(q[i]) = w[i];
-                        sum(i..N, |c| m[c] * (jx[c][i] * ax[c] + jy[c][i] * (ay[c] + g)) + i_link[c] * al[c])
-                            + ks[i] * (q[i] - th[i]) == 0.0;
-                        der(th[i]) = wm[i];
-                        der(wm[i]) = (ks[i] * (q[i] - th[i]) + u[i]) / j_motor[i];
-                    }
-                }
-                outputs { q }
-                references { q[i in 0..N] = 0.3 * sin(0.8 * t + 0.5 * i) }
-                tracking $tracking { q: [4.0, 4.0] }
-            }
-        }
-    };
-}
+include!("../../models/src/arm_declaration.rs");
 
 /// Median time of `f` over about half a second.
 fn median(mut f: impl FnMut()) -> Duration {

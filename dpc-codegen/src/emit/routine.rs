@@ -537,23 +537,23 @@ mod tests {
     use super::{reads, Plan};
     use std::collections::BTreeSet;
 
-    /// The `Arm2` declaration of `models/src/arm.rs` with six links.
+    /// The arm of `models/src/arm.rs` with six links: its declaration
+    /// (`models/src/arm_declaration.rs`) with the template's parameters replaced.
     fn six_link_arm() -> proc_macro2::TokenStream {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/src/arm.rs");
-        let source = std::fs::read_to_string(path).expect("models/src/arm.rs");
-        let file = syn::parse_file(&source).expect("arm.rs parses");
-        let text = file
-            .items
-            .into_iter()
-            .find_map(|item| match item {
-                syn::Item::Macro(m) if m.mac.tokens.to_string().contains("pub Arm2 {") => {
-                    Some(m.mac.tokens.to_string())
-                }
-                _ => None,
-            })
-            .expect("Arm2 in models/src/arm.rs")
-            .replace("N = 2", "N = 6");
-        text.parse().expect("the arm tokenises")
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../models/src/arm_declaration.rs"
+        );
+        let source = std::fs::read_to_string(path).expect("models/src/arm_declaration.rs");
+        let start = source.find("dpc::model! {").expect("a model") + "dpc::model! {".len();
+        let body = &source[start..source.rfind("};").expect("the rule's end")];
+        body[..body.rfind('}').expect("the model's end")]
+            .replace("$doc", "\"The arm.\"")
+            .replace("$name", "Arm6")
+            .replace("$tracking", "Arm6Tracking")
+            .replace("$n", "6")
+            .parse()
+            .expect("the arm tokenises")
     }
 
     /// A split routine computes what the one piece computes: every part reads each temporary
