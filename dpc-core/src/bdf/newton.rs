@@ -141,14 +141,11 @@ pub(crate) fn setup<D: ImplicitDae, L: LinearSolver>(
     }
 }
 
-/// Work vectors and inputs of one Newton solve.
-pub(crate) struct NewtonProblem<'a> {
+/// The inputs of one Newton solve; the predictor and the weights are in the
+/// [`Corrector`].
+pub(crate) struct NewtonProblem {
     pub t: f64,
     pub cj: f64,
-    pub y_pred: &'a [f64],
-    pub yp_pred: &'a [f64],
-    /// Weights of the convergence test.
-    pub w: &'a [f64],
     pub max_iterations: usize,
     pub epcon: f64,
     /// When finite: the scaled residual `max_i |F_i| / max_j (|G_ij| / w_j)` at the solution
@@ -158,131 +155,180 @@ pub(crate) struct NewtonProblem<'a> {
     pub force_setup: bool,
 }
 
-/// Solve for `y`, `yp` (and the correction `ee = y - y_pred`). On failure with a stale matrix
-/// the attempt is repeated once with a fresh one, as IDA does.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
-    dae: &D,
-    ls: &mut L,
-    jac: &mut JacState,
-    stats: &mut Stats,
-    p: &NewtonProblem<'_>,
-    y: &mut [f64],
-    yp: &mut [f64],
-    ee: &mut [f64],
-    res: &mut [f64],
-    delta: &mut [f64],
-) -> Result<usize, NewtonFailure> {
-    jac.current = false;
-    // A changed cj makes the carried rate estimate unreliable: start pessimistic (IDA).
-    if p.cj != jac.cj_last {
-        jac.ss = 100.0;
-        jac.cj_last = p.cj;
-    }
-    let mut need_setup = p.force_setup || !jac.valid || {
-        let r = p.cj / jac.cj_factored;
-        !(0.6..=1.0 / 0.6).contains(&r)
-    };
-    loop {
-        y.copy_from_slice(p.y_pred);
-        yp.copy_from_slice(p.yp_pred);
-        ee.fill(0.0);
-        if need_setup {
-            setup(dae, ls, jac, stats, p.t, y, yp, p.cj)?;
-        }
-        match iterate(dae, ls, jac, stats, p, y, yp, ee, res, delta) {
-            Ok(m) => return Ok(m),
-            Err(NewtonFailure::Convergence | NewtonFailure::NonFinite(_)) if !jac.current => {
-                need_setup = true;
-            }
-            Err(e) => return Err(e),
-        }
-    }
+/// Everything Newton works in, allocated once for an integrator: the linear solver with its
+/// factorised iteration matrix and the state of that matrix, the predictor it starts from,
+/// the weights of its convergence test, the iterate and its work vectors.
+pub(crate) struct Corrector<L: LinearSolver> {
+    /// The linear solver holding the iteration matrix.
+    pub ls: L,
+    /// What the factorised matrix was formed with.
+    pub jac: JacState,
+    /// The predicted `y` and `y'` the iteration starts from.
+    pub y_pred: Vec<f64>,
+    pub yp_pred: Vec<f64>,
+    /// Weights of the convergence test.
+    pub w: Vec<f64>,
+    /// The iterate `y`, `y' = y'_pred + cj (y - y_pred)` and the correction `ee = y - y_pred`.
+    pub y: Vec<f64>,
+    pub yp: Vec<f64>,
+    pub ee: Vec<f64>,
+    /// The residual and the Newton update (also scratch for the caller between solves).
+    pub res: Vec<f64>,
+    pub delta: Vec<f64>,
 }
 
-#[allow(clippy::too_many_arguments)]
-fn iterate<D: ImplicitDae, L: LinearSolver>(
-    dae: &D,
-    ls: &mut L,
-    jac: &mut JacState,
-    stats: &mut Stats,
-    p: &NewtonProblem<'_>,
-    y: &mut [f64],
-    yp: &mut [f64],
-    ee: &mut [f64],
-    res: &mut [f64],
-    delta: &mut [f64],
-) -> Result<usize, NewtonFailure> {
-    let cjratio = p.cj / jac.cj_factored;
-    let scale = if cjratio == 1.0 {
-        1.0
-    } else {
-        2.0 / (1.0 + cjratio)
-    };
-    let mut oldnrm = 0.0;
-    let mut m = 0;
-    loop {
-        dae.residual(p.t, y, yp, res);
-        stats.residual_evaluations += 1;
-        if let Some(i) = first_non_finite(res) {
-            return Err(NewtonFailure::NonFinite(i));
+impl<L: LinearSolver> Corrector<L> {
+    /// Work vectors of dimension `n` around the solver `ls`.
+    pub fn new(ls: L, n: usize) -> Self {
+        Self {
+            ls,
+            jac: JacState::default(),
+            y_pred: vec![0.0; n],
+            yp_pred: vec![0.0; n],
+            w: vec![0.0; n],
+            y: vec![0.0; n],
+            yp: vec![0.0; n],
+            ee: vec![0.0; n],
+            res: vec![0.0; n],
+            delta: vec![0.0; n],
         }
-        delta.copy_from_slice(res);
-        ls.solve_in_place(delta);
-        stats.newton_iterations += 1;
-        if scale != 1.0 {
-            delta.iter_mut().for_each(|d| *d *= scale);
+    }
+
+    /// Solve for `y`, `yp` (and the correction `ee = y - y_pred`) from the predictor. On
+    /// failure with a stale matrix the attempt is repeated once with a fresh one, as IDA does.
+    pub fn solve<D: ImplicitDae>(
+        &mut self,
+        dae: &D,
+        stats: &mut Stats,
+        p: &NewtonProblem,
+    ) -> Result<usize, NewtonFailure> {
+        self.jac.current = false;
+        // A changed cj makes the carried rate estimate unreliable: start pessimistic (IDA).
+        if p.cj != self.jac.cj_last {
+            self.jac.ss = 100.0;
+            self.jac.cj_last = p.cj;
         }
-        for i in 0..y.len() {
-            y[i] -= delta[i];
-            ee[i] -= delta[i];
-            yp[i] -= p.cj * delta[i];
-        }
-        let delnrm = wrms(delta, p.w);
-        if !delnrm.is_finite() {
-            return Err(NewtonFailure::Convergence);
-        }
-        let mut converged = false;
-        if m == 0 {
-            oldnrm = delnrm;
-            if delnrm <= 1e-4 * p.epcon {
-                converged = true;
+        let mut need_setup = p.force_setup || !self.jac.valid || {
+            let r = p.cj / self.jac.cj_factored;
+            !(0.6..=1.0 / 0.6).contains(&r)
+        };
+        loop {
+            self.y.copy_from_slice(&self.y_pred);
+            self.yp.copy_from_slice(&self.yp_pred);
+            self.ee.fill(0.0);
+            if need_setup {
+                setup(
+                    dae,
+                    &mut self.ls,
+                    &mut self.jac,
+                    stats,
+                    p.t,
+                    &self.y,
+                    &self.yp,
+                    p.cj,
+                )?;
             }
+            match self.iterate(dae, stats, p) {
+                Ok(m) => return Ok(m),
+                Err(NewtonFailure::Convergence | NewtonFailure::NonFinite(_))
+                    if !self.jac.current =>
+                {
+                    need_setup = true;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    fn iterate<D: ImplicitDae>(
+        &mut self,
+        dae: &D,
+        stats: &mut Stats,
+        p: &NewtonProblem,
+    ) -> Result<usize, NewtonFailure> {
+        let Self {
+            ls,
+            jac,
+            w,
+            y,
+            yp,
+            ee,
+            res,
+            delta,
+            ..
+        } = self;
+        let cjratio = p.cj / jac.cj_factored;
+        let scale = if cjratio == 1.0 {
+            1.0
         } else {
-            let ratio = delnrm / oldnrm;
-            let rate = if m == 1 {
-                ratio
-            } else {
-                ratio.powf(1.0 / m as f64)
-            };
-            if rate > 0.9 {
+            2.0 / (1.0 + cjratio)
+        };
+        let mut oldnrm = 0.0;
+        let mut m = 0;
+        loop {
+            dae.residual(p.t, y, yp, res);
+            stats.residual_evaluations += 1;
+            if let Some(i) = first_non_finite(res) {
+                return Err(NewtonFailure::NonFinite(i));
+            }
+            delta.copy_from_slice(res);
+            ls.solve_in_place(delta);
+            stats.newton_iterations += 1;
+            if scale != 1.0 {
+                delta.iter_mut().for_each(|d| *d *= scale);
+            }
+            for i in 0..y.len() {
+                y[i] -= delta[i];
+                ee[i] -= delta[i];
+                yp[i] -= p.cj * delta[i];
+            }
+            let delnrm = wrms(delta, w);
+            if !delnrm.is_finite() {
                 return Err(NewtonFailure::Convergence);
             }
-            jac.ss = rate / (1.0 - rate);
-        }
-        if converged || jac.ss * delnrm <= p.epcon {
-            if p.residual_tolerance.is_finite() {
-                dae.residual(p.t, y, yp, res);
-                stats.residual_evaluations += 1;
-                if let Some(i) = first_non_finite(res) {
-                    return Err(NewtonFailure::NonFinite(i));
-                }
-                // Scaled residual: each equation relative to the change one tolerance unit of
-                // the unknowns causes in it (absolute where a row of the matrix is empty).
-                ls.scaled_row_norms(p.w, delta);
-                let rn = res.iter().zip(delta.iter()).fold(0.0f64, |a, (r, s)| {
-                    a.max(if *s > 0.0 { r.abs() / s } else { r.abs() })
-                });
-                if rn <= p.residual_tolerance {
-                    return Ok(m + 1);
+            let mut converged = false;
+            if m == 0 {
+                oldnrm = delnrm;
+                if delnrm <= 1e-4 * p.epcon {
+                    converged = true;
                 }
             } else {
-                return Ok(m + 1);
+                let ratio = delnrm / oldnrm;
+                let rate = if m == 1 {
+                    ratio
+                } else {
+                    ratio.powf(1.0 / m as f64)
+                };
+                if rate > 0.9 {
+                    return Err(NewtonFailure::Convergence);
+                }
+                jac.ss = rate / (1.0 - rate);
             }
-        }
-        m += 1;
-        if m >= p.max_iterations {
-            return Err(NewtonFailure::Convergence);
+            if converged || jac.ss * delnrm <= p.epcon {
+                if p.residual_tolerance.is_finite() {
+                    dae.residual(p.t, y, yp, res);
+                    stats.residual_evaluations += 1;
+                    if let Some(i) = first_non_finite(res) {
+                        return Err(NewtonFailure::NonFinite(i));
+                    }
+                    // Scaled residual: each equation relative to the change one tolerance unit
+                    // of the unknowns causes in it (absolute where a row of the matrix is
+                    // empty).
+                    ls.scaled_row_norms(w, delta);
+                    let rn = res.iter().zip(delta.iter()).fold(0.0f64, |a, (r, s)| {
+                        a.max(if *s > 0.0 { r.abs() / s } else { r.abs() })
+                    });
+                    if rn <= p.residual_tolerance {
+                        return Ok(m + 1);
+                    }
+                } else {
+                    return Ok(m + 1);
+                }
+            }
+            m += 1;
+            if m >= p.max_iterations {
+                return Err(NewtonFailure::Convergence);
+            }
         }
     }
 }
