@@ -9,6 +9,7 @@
 //! [`FixedBdf::with_history`], or starting from consistent values with
 //! [`FixedBdf::with_consistent_start`], gives the full order.
 
+use super::history::History;
 use super::newton::{error_weights, Corrector, JacState, NewtonProblem};
 use super::{BdfError, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
@@ -38,7 +39,7 @@ pub struct FixedBdf<D: ImplicitDae, L: LinearSolver> {
     h: f64,
     t: f64,
     /// `hist[0]` is `y_n`, `hist[j]` is `y_{n-j}`.
-    hist: Vec<Vec<f64>>,
+    hist: History,
     navail: usize,
     /// The order the factorised iteration matrix was formed for (0: none yet).
     jac_order: usize,
@@ -113,9 +114,9 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             }
         }
         opts.validate(n)?;
-        let mut hist = vec![vec![0.0; n]; 6];
-        for (dst, src) in hist.iter_mut().zip(history) {
-            dst.copy_from_slice(src);
+        let mut hist = History::new(6, n);
+        for (j, src) in history.iter().enumerate() {
+            hist.col_mut(j).copy_from_slice(src);
         }
         let mut corrector = Corrector::new(ls, n);
         corrector.y.copy_from_slice(history[0]);
@@ -148,7 +149,7 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             });
         }
         self.t = t0;
-        self.hist[0].copy_from_slice(y0);
+        self.hist.col_mut(0).copy_from_slice(y0);
         self.corrector.y.copy_from_slice(y0);
         self.corrector.yp.fill(0.0);
         self.navail = 1;
@@ -202,7 +203,7 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         let startup = bdf.stats();
         drop(bdf);
         for (j, p) in points.iter().rev().enumerate() {
-            f.hist[j].copy_from_slice(p);
+            f.hist.col_mut(j).copy_from_slice(p);
         }
         f.corrector.y.copy_from_slice(&points[order - 1]);
         f.navail = order;
@@ -219,7 +220,7 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
 
     /// Solution at [`t`](Self::t).
     pub fn y(&self) -> &[f64] {
-        &self.hist[0]
+        self.hist.col(0)
     }
 
     /// The BDF derivative approximation at [`t`](Self::t) (zero before the first step).
@@ -256,18 +257,18 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             // coefficient (-1)^j C(m, j+1)
             binom = binom * (m - j) as f64 / (j + 1) as f64;
             let c = if j % 2 == 0 { binom } else { -binom };
-            for (p, v) in self.corrector.y_pred.iter_mut().zip(&self.hist[j]) {
+            for (p, v) in self.corrector.y_pred.iter_mut().zip(self.hist.col(j)) {
                 *p += c * v;
             }
         }
         for i in 0..self.corrector.y_pred.len() {
             let mut s = a[0] * self.corrector.y_pred[i];
             for (j, aj) in a.iter().enumerate().take(q + 1).skip(1) {
-                s += aj * self.hist[j - 1][i];
+                s += aj * self.hist.col(j - 1)[i];
             }
             self.corrector.yp_pred[i] = s / h;
         }
-        error_weights(&self.opts, &self.hist[0], &mut self.corrector.w)?;
+        error_weights(&self.opts, self.hist.col(0), &mut self.corrector.w)?;
         let hs = h.min(1.0);
         for (i, w) in self.corrector.w.iter_mut().enumerate() {
             let m = self.opts.index_of(i);
@@ -289,8 +290,7 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             return Err(f.into_error(&self.dae, t_new, h));
         }
         self.jac_order = q;
-        self.hist.rotate_right(1);
-        self.hist[0].copy_from_slice(&self.corrector.y);
+        self.hist.push_front().copy_from_slice(&self.corrector.y);
         self.navail = (self.navail + 1).min(6);
         self.t = t_new;
         self.stats.steps += 1;

@@ -80,6 +80,7 @@
 mod dense;
 mod error;
 mod fixed;
+mod history;
 mod init;
 mod newton;
 mod options;

@@ -14,6 +14,7 @@
 //! them rejected); with these two rules it takes 15 608 steps (see
 //! `tests/bdf_testset.rs`).
 
+use super::history::History;
 use super::newton::{self, error_weights, wrms, Corrector, JacState, NewtonFailure, NewtonProblem};
 use super::{BdfError, HigherIndexControl, Options, Stats};
 use crate::error::InvalidOption;
@@ -65,7 +66,7 @@ struct BdfState {
     err_km1: f64,
     terr_k: f64,
     terr_km1: f64,
-    phi: Vec<Vec<f64>>,
+    phi: History,
     h_initialised: bool,
     /// First step after [`Bdf::reinit`] from the curvature of the previous integration's last
     /// polynomial (`None`: the default rule of [`Options::initial_step`]).
@@ -121,9 +122,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 equation: dae.equation_name(i),
             });
         }
-        let mut phi = vec![vec![0.0; n]; MAXORD + 2];
-        phi[0].copy_from_slice(y0);
-        phi[1].copy_from_slice(yp0);
+        let mut phi = History::new(MAXORD + 2, n);
+        phi.col_mut(0).copy_from_slice(y0);
+        phi.col_mut(1).copy_from_slice(yp0);
         let mut ewt = vec![0.0; n];
         error_weights(&opts, y0, &mut ewt)?;
         let stats = Stats {
@@ -211,8 +212,8 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         error_weights(&self.opts, y0, &mut self.state.ewt)?;
         self.state.restart_step = self.curvature_step();
-        self.state.phi[0].copy_from_slice(y0);
-        self.state.phi[1].copy_from_slice(yp0);
+        self.state.phi.col_mut(0).copy_from_slice(y0);
+        self.state.phi.col_mut(1).copy_from_slice(yp0);
         self.corrector.y.copy_from_slice(y0);
         self.corrector.yp.copy_from_slice(yp0);
         self.state.tn = t0;
@@ -247,7 +248,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             d2 = d2 * factor + 2.0 * d1 * slope;
             d1 = d1 * factor + c * slope;
             c *= factor;
-            for (y2, p) in self.corrector.delta.iter_mut().zip(&self.state.phi[j]) {
+            for (y2, p) in self.corrector.delta.iter_mut().zip(self.state.phi.col(j)) {
                 *y2 += d2 * p;
             }
         }
@@ -318,7 +319,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 } else {
                     1e-6 * self.state.tn.abs().max(1.0)
                 };
-                let ypnorm = wrms(&self.state.phi[1], &self.state.ewt);
+                let ypnorm = wrms(self.state.phi.col(1), &self.state.ewt);
                 if ypnorm * h > 0.5 {
                     h = 0.5 / ypnorm;
                 }
@@ -328,9 +329,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         h = h.min(self.opts.max_step);
         self.state.hh = h;
         // phi[1] holds h y'(t0) from here on.
-        for v in &mut self.state.phi[1] {
-            *v *= h;
-        }
+        self.state.phi.scale(1, h);
         self.state.h_initialised = true;
     }
 
@@ -443,7 +442,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             });
         }
         if self.nst() == 0 {
-            y_out.copy_from_slice(&self.state.phi[0]);
+            y_out.copy_from_slice(self.state.phi.col(0));
             if let Some(yp) = yp_out {
                 yp.copy_from_slice(&self.corrector.yp);
             }
@@ -474,7 +473,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
 
     /// Weights for Newton and the error test from the current solution and step.
     fn update_weights(&mut self) -> Result<(), BdfError> {
-        error_weights(&self.opts, &self.state.phi[0], &mut self.state.ewt)?;
+        error_weights(&self.opts, self.state.phi.col(0), &mut self.state.ewt)?;
         let hs = self.state.hh.abs().min(1.0);
         for i in 0..self.n {
             let m = self.opts.index_of(i);
@@ -510,7 +509,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 let hnew = ts - self.state.tn;
                 if self.nst() == 0 {
                     let r = hnew / self.state.hh;
-                    self.state.phi[1].iter_mut().for_each(|v| *v *= r);
+                    self.state.phi.scale(1, r);
                     self.state.psi[0] = hnew;
                 }
                 self.state.hh = hnew;
@@ -628,7 +627,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         if self.nst() == 0 {
             let r = self.state.hh / h_old;
             self.state.psi[0] = self.state.hh;
-            self.state.phi[1].iter_mut().for_each(|v| *v *= r);
+            self.state.phi.scale(1, r);
         }
     }
 
@@ -671,20 +670,21 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         if self.state.ns <= kk {
             for i in self.state.ns..=kk {
                 let b = self.state.beta[i];
-                self.state.phi[i].iter_mut().for_each(|v| *v *= b);
+                self.state.phi.scale(i, b);
             }
         }
     }
 
     /// IDA's `IDAPredict`.
     fn predict(&mut self) {
-        self.corrector.y_pred.copy_from_slice(&self.state.phi[0]);
+        self.corrector.y_pred.copy_from_slice(self.state.phi.col(0));
         self.corrector.yp_pred.fill(0.0);
         for j in 1..=self.state.kk {
             let g = self.state.gamma[j];
+            let phi = self.state.phi.col(j);
             for i in 0..self.n {
-                self.corrector.y_pred[i] += self.state.phi[j][i];
-                self.corrector.yp_pred[i] += g * self.state.phi[j][i];
+                self.corrector.y_pred[i] += phi[i];
+                self.corrector.yp_pred[i] += g * phi[i];
             }
         }
     }
@@ -698,7 +698,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         if self.state.ns <= self.state.kk {
             for j in self.state.ns..=self.state.kk {
                 let b = 1.0 / self.state.beta[j];
-                self.state.phi[j].iter_mut().for_each(|v| *v *= b);
+                self.state.phi.scale(j, b);
             }
         }
     }
@@ -712,14 +712,14 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.state.knew = kk;
         if kk > 1 {
             for i in 0..self.n {
-                self.corrector.delta[i] = self.state.phi[kk][i] + self.corrector.ee[i];
+                self.corrector.delta[i] = self.state.phi.col(kk)[i] + self.corrector.ee[i];
             }
             let enorm_km1 = wrms(&self.corrector.delta, &self.state.w_err);
             self.state.err_km1 = self.state.sigma[kk - 1] * enorm_km1;
             self.state.terr_km1 = kk as f64 * self.state.err_km1;
             if kk > 2 {
                 for i in 0..self.n {
-                    self.corrector.delta[i] += self.state.phi[kk - 1][i];
+                    self.corrector.delta[i] += self.state.phi.col(kk - 1)[i];
                 }
                 let enorm_km2 = wrms(&self.corrector.delta, &self.state.w_err);
                 let err_km2 = self.state.sigma[kk - 2] * enorm_km2;
@@ -769,7 +769,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             let mut err_kp1 = 0.0;
             if action == Action::Unset {
                 for i in 0..self.n {
-                    self.corrector.delta[i] = self.corrector.ee[i] - self.state.phi[kk + 1][i];
+                    self.corrector.delta[i] = self.corrector.ee[i] - self.state.phi.col(kk + 1)[i];
                 }
                 let enorm_kp1 = wrms(&self.corrector.delta, &self.state.w_err);
                 err_kp1 = enorm_kp1 / (kk as f64 + 2.0);
@@ -817,23 +817,18 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             }
         }
         let ku = self.state.kused;
+        let phi = &mut self.state.phi;
+        let ee = &self.corrector.ee;
         if ku < MAXORD {
-            let (lo, hi) = self.state.phi.split_at_mut(ku + 1);
-            hi[0].copy_from_slice(&self.corrector.ee);
-            lo[ku]
-                .iter_mut()
-                .zip(&self.corrector.ee)
-                .for_each(|(p, e)| *p += e);
-        } else {
-            let ee = &self.corrector.ee;
-            self.state.phi[ku]
-                .iter_mut()
-                .zip(ee)
-                .for_each(|(p, e)| *p += e);
+            phi.col_mut(ku + 1).copy_from_slice(ee);
         }
+        phi.col_mut(ku)
+            .iter_mut()
+            .zip(ee)
+            .for_each(|(p, e)| *p += e);
         for j in (0..ku).rev() {
-            let (lo, hi) = self.state.phi.split_at_mut(j + 1);
-            lo[j].iter_mut().zip(&hi[0]).for_each(|(p, q)| *p += q);
+            let (lo, hi) = phi.pair_mut(j, j + 1);
+            lo.iter_mut().zip(hi).for_each(|(p, q)| *p += q);
         }
     }
 }
