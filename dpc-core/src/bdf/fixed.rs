@@ -10,7 +10,7 @@
 //! [`FixedBdf::with_consistent_start`], gives the full order.
 
 use super::history::History;
-use super::newton::{error_weights, Corrector, JacState, NewtonProblem};
+use super::newton::{error_weights, Corrector, NewtonProblem};
 use super::{BdfError, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
@@ -153,7 +153,7 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         self.corrector.y.copy_from_slice(y0);
         self.corrector.yp.fill(0.0);
         self.navail = 1;
-        self.corrector.jac = JacState::default();
+        self.corrector.reset();
         self.jac_order = 0;
         Ok(())
     }
@@ -209,7 +209,7 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         f.navail = order;
         f.t = t0 + (order - 1) as f64 * h;
         f.stats = startup;
-        f.corrector.jac = JacState::default();
+        f.corrector.reset();
         Ok(f)
     }
 
@@ -268,9 +268,9 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             }
             self.corrector.yp_pred[i] = s / h;
         }
-        error_weights(&self.opts, self.hist.col(0), &mut self.corrector.w)?;
+        error_weights(&self.opts, self.hist.col(0), &mut self.corrector.newton.w)?;
         let hs = h.min(1.0);
-        for (i, w) in self.corrector.w.iter_mut().enumerate() {
+        for (i, w) in self.corrector.newton.w.iter_mut().enumerate() {
             let m = self.opts.index_of(i);
             if m > 1 {
                 *w *= hs.powi(i32::from(m) - 1);

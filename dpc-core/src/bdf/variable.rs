@@ -15,10 +15,11 @@
 //! `tests/bdf_testset.rs`).
 
 use super::history::History;
-use super::newton::{self, error_weights, wrms, Corrector, JacState, NewtonFailure, NewtonProblem};
+use super::newton::{error_weights, Corrector, NewtonProblem};
 use super::{BdfError, HigherIndexControl, Options, Stats};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
+use crate::newton::{first_non_finite, wrms, NewtonFailure};
 use crate::ImplicitDae;
 
 const MAXORD: usize = 5;
@@ -116,7 +117,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         let mut res = vec![0.0; n];
         dae.residual(t0, y0, yp0, &mut res);
-        if let Some(i) = newton::first_non_finite(&res) {
+        if let Some(i) = first_non_finite(&res) {
             return Err(BdfError::NonFiniteResidual {
                 t: t0,
                 equation: dae.equation_name(i),
@@ -134,8 +135,8 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         let mut corrector = Corrector::new(ls, n);
         corrector.y.copy_from_slice(y0);
         corrector.yp.copy_from_slice(yp0);
-        corrector.res.copy_from_slice(&res);
-        corrector.w.copy_from_slice(&ewt);
+        corrector.newton.res.copy_from_slice(&res);
+        corrector.newton.w.copy_from_slice(&ewt);
         Ok(Self {
             dae,
             n,
@@ -202,9 +203,10 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 });
             }
         }
-        self.dae.residual(t0, y0, yp0, &mut self.corrector.res);
+        self.dae
+            .residual(t0, y0, yp0, &mut self.corrector.newton.res);
         self.stats.residual_evaluations += 1;
-        if let Some(i) = newton::first_non_finite(&self.corrector.res) {
+        if let Some(i) = first_non_finite(&self.corrector.newton.res) {
             return Err(BdfError::NonFiniteResidual {
                 t: t0,
                 equation: self.dae.equation_name(i),
@@ -225,7 +227,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.state.phase = 0;
         self.state.h_initialised = false;
         self.state.tstop = None;
-        self.corrector.jac = JacState::default();
+        self.corrector.reset();
         self.state.steps_at_start = self.stats.steps;
         Ok(())
     }
@@ -240,7 +242,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         // y(t) = sum_j c_j(t) phi_j with c_j a product of the linear factors of
         // `dense::interpolate`; carry each c_j with its first and second derivatives at tn.
         let (mut c, mut d1, mut d2) = (1.0, 0.0, 0.0);
-        self.corrector.delta.fill(0.0);
+        self.corrector.newton.delta.fill(0.0);
         for j in 1..=self.state.kused {
             let offset = if j == 1 { 0.0 } else { self.state.psi[j - 2] };
             let slope = 1.0 / self.state.psi[j - 1];
@@ -248,11 +250,17 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             d2 = d2 * factor + 2.0 * d1 * slope;
             d1 = d1 * factor + c * slope;
             c *= factor;
-            for (y2, p) in self.corrector.delta.iter_mut().zip(self.state.phi.col(j)) {
+            for (y2, p) in self
+                .corrector
+                .newton
+                .delta
+                .iter_mut()
+                .zip(self.state.phi.col(j))
+            {
                 *y2 += d2 * p;
             }
         }
-        let curvature = wrms(&self.corrector.delta, &self.state.ewt);
+        let curvature = wrms(&self.corrector.newton.delta, &self.state.ewt);
         (curvature.is_finite() && curvature > 0.0).then(|| (0.5 / curvature).sqrt())
     }
 
@@ -479,12 +487,12 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             let m = self.opts.index_of(i);
             let w = self.state.ewt[i];
             if m <= 1 {
-                self.corrector.w[i] = w;
+                self.corrector.newton.w[i] = w;
                 self.state.w_err[i] = w;
                 continue;
             }
             let s = w * hs.powi(i32::from(m) - 1);
-            (self.corrector.w[i], self.state.w_err[i]) = match self.opts.higher_index {
+            (self.corrector.newton.w[i], self.state.w_err[i]) = match self.opts.higher_index {
                 // IDA's suppressalg: Newton keeps the plain weight. On the pendulum this gives
                 // fewer steps and more digits than scaling Newton's weights as well.
                 HigherIndexControl::Exclude => (w, 0.0),
@@ -682,9 +690,14 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         for j in 1..=self.state.kk {
             let g = self.state.gamma[j];
             let phi = self.state.phi.col(j);
-            for i in 0..self.n {
-                self.corrector.y_pred[i] += phi[i];
-                self.corrector.yp_pred[i] += g * phi[i];
+            let pred = self
+                .corrector
+                .y_pred
+                .iter_mut()
+                .zip(&mut self.corrector.yp_pred);
+            for ((y, yp), p) in pred.zip(phi) {
+                *y += p;
+                *yp += g * p;
             }
         }
     }
@@ -712,16 +725,16 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.state.knew = kk;
         if kk > 1 {
             for i in 0..self.n {
-                self.corrector.delta[i] = self.state.phi.col(kk)[i] + self.corrector.ee[i];
+                self.corrector.newton.delta[i] = self.state.phi.col(kk)[i] + self.corrector.ee[i];
             }
-            let enorm_km1 = wrms(&self.corrector.delta, &self.state.w_err);
+            let enorm_km1 = wrms(&self.corrector.newton.delta, &self.state.w_err);
             self.state.err_km1 = self.state.sigma[kk - 1] * enorm_km1;
             self.state.terr_km1 = kk as f64 * self.state.err_km1;
             if kk > 2 {
                 for i in 0..self.n {
-                    self.corrector.delta[i] += self.state.phi.col(kk - 1)[i];
+                    self.corrector.newton.delta[i] += self.state.phi.col(kk - 1)[i];
                 }
-                let enorm_km2 = wrms(&self.corrector.delta, &self.state.w_err);
+                let enorm_km2 = wrms(&self.corrector.newton.delta, &self.state.w_err);
                 let err_km2 = self.state.sigma[kk - 2] * enorm_km2;
                 let terr_km2 = (kk as f64 - 1.0) * err_km2;
                 if self.state.terr_km1.max(terr_km2) <= self.state.terr_k {
@@ -769,9 +782,10 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             let mut err_kp1 = 0.0;
             if action == Action::Unset {
                 for i in 0..self.n {
-                    self.corrector.delta[i] = self.corrector.ee[i] - self.state.phi.col(kk + 1)[i];
+                    self.corrector.newton.delta[i] =
+                        self.corrector.ee[i] - self.state.phi.col(kk + 1)[i];
                 }
-                let enorm_kp1 = wrms(&self.corrector.delta, &self.state.w_err);
+                let enorm_kp1 = wrms(&self.corrector.newton.delta, &self.state.w_err);
                 err_kp1 = enorm_kp1 / (kk as f64 + 2.0);
                 let terr_kp1 = enorm_kp1;
                 action = if kk == 1 {
