@@ -1,4 +1,4 @@
-//! Fixed-step, fixed-order BDF ([`FixedBdf`]) for the DPC inner integration.
+//! Fixed-step, fixed-order BDF ([`FixedBdf`]).
 //!
 //! Constant-step BDF of order `q`: `F(t_{n+1}, y_{n+1}, (1/h) sum_j a_j y_{n+1-j}) = 0`
 //! (Hairer & Wanner 1996, Section III.1, Table 1.2 of coefficients). Only past *values* of `y`
@@ -135,8 +135,7 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
     }
 
     /// Restart at `(t0, y0)` (possibly inconsistent) without allocating: the order ramps up
-    /// again and the iteration matrix is re-formed at the first step. This is the call for
-    /// each sample of the DPC controller.
+    /// again and the iteration matrix is re-formed at the first step.
     ///
     /// # Errors
     /// [`BdfError::DimensionMismatch`] if `y0` has the wrong length.
