@@ -36,6 +36,7 @@ pub mod linear_analysis;
 pub mod linear_solver;
 pub mod linearize;
 pub mod model;
+mod newton;
 pub mod numeric;
 pub mod prefeedback;
 pub mod radau;

@@ -1,4 +1,4 @@
-//! Fixed-step, fixed-order BDF ([`FixedBdf`]) for the DPC inner integration.
+//! Fixed-step, fixed-order BDF ([`FixedBdf`]).
 //!
 //! Constant-step BDF of order `q`: `F(t_{n+1}, y_{n+1}, (1/h) sum_j a_j y_{n+1-j}) = 0`
 //! (Hairer & Wanner 1996, Section III.1, Table 1.2 of coefficients). Only past *values* of `y`
@@ -9,7 +9,8 @@
 //! [`FixedBdf::with_history`], or starting from consistent values with
 //! [`FixedBdf::with_consistent_start`], gives the full order.
 
-use super::newton::{self, error_weights, JacState, NewtonProblem};
+use super::history::History;
+use super::newton::{error_weights, Corrector, NewtonProblem};
 use super::{BdfError, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
@@ -33,24 +34,17 @@ const COEFFS: [[f64; 6]; 5] = [
 /// the integrator stays at the previous point.
 pub struct FixedBdf<D: ImplicitDae, L: LinearSolver> {
     dae: D,
-    ls: L,
     opts: Options,
     order: usize,
     h: f64,
     t: f64,
     /// `hist[0]` is `y_n`, `hist[j]` is `y_{n-j}`.
-    hist: Vec<Vec<f64>>,
+    hist: History,
     navail: usize,
-    y: Vec<f64>,
-    yp: Vec<f64>,
-    y_pred: Vec<f64>,
-    yp_pred: Vec<f64>,
-    ee: Vec<f64>,
-    res: Vec<f64>,
-    delta: Vec<f64>,
-    w: Vec<f64>,
-    jac: JacState,
+    /// The order the factorised iteration matrix was formed for (0: none yet).
     jac_order: usize,
+    /// The corrector's linear solver, iteration matrix and work vectors.
+    corrector: Corrector<L>,
     stats: Stats,
 }
 
@@ -120,53 +114,45 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             }
         }
         opts.validate(n)?;
-        let mut hist = vec![vec![0.0; n]; 6];
-        for (dst, src) in hist.iter_mut().zip(history) {
-            dst.copy_from_slice(src);
+        let mut hist = History::new(6, n);
+        for (j, src) in history.iter().enumerate() {
+            hist.col_mut(j).copy_from_slice(src);
         }
+        let mut corrector = Corrector::new(ls, n);
+        corrector.y.copy_from_slice(history[0]);
         Ok(Self {
             dae,
-            ls,
             opts,
             order,
             h,
             t: t0,
             navail: history.len(),
-            y: history[0].to_vec(),
-            yp: vec![0.0; n],
-            y_pred: vec![0.0; n],
-            yp_pred: vec![0.0; n],
-            ee: vec![0.0; n],
-            res: vec![0.0; n],
-            delta: vec![0.0; n],
-            w: vec![0.0; n],
             hist,
-            jac: JacState::default(),
             jac_order: 0,
+            corrector,
             stats: Stats::default(),
         })
     }
 
     /// Restart at `(t0, y0)` (possibly inconsistent) without allocating: the order ramps up
-    /// again and the iteration matrix is re-formed at the first step. This is the call for
-    /// each sample of the DPC controller.
+    /// again and the iteration matrix is re-formed at the first step.
     ///
     /// # Errors
     /// [`BdfError::DimensionMismatch`] if `y0` has the wrong length.
     pub fn reset(&mut self, t0: f64, y0: &[f64]) -> Result<(), BdfError> {
-        if y0.len() != self.y.len() {
+        if y0.len() != self.corrector.y.len() {
             return Err(BdfError::DimensionMismatch {
                 what: "y0",
-                expected: self.y.len(),
+                expected: self.corrector.y.len(),
                 found: y0.len(),
             });
         }
         self.t = t0;
-        self.hist[0].copy_from_slice(y0);
-        self.y.copy_from_slice(y0);
-        self.yp.fill(0.0);
+        self.hist.col_mut(0).copy_from_slice(y0);
+        self.corrector.y.copy_from_slice(y0);
+        self.corrector.yp.fill(0.0);
         self.navail = 1;
-        self.jac = JacState::default();
+        self.corrector.reset();
         self.jac_order = 0;
         Ok(())
     }
@@ -206,7 +192,7 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
             atol: tighten(&f.opts.atol),
             ..f.opts.clone()
         };
-        let mut bdf = super::Bdf::new(&f.dae, &mut f.ls, startup_opts, t0, y0, yp0)?;
+        let mut bdf = super::Bdf::new(&f.dae, &mut f.corrector.ls, startup_opts, t0, y0, yp0)?;
         let mut points = vec![vec![0.0; n]; order];
         points[0].copy_from_slice(y0);
         for (j, p) in points.iter_mut().enumerate().skip(1) {
@@ -216,13 +202,13 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         let startup = bdf.stats();
         drop(bdf);
         for (j, p) in points.iter().rev().enumerate() {
-            f.hist[j].copy_from_slice(p);
+            f.hist.col_mut(j).copy_from_slice(p);
         }
-        f.y.copy_from_slice(&points[order - 1]);
+        f.corrector.y.copy_from_slice(&points[order - 1]);
         f.navail = order;
         f.t = t0 + (order - 1) as f64 * h;
         f.stats = startup;
-        f.jac = JacState::default();
+        f.corrector.reset();
         Ok(f)
     }
 
@@ -233,12 +219,12 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
 
     /// Solution at [`t`](Self::t).
     pub fn y(&self) -> &[f64] {
-        &self.hist[0]
+        self.hist.col(0)
     }
 
     /// The BDF derivative approximation at [`t`](Self::t) (zero before the first step).
     pub fn yp(&self) -> &[f64] {
-        &self.yp
+        &self.corrector.yp
     }
 
     /// Work counters so far.
@@ -264,26 +250,26 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         let cj = a[0] / h;
         // Predictor: polynomial extrapolation through the available past values.
         let m = self.navail.min(q + 1);
-        self.y_pred.fill(0.0);
+        self.corrector.y_pred.fill(0.0);
         let mut binom = 1.0;
         for j in 0..m {
             // coefficient (-1)^j C(m, j+1)
             binom = binom * (m - j) as f64 / (j + 1) as f64;
             let c = if j % 2 == 0 { binom } else { -binom };
-            for (p, v) in self.y_pred.iter_mut().zip(&self.hist[j]) {
+            for (p, v) in self.corrector.y_pred.iter_mut().zip(self.hist.col(j)) {
                 *p += c * v;
             }
         }
-        for i in 0..self.y_pred.len() {
-            let mut s = a[0] * self.y_pred[i];
+        for i in 0..self.corrector.y_pred.len() {
+            let mut s = a[0] * self.corrector.y_pred[i];
             for (j, aj) in a.iter().enumerate().take(q + 1).skip(1) {
-                s += aj * self.hist[j - 1][i];
+                s += aj * self.hist.col(j - 1)[i];
             }
-            self.yp_pred[i] = s / h;
+            self.corrector.yp_pred[i] = s / h;
         }
-        error_weights(&self.opts, &self.hist[0], &mut self.w)?;
+        error_weights(&self.opts, self.hist.col(0), &mut self.corrector.newton.w)?;
         let hs = h.min(1.0);
-        for (i, w) in self.w.iter_mut().enumerate() {
+        for (i, w) in self.corrector.newton.w.iter_mut().enumerate() {
             let m = self.opts.index_of(i);
             if m > 1 {
                 *w *= hs.powi(i32::from(m) - 1);
@@ -292,33 +278,18 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         let problem = NewtonProblem {
             t: t_new,
             cj,
-            y_pred: &self.y_pred,
-            yp_pred: &self.yp_pred,
-            w: &self.w,
             max_iterations: self.opts.max_newton_iterations.max(4),
             epcon: self.opts.newton_tolerance,
             residual_tolerance: self.opts.residual_tolerance,
             force_setup: self.jac_order != q,
         };
-        let out = newton::solve(
-            &self.dae,
-            &mut self.ls,
-            &mut self.jac,
-            &mut self.stats,
-            &problem,
-            &mut self.y,
-            &mut self.yp,
-            &mut self.ee,
-            &mut self.res,
-            &mut self.delta,
-        );
+        let out = self.corrector.solve(&self.dae, &mut self.stats, &problem);
         if let Err(f) = out {
             self.stats.newton_failures += 1;
             return Err(f.into_error(&self.dae, t_new, h));
         }
         self.jac_order = q;
-        self.hist.rotate_right(1);
-        self.hist[0].copy_from_slice(&self.y);
+        self.hist.push_front().copy_from_slice(&self.corrector.y);
         self.navail = (self.navail + 1).min(6);
         self.t = t_new;
         self.stats.steps += 1;

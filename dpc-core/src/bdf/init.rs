@@ -14,9 +14,13 @@
 //! Newton), so a plant made consistent again after a jump of its inputs costs one
 //! factorisation, not two.
 
-use super::newton::{error_weights, first_non_finite, wrms};
+use super::newton::error_weights;
 use super::{BdfError, Options, Stats};
-use crate::linear_solver::{FactorError, LinearSolver};
+use crate::linear_solver::LinearSolver;
+use crate::newton::{
+    first_non_finite, wrms, Convergence, Corrected, Iterate, NewtonFailure, NewtonSystem,
+    NewtonWorkspace, Verdict,
+};
 use crate::{ImplicitDae, MatrixSink};
 
 /// A power of two, so the scalings by `1/C_BIG` are exact.
@@ -115,9 +119,7 @@ pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
 #[derive(Debug, Clone)]
 pub struct InitWorkspace {
     differential: Vec<bool>,
-    res: Vec<f64>,
-    delta: Vec<f64>,
-    w: Vec<f64>,
+    newton: NewtonWorkspace,
     y_try: Vec<f64>,
     yp_try: Vec<f64>,
 }
@@ -127,9 +129,7 @@ impl InitWorkspace {
     pub fn new(n: usize) -> Self {
         Self {
             differential: vec![false; n],
-            res: vec![0.0; n],
-            delta: vec![0.0; n],
-            w: vec![0.0; n],
+            newton: NewtonWorkspace::new(n),
             y_try: vec![0.0; n],
             yp_try: vec![0.0; n],
         }
@@ -150,167 +150,230 @@ impl InitWorkspace {
         yp: &mut [f64],
     ) -> Result<Stats, BdfError> {
         let n = dae.dimension();
-        if self.res.len() != n {
+        if self.y_try.len() != n {
             return Err(BdfError::DimensionMismatch {
                 what: "initialisation workspace",
                 expected: n,
-                found: self.res.len(),
+                found: self.y_try.len(),
             });
         }
-        let InitWorkspace {
-            differential,
-            res,
-            delta,
-            w,
-            y_try,
-            yp_try,
-        } = self;
-        for (i, d) in differential.iter_mut().enumerate() {
+        for (what, found) in [
+            ("y", y.len()),
+            ("yp", yp.len()),
+            ("linear solver", ls.dimension()),
+        ] {
+            if found != n {
+                return Err(BdfError::DimensionMismatch {
+                    what,
+                    expected: n,
+                    found,
+                });
+            }
+        }
+        opts.validate(n)?;
+        for (i, d) in self.differential.iter_mut().enumerate() {
             *d = dae.is_differential(i);
         }
-        solve(
+        let mut system = InitSystem {
             dae,
-            ls,
-            opts,
             t0,
+            differential: &self.differential,
             y,
             yp,
-            differential,
-            [res, delta, w, y_try, yp_try],
-        )
+            y_try: &mut self.y_try,
+            yp_try: &mut self.yp_try,
+            fnorm: 0.0,
+            trial_residuals: 0,
+        };
+        let mut test = InitTest {
+            opts,
+            fnorm_before: 0.0,
+        };
+        let before = self.newton.counts;
+        let outcome = self.newton.solve(ls, &mut system, &mut test, true);
+        let counts = self.newton.counts;
+        let matrices = counts.matrices - before.matrices;
+        let stats = Stats {
+            residual_evaluations: counts.residuals - before.residuals + system.trial_residuals,
+            jacobian_evaluations: 2 * matrices,
+            factorisations: matrices,
+            newton_iterations: counts.solves - before.solves,
+            ..Stats::default()
+        };
+        let fnorm = system.fnorm;
+        match outcome {
+            Ok(_) => Ok(stats),
+            Err(NewtonFailure::Convergence) => Err(BdfError::InitialisationFailed(format!(
+                "Newton did not converge in {MAX_ITERATIONS} iterations (residual 2-norm {fnorm:e})"
+            ))),
+            Err(NewtonFailure::Singular(column, row)) => Err(BdfError::SingularMatrix {
+                t: t0,
+                unknown: column.map(|c| {
+                    if self.differential[c] {
+                        format!("derivative of {}", dae.unknown_name(c))
+                    } else {
+                        dae.unknown_name(c)
+                    }
+                }),
+                equation: row.map(|r| dae.equation_name(r)),
+            }),
+            Err(other) => Err(other.into_error(dae, t0, 0.0)),
+        }
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn solve<D: ImplicitDae, L: LinearSolver>(
-    dae: &D,
-    ls: &mut L,
-    opts: &Options,
+/// Newton iterations before the initialisation gives up.
+const MAX_ITERATIONS: usize = 20;
+
+/// The unknowns `(y'_d, y_a)` at `t0`, corrected with backtracking on the residual's 2-norm.
+struct InitSystem<'a, D> {
+    dae: &'a D,
     t0: f64,
-    y: &mut [f64],
-    yp: &mut [f64],
-    differential: &[bool],
-    [res, delta, w, y_try, yp_try]: [&mut Vec<f64>; 5],
-) -> Result<Stats, BdfError> {
-    let n = dae.dimension();
-    for (what, found) in [
-        ("y", y.len()),
-        ("yp", yp.len()),
-        ("linear solver", ls.dimension()),
-    ] {
-        if found != n {
-            return Err(BdfError::DimensionMismatch {
-                what,
-                expected: n,
-                found,
-            });
+    differential: &'a [bool],
+    y: &'a mut [f64],
+    yp: &'a mut [f64],
+    y_try: &'a mut [f64],
+    yp_try: &'a mut [f64],
+    /// The residual's 2-norm at the current iterate.
+    fnorm: f64,
+    /// Residual evaluations of the backtracking.
+    trial_residuals: usize,
+}
+
+impl<D: ImplicitDae> InitSystem<'_, D> {
+    /// The weights of the unknowns: each in its own tolerance units, `y_a` by `|y_a|`,
+    /// `y'_d` by `|y'_d|`.
+    fn weights(&mut self, opts: &Options, w: &mut [f64]) -> Result<(), NewtonFailure> {
+        for i in 0..self.y.len() {
+            self.y_try[i] = if self.differential[i] {
+                self.yp[i]
+            } else {
+                self.y[i]
+            };
         }
+        error_weights(opts, self.y_try, w).map_err(|e| match e {
+            BdfError::InvalidTolerance {
+                component, value, ..
+            } => NewtonFailure::Weight { component, value },
+            _ => NewtonFailure::Convergence,
+        })
     }
-    opts.validate(n)?;
-    let mut stats = Stats::default();
-    let eval =
-        |y: &[f64], yp: &[f64], res: &mut [f64], stats: &mut Stats| -> Result<f64, BdfError> {
-            dae.residual(t0, y, yp, res);
-            stats.residual_evaluations += 1;
-            if let Some(i) = first_non_finite(res) {
-                return Err(BdfError::NonFiniteResidual {
-                    t: t0,
-                    equation: dae.equation_name(i),
-                });
-            }
-            Ok(res.iter().map(|r| r * r).sum::<f64>().sqrt())
-        };
-    let mut fnorm = eval(y, yp, &mut *res, &mut stats)?;
-    // Keep the factorisation for the next iteration (simplified Newton) after a full step
-    // that contracted the residual by REUSE_CONTRACTION: the Jacobian then hardly changed
-    // (exactly not at all where F is linear in y'_d and there are no algebraic unknowns, the
-    // usual mechanical plant after a jump of its inputs).
-    let mut reuse = false;
-    for _ in 0..20 {
-        // Each unknown is measured in its own tolerance units: y_a by |y_a|, y'_d by |y'_d|.
-        for i in 0..n {
-            y_try[i] = if differential[i] { yp[i] } else { y[i] };
+}
+
+impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for InitSystem<'_, D> {
+    fn evaluate(&mut self, res: &mut [f64], residual: bool, matrix: Option<&mut M>) {
+        if residual {
+            self.dae.residual(self.t0, self.y, self.yp, res);
+            self.fnorm = norm2(res);
         }
-        error_weights(opts, y_try, &mut *w)?;
-        if !reuse {
-            let m = ls.matrix_mut();
+        if let Some(m) = matrix {
             m.fill_zero();
             let mut first = FirstPass {
                 inner: &mut *m,
-                differential,
+                differential: self.differential,
             };
-            dae.iteration_matrix(t0, y, yp, C_BIG, &mut first);
+            self.dae
+                .iteration_matrix(self.t0, self.y, self.yp, C_BIG, &mut first);
             let mut second = SecondPass {
                 inner: m,
-                differential,
+                differential: self.differential,
             };
-            dae.iteration_matrix(t0, y, yp, 0.0, &mut second);
-            stats.jacobian_evaluations += 2;
-            stats.factorisations += 1;
+            self.dae
+                .iteration_matrix(self.t0, self.y, self.yp, 0.0, &mut second);
         }
-        match if reuse { Ok(()) } else { ls.factor() } {
-            Ok(()) => {}
-            Err(FactorError::Singular { column, row }) => {
-                return Err(BdfError::SingularMatrix {
-                    t: t0,
-                    unknown: column.map(|c| {
-                        if differential[c] {
-                            format!("derivative of {}", dae.unknown_name(c))
-                        } else {
-                            dae.unknown_name(c)
-                        }
-                    }),
-                    equation: row.map(|r| dae.equation_name(r)),
-                });
-            }
-            Err(FactorError::OutsidePattern { row, col }) => {
-                return Err(BdfError::OutsidePattern {
-                    equation: dae.equation_name(row),
-                    unknown: dae.unknown_name(col),
-                });
-            }
-        }
-        delta.copy_from_slice(res);
-        ls.solve_in_place(&mut *delta);
-        stats.newton_iterations += 1;
-        let dnorm = wrms(delta, w);
-        let fnorm_before = fnorm;
+    }
+
+    /// Backtracking: halve the step until the residual's 2-norm falls by the fraction
+    /// `1e-4 lambda` (or `lambda` drops below `1/64`); a non-finite residual halves the step
+    /// as well, and fails at the smallest one.
+    fn correct(&mut self, delta: &mut [f64], res: &mut [f64]) -> Result<Corrected, NewtonFailure> {
+        let fnorm = self.fnorm;
         let mut lambda = 1.0;
         loop {
-            for i in 0..n {
-                y_try[i] = y[i];
-                yp_try[i] = yp[i];
-                if differential[i] {
-                    yp_try[i] -= lambda * delta[i];
+            self.y_try.copy_from_slice(self.y);
+            self.yp_try.copy_from_slice(self.yp);
+            for (i, d) in delta.iter().enumerate() {
+                if self.differential[i] {
+                    self.yp_try[i] -= lambda * d;
                 } else {
-                    y_try[i] -= lambda * delta[i];
+                    self.y_try[i] -= lambda * d;
                 }
             }
-            match eval(y_try, yp_try, &mut *res, &mut stats) {
-                Ok(f) if f <= (1.0 - 1e-4 * lambda) * fnorm || lambda < 1.0 / 64.0 || f == 0.0 => {
-                    fnorm = f;
-                    break;
+            self.dae.residual(self.t0, self.y_try, self.yp_try, res);
+            self.trial_residuals += 1;
+            let small = lambda < 1.0 / 64.0;
+            match first_non_finite(res) {
+                None => {
+                    let f = norm2(res);
+                    if f <= (1.0 - 1e-4 * lambda) * fnorm || small || f == 0.0 {
+                        self.fnorm = f;
+                        break;
+                    }
                 }
-                Ok(_) | Err(BdfError::NonFiniteResidual { .. }) if lambda >= 1.0 / 64.0 => {
-                    lambda *= 0.5;
-                }
-                Ok(f) => {
-                    fnorm = f;
-                    break;
-                }
-                Err(e) => return Err(e),
+                Some(i) if small => return Err(NewtonFailure::NonFinite(i)),
+                Some(_) => {}
             }
+            lambda *= 0.5;
         }
-        y.copy_from_slice(y_try);
-        yp.copy_from_slice(yp_try);
-        // A reused matrix's damped step says little about convergence: form a fresh one.
-        let trusted = !reuse || lambda == 1.0;
-        if trusted && (lambda * dnorm <= 1e-3 * opts.newton_tolerance || fnorm == 0.0) {
-            return Ok(stats);
-        }
-        reuse = lambda == 1.0 && fnorm <= REUSE_CONTRACTION * fnorm_before;
+        self.y.copy_from_slice(self.y_try);
+        self.yp.copy_from_slice(self.yp_try);
+        Ok(Corrected {
+            lambda,
+            residual_current: true,
+        })
     }
-    Err(BdfError::InitialisationFailed(format!(
-        "Newton did not converge in 20 iterations (residual 2-norm {fnorm:e})"
-    )))
+}
+
+/// The residual's 2-norm.
+fn norm2(res: &[f64]) -> f64 {
+    res.iter().map(|r| r * r).sum::<f64>().sqrt()
+}
+
+/// The initialisation's convergence test: the weighted update (times the damping) below
+/// `1e-3` times [`Options::newton_tolerance`] (IDA's `epiccon = 0.01 epcon`), from a matrix
+/// formed in this pass or after a full step; the matrix is kept for the next pass after a
+/// full step that shrank the residual by [`REUSE_CONTRACTION`].
+struct InitTest<'a> {
+    opts: &'a Options,
+    /// The residual's 2-norm before the correction.
+    fnorm_before: f64,
+}
+
+impl<D: ImplicitDae, L> Convergence<InitSystem<'_, D>, L> for InitTest<'_> {
+    fn screen(&mut self, _sys: &mut InitSystem<'_, D>, res: &[f64]) -> Result<(), NewtonFailure> {
+        match first_non_finite(res) {
+            Some(i) => Err(NewtonFailure::NonFinite(i)),
+            None => Ok(()),
+        }
+    }
+
+    fn after_residual(&mut self, sys: &mut InitSystem<'_, D>, it: Iterate<'_, L>) -> Verdict {
+        if let Err(f) = sys.weights(self.opts, it.w) {
+            return Verdict::Fail(f);
+        }
+        self.fnorm_before = sys.fnorm;
+        Verdict::Continue
+    }
+
+    fn after_update(&mut self, sys: &mut InitSystem<'_, D>, it: Iterate<'_, L>) -> Verdict {
+        let lambda = it.corrected.lambda;
+        let dnorm = wrms(it.delta, it.w);
+        // A reused matrix's damped step says little about convergence: form a fresh one.
+        let trusted = it.fresh || lambda == 1.0;
+        if trusted && (lambda * dnorm <= 1e-3 * self.opts.newton_tolerance || sys.fnorm == 0.0) {
+            return Verdict::Converged;
+        }
+        if it.solves >= MAX_ITERATIONS {
+            return Verdict::Fail(NewtonFailure::Convergence);
+        }
+        // Keep the factorisation for the next iteration (simplified Newton) after a full
+        // step that contracted the residual by REUSE_CONTRACTION: the Jacobian then hardly
+        // changed (exactly not at all where F is linear in y'_d and there are no algebraic
+        // unknowns, the usual mechanical plant after a jump of its inputs).
+        if lambda == 1.0 && sys.fnorm <= REUSE_CONTRACTION * self.fnorm_before {
+            Verdict::Continue
+        } else {
+            Verdict::Refresh { back: false }
+        }
+    }
 }

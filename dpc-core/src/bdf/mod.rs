@@ -8,8 +8,8 @@
 //!   modified Newton on `dF/dy + (alpha/h) dF/dy'` with reuse of the factorisation across
 //!   steps, convergence-rate test, local error test in a weighted RMS norm with relative and
 //!   absolute tolerances, rejection and retry, IDA's order selection, dense output.
-//! * [`FixedBdf`]: constant step and order, starting from possibly inconsistent values, for the
-//!   DPC inner integration.
+//! * [`FixedBdf`]: constant step and order, starting from possibly inconsistent values (the
+//!   DPC controller's inner integration does not use it; it runs its own implicit-Euler Newton).
 //! * [`consistent_initial_values`]: given the differential components, compute the algebraic
 //!   components and `y'` (the idea of IDA's `IDACalcIC` with `IDA_YA_YDP_INIT`).
 //!
@@ -80,6 +80,7 @@
 mod dense;
 mod error;
 mod fixed;
+mod history;
 mod init;
 mod newton;
 mod options;

@@ -1,5 +1,6 @@
-//! Modified Newton iteration on `G(y) = F(t, y, y'_pred + cj (y - y_pred)) = 0`, shared by the
-//! variable-step and fixed-step integrators.
+//! The BDF corrector, shared by the variable-step and fixed-step integrators: the system
+//! `G(y) = F(t, y, y'_pred + cj (y - y_pred)) = 0` and IDA's convergence-rate test, solved by
+//! the crate's one Newton ([`crate::newton`]).
 //!
 //! The iteration matrix `dF/dy + cj dF/dy'` is kept across steps and refactorised only when
 //! Newton fails with a stale matrix or `cj` drifts beyond the window `[0.6, 1.67]` of the value
@@ -9,18 +10,18 @@
 //! `s |delta| <= epcon` in the weighted RMS norm (IDA's `IDANewtonIter`).
 
 use super::{BdfError, Options, Stats};
-use crate::linear_solver::{FactorError, LinearSolver};
-use crate::ImplicitDae;
+use crate::linear_solver::LinearSolver;
+use crate::newton::{
+    first_non_finite, wrms, Convergence, Corrected, Iterate, NewtonFailure, NewtonSystem,
+    NewtonWorkspace, Verdict,
+};
+use crate::{ImplicitDae, MatrixSink};
 
-/// State of the iteration matrix and its factorisation.
+/// What the iteration matrix was formed with, and the rate estimate carried between steps.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct JacState {
     /// `cj` the matrix was formed with.
     pub cj_factored: f64,
-    /// The matrix was formed in the current step attempt (a retry cannot help).
-    pub current: bool,
-    /// A valid factorisation exists.
-    pub valid: bool,
     /// Convergence-rate factor `s` carried between steps.
     pub ss: f64,
     /// `cj` of the previous Newton solve.
@@ -31,29 +32,14 @@ impl Default for JacState {
     fn default() -> Self {
         Self {
             cj_factored: 0.0,
-            current: false,
-            valid: false,
             ss: 20.0,
             cj_last: 0.0,
         }
     }
 }
 
-/// Why an attempt failed; recoverable by a smaller step in the variable-step integrator.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum NewtonFailure {
-    /// Slow or diverging iteration.
-    Convergence,
-    /// Singular iteration matrix (pivot column, zero row).
-    Singular(Option<usize>, Option<usize>),
-    /// Non-finite residual in this equation.
-    NonFinite(usize),
-    /// Matrix entry outside the declared pattern: not recoverable.
-    OutsidePattern(usize, usize),
-}
-
 impl NewtonFailure {
-    /// The typed error to report when this failure is final.
+    /// The typed error to report when this failure of a step at `t` with step `h` is final.
     pub fn into_error<D: ImplicitDae>(self, dae: &D, t: f64, h: f64) -> BdfError {
         match self {
             Self::Convergence => BdfError::NewtonFailed { t, h },
@@ -70,16 +56,13 @@ impl NewtonFailure {
                 equation: dae.equation_name(r),
                 unknown: dae.unknown_name(c),
             },
+            Self::Weight { component, value } => BdfError::InvalidTolerance {
+                which: "error weight",
+                component,
+                value,
+            },
         }
     }
-}
-
-/// Weighted RMS norm `sqrt(sum (v_i w_i)^2 / n)`.
-#[inline]
-pub(crate) fn wrms(v: &[f64], w: &[f64]) -> f64 {
-    let n = v.len().max(1) as f64;
-    let s: f64 = v.iter().zip(w).map(|(a, b)| (a * b) * (a * b)).sum();
-    (s / n).sqrt()
 }
 
 /// Error weights `1 / (rtol_i |y_i| + atol_i)`.
@@ -98,57 +81,11 @@ pub(crate) fn error_weights(opts: &Options, y: &[f64], w: &mut [f64]) -> Result<
     Ok(())
 }
 
-/// First index of a non-finite entry.
-#[inline]
-pub(crate) fn first_non_finite(v: &[f64]) -> Option<usize> {
-    v.iter().position(|x| !x.is_finite())
-}
-
-/// Form and factorise `dF/dy + cj dF/dy'` at `(t, y, yp)`.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn setup<D: ImplicitDae, L: LinearSolver>(
-    dae: &D,
-    ls: &mut L,
-    jac: &mut JacState,
-    stats: &mut Stats,
-    t: f64,
-    y: &[f64],
-    yp: &[f64],
-    cj: f64,
-) -> Result<(), NewtonFailure> {
-    use crate::MatrixSink;
-    let m = ls.matrix_mut();
-    m.fill_zero();
-    dae.iteration_matrix(t, y, yp, cj, m);
-    stats.jacobian_evaluations += 1;
-    stats.factorisations += 1;
-    jac.cj_factored = cj;
-    jac.current = true;
-    jac.ss = 20.0;
-    match ls.factor() {
-        Ok(()) => {
-            jac.valid = true;
-            Ok(())
-        }
-        Err(FactorError::Singular { column, row }) => {
-            jac.valid = false;
-            Err(NewtonFailure::Singular(column, row))
-        }
-        Err(FactorError::OutsidePattern { row, col }) => {
-            jac.valid = false;
-            Err(NewtonFailure::OutsidePattern(row, col))
-        }
-    }
-}
-
-/// Work vectors and inputs of one Newton solve.
-pub(crate) struct NewtonProblem<'a> {
+/// The inputs of one corrector solve; the predictor is in the [`Corrector`], the weights of
+/// the convergence test in its Newton workspace.
+pub(crate) struct NewtonProblem {
     pub t: f64,
     pub cj: f64,
-    pub y_pred: &'a [f64],
-    pub yp_pred: &'a [f64],
-    /// Weights of the convergence test.
-    pub w: &'a [f64],
     pub max_iterations: usize,
     pub epcon: f64,
     /// When finite: the scaled residual `max_i |F_i| / max_j (|G_ij| / w_j)` at the solution
@@ -158,131 +95,230 @@ pub(crate) struct NewtonProblem<'a> {
     pub force_setup: bool,
 }
 
-/// Solve for `y`, `yp` (and the correction `ee = y - y_pred`). On failure with a stale matrix
-/// the attempt is repeated once with a fresh one, as IDA does.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
-    dae: &D,
-    ls: &mut L,
-    jac: &mut JacState,
-    stats: &mut Stats,
-    p: &NewtonProblem<'_>,
-    y: &mut [f64],
-    yp: &mut [f64],
-    ee: &mut [f64],
-    res: &mut [f64],
-    delta: &mut [f64],
-) -> Result<usize, NewtonFailure> {
-    jac.current = false;
-    // A changed cj makes the carried rate estimate unreliable: start pessimistic (IDA).
-    if p.cj != jac.cj_last {
-        jac.ss = 100.0;
-        jac.cj_last = p.cj;
+/// Everything the corrector works in, allocated once for an integrator: the Newton workspace
+/// (linear solver, factorisation, residual, update, weights), the state of the matrix, the
+/// predictor, the iterate `y`, `y'` and the correction `ee = y - y_pred`.
+pub(crate) struct Corrector<L: LinearSolver> {
+    /// The linear solver holding the iteration matrix.
+    pub ls: L,
+    pub newton: NewtonWorkspace,
+    pub jac: JacState,
+    pub y_pred: Vec<f64>,
+    pub yp_pred: Vec<f64>,
+    pub y: Vec<f64>,
+    pub yp: Vec<f64>,
+    pub ee: Vec<f64>,
+}
+
+/// The corrector's system at one step: the iterate `y` with `y' = y'_pred + cj (y - y_pred)`.
+struct StepSystem<'a, D> {
+    dae: &'a D,
+    t: f64,
+    cj: f64,
+    /// `cj` of the factorised matrix (set when the system forms one).
+    cj_factored: &'a mut f64,
+    y: &'a mut [f64],
+    yp: &'a mut [f64],
+    ee: &'a mut [f64],
+}
+
+impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, D> {
+    fn evaluate(&mut self, res: &mut [f64], residual: bool, matrix: Option<&mut M>) {
+        if let Some(m) = matrix {
+            m.fill_zero();
+            self.dae
+                .iteration_matrix(self.t, self.y, self.yp, self.cj, m);
+            *self.cj_factored = self.cj;
+        }
+        if residual {
+            self.dae.residual(self.t, self.y, self.yp, res);
+        }
     }
-    let mut need_setup = p.force_setup || !jac.valid || {
-        let r = p.cj / jac.cj_factored;
-        !(0.6..=1.0 / 0.6).contains(&r)
-    };
-    loop {
-        y.copy_from_slice(p.y_pred);
-        yp.copy_from_slice(p.yp_pred);
-        ee.fill(0.0);
-        if need_setup {
-            setup(dae, ls, jac, stats, p.t, y, yp, p.cj)?;
+
+    fn correct(&mut self, delta: &mut [f64], _res: &mut [f64]) -> Result<Corrected, NewtonFailure> {
+        let cjratio = self.cj / *self.cj_factored;
+        if cjratio != 1.0 {
+            let scale = 2.0 / (1.0 + cjratio);
+            delta.iter_mut().for_each(|d| *d *= scale);
         }
-        match iterate(dae, ls, jac, stats, p, y, yp, ee, res, delta) {
-            Ok(m) => return Ok(m),
-            Err(NewtonFailure::Convergence | NewtonFailure::NonFinite(_)) if !jac.current => {
-                need_setup = true;
-            }
-            Err(e) => return Err(e),
+        let iterate = self
+            .y
+            .iter_mut()
+            .zip(self.ee.iter_mut())
+            .zip(self.yp.iter_mut());
+        for (((y, ee), yp), d) in iterate.zip(delta.iter()) {
+            *y -= d;
+            *ee -= d;
+            *yp -= self.cj * d;
         }
+        Ok(Corrected::FULL)
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn iterate<D: ImplicitDae, L: LinearSolver>(
-    dae: &D,
-    ls: &mut L,
-    jac: &mut JacState,
-    stats: &mut Stats,
-    p: &NewtonProblem<'_>,
-    y: &mut [f64],
-    yp: &mut [f64],
-    ee: &mut [f64],
-    res: &mut [f64],
-    delta: &mut [f64],
-) -> Result<usize, NewtonFailure> {
-    let cjratio = p.cj / jac.cj_factored;
-    let scale = if cjratio == 1.0 {
-        1.0
-    } else {
-        2.0 / (1.0 + cjratio)
-    };
-    let mut oldnrm = 0.0;
-    let mut m = 0;
-    loop {
-        dae.residual(p.t, y, yp, res);
-        stats.residual_evaluations += 1;
-        if let Some(i) = first_non_finite(res) {
-            return Err(NewtonFailure::NonFinite(i));
+/// IDA's convergence-rate test, with the optional scaled-residual test of the fixed-step
+/// integrator.
+struct RateTest {
+    /// The rate factor `s`, carried between solves by [`JacState::ss`].
+    ss: f64,
+    epcon: f64,
+    max_iterations: usize,
+    residual_tolerance: f64,
+    oldnrm: f64,
+    /// The rate test passed; the residual test at the next evaluation decides.
+    residual_pending: bool,
+}
+
+impl<S, L: LinearSolver> Convergence<S, L> for RateTest {
+    fn screen(&mut self, _sys: &mut S, res: &[f64]) -> Result<(), NewtonFailure> {
+        match first_non_finite(res) {
+            Some(i) => Err(NewtonFailure::NonFinite(i)),
+            None => Ok(()),
         }
-        delta.copy_from_slice(res);
-        ls.solve_in_place(delta);
-        stats.newton_iterations += 1;
-        if scale != 1.0 {
-            delta.iter_mut().for_each(|d| *d *= scale);
+    }
+
+    fn after_residual(&mut self, _sys: &mut S, it: Iterate<'_, L>) -> Verdict {
+        if it.fresh {
+            self.ss = 20.0;
         }
-        for i in 0..y.len() {
-            y[i] -= delta[i];
-            ee[i] -= delta[i];
-            yp[i] -= p.cj * delta[i];
+        if !self.residual_pending {
+            return Verdict::Continue;
         }
-        let delnrm = wrms(delta, p.w);
+        self.residual_pending = false;
+        // Scaled residual: each equation relative to the change one tolerance unit of the
+        // unknowns causes in it (absolute where a row of the matrix is empty).
+        it.ls.scaled_row_norms(it.w, it.delta);
+        let rn = it
+            .res
+            .iter()
+            .zip(it.delta.iter())
+            .fold(0.0f64, |a, (r, s)| {
+                a.max(if *s > 0.0 { r.abs() / s } else { r.abs() })
+            });
+        if rn <= self.residual_tolerance {
+            Verdict::Converged
+        } else if it.solves >= self.max_iterations {
+            Verdict::Fail(NewtonFailure::Convergence)
+        } else {
+            Verdict::Continue
+        }
+    }
+
+    fn after_update(&mut self, _sys: &mut S, it: Iterate<'_, L>) -> Verdict {
+        let delnrm = wrms(it.delta, it.w);
         if !delnrm.is_finite() {
-            return Err(NewtonFailure::Convergence);
+            return Verdict::Fail(NewtonFailure::Convergence);
         }
+        let m = it.solves - 1;
         let mut converged = false;
         if m == 0 {
-            oldnrm = delnrm;
-            if delnrm <= 1e-4 * p.epcon {
-                converged = true;
-            }
+            self.oldnrm = delnrm;
+            converged = delnrm <= 1e-4 * self.epcon;
         } else {
-            let ratio = delnrm / oldnrm;
+            let ratio = delnrm / self.oldnrm;
             let rate = if m == 1 {
                 ratio
             } else {
                 ratio.powf(1.0 / m as f64)
             };
             if rate > 0.9 {
-                return Err(NewtonFailure::Convergence);
+                return Verdict::Fail(NewtonFailure::Convergence);
             }
-            jac.ss = rate / (1.0 - rate);
+            self.ss = rate / (1.0 - rate);
         }
-        if converged || jac.ss * delnrm <= p.epcon {
-            if p.residual_tolerance.is_finite() {
-                dae.residual(p.t, y, yp, res);
-                stats.residual_evaluations += 1;
-                if let Some(i) = first_non_finite(res) {
-                    return Err(NewtonFailure::NonFinite(i));
-                }
-                // Scaled residual: each equation relative to the change one tolerance unit of
-                // the unknowns causes in it (absolute where a row of the matrix is empty).
-                ls.scaled_row_norms(p.w, delta);
-                let rn = res.iter().zip(delta.iter()).fold(0.0f64, |a, (r, s)| {
-                    a.max(if *s > 0.0 { r.abs() / s } else { r.abs() })
-                });
-                if rn <= p.residual_tolerance {
-                    return Ok(m + 1);
-                }
-            } else {
-                return Ok(m + 1);
+        if converged || self.ss * delnrm <= self.epcon {
+            if !self.residual_tolerance.is_finite() {
+                return Verdict::Converged;
             }
+            self.residual_pending = true;
+            return Verdict::Continue;
         }
-        m += 1;
-        if m >= p.max_iterations {
-            return Err(NewtonFailure::Convergence);
+        if it.solves >= self.max_iterations {
+            Verdict::Fail(NewtonFailure::Convergence)
+        } else {
+            Verdict::Continue
         }
+    }
+}
+
+impl<L: LinearSolver> Corrector<L> {
+    /// Work vectors of dimension `n` around the solver `ls`.
+    pub fn new(ls: L, n: usize) -> Self {
+        Self {
+            ls,
+            newton: NewtonWorkspace::new(n),
+            jac: JacState::default(),
+            y_pred: vec![0.0; n],
+            yp_pred: vec![0.0; n],
+            y: vec![0.0; n],
+            yp: vec![0.0; n],
+            ee: vec![0.0; n],
+        }
+    }
+
+    /// Forget the factorised matrix and the rate estimate (a restart).
+    pub fn reset(&mut self) {
+        self.jac = JacState::default();
+        self.newton.valid = false;
+    }
+
+    /// Solve for `y`, `yp` (and the correction `ee = y - y_pred`) from the predictor, with
+    /// the weights in `newton.w`. On failure with a stale matrix the attempt is repeated once
+    /// with a fresh one, as IDA does. The work goes into `stats`.
+    pub fn solve<D: ImplicitDae>(
+        &mut self,
+        dae: &D,
+        stats: &mut Stats,
+        p: &NewtonProblem,
+    ) -> Result<usize, NewtonFailure> {
+        // A changed cj makes the carried rate estimate unreliable: start pessimistic (IDA).
+        if p.cj != self.jac.cj_last {
+            self.jac.ss = 100.0;
+            self.jac.cj_last = p.cj;
+        }
+        let mut fresh = p.force_setup || {
+            let r = p.cj / self.jac.cj_factored;
+            !(0.6..=1.0 / 0.6).contains(&r)
+        };
+        let before = self.newton.counts;
+        let outcome = loop {
+            self.y.copy_from_slice(&self.y_pred);
+            self.yp.copy_from_slice(&self.yp_pred);
+            self.ee.fill(0.0);
+            let mut system = StepSystem {
+                dae,
+                t: p.t,
+                cj: p.cj,
+                cj_factored: &mut self.jac.cj_factored,
+                y: &mut self.y,
+                yp: &mut self.yp,
+                ee: &mut self.ee,
+            };
+            let mut test = RateTest {
+                ss: self.jac.ss,
+                epcon: p.epcon,
+                max_iterations: p.max_iterations,
+                residual_tolerance: p.residual_tolerance,
+                oldnrm: 0.0,
+                residual_pending: false,
+            };
+            let outcome = self
+                .newton
+                .solve(&mut self.ls, &mut system, &mut test, fresh);
+            self.jac.ss = test.ss;
+            match outcome {
+                Err(NewtonFailure::Convergence | NewtonFailure::NonFinite(_))
+                    if !fresh && !self.newton.formed =>
+                {
+                    fresh = true;
+                }
+                outcome => break outcome,
+            }
+        };
+        let after = self.newton.counts;
+        stats.residual_evaluations += after.residuals - before.residuals;
+        stats.jacobian_evaluations += after.matrices - before.matrices;
+        stats.factorisations += after.matrices - before.matrices;
+        stats.newton_iterations += after.solves - before.solves;
+        outcome
     }
 }

@@ -14,10 +14,12 @@
 //! them rejected); with these two rules it takes 15 608 steps (see
 //! `tests/bdf_testset.rs`).
 
-use super::newton::{self, error_weights, wrms, JacState, NewtonFailure, NewtonProblem};
+use super::history::History;
+use super::newton::{error_weights, Corrector, NewtonProblem};
 use super::{BdfError, HigherIndexControl, Options, Stats};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
+use crate::newton::{first_non_finite, wrms, NewtonFailure};
 use crate::ImplicitDae;
 
 const MAXORD: usize = 5;
@@ -32,10 +34,20 @@ const KEEP_ORDER_FAILURES: usize = 5;
 /// never touch the heap (error paths excepted, which build names for the message).
 pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
     dae: D,
-    ls: L,
     opts: Options,
     n: usize,
-    // Method state (names follow IDA).
+    /// Where the integration is: time, step, order, history and the step's coefficients.
+    state: BdfState,
+    /// The corrector's linear solver, iteration matrix and work vectors.
+    corrector: Corrector<L>,
+    /// The work done.
+    stats: Stats,
+}
+
+/// The method's state (names follow IDA): the current time, step and order, the history
+/// `phi` of modified divided differences with the coefficients of the step being taken, the
+/// order-selection estimates, and the weights of the local error test.
+struct BdfState {
     tn: f64,
     hh: f64,
     hused: f64,
@@ -55,7 +67,7 @@ pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
     err_km1: f64,
     terr_k: f64,
     terr_km1: f64,
-    phi: Vec<Vec<f64>>,
+    phi: History,
     h_initialised: bool,
     /// First step after [`Bdf::reinit`] from the curvature of the previous integration's last
     /// polynomial (`None`: the default rule of [`Options::initial_step`]).
@@ -63,19 +75,10 @@ pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
     /// `stats.steps` when the current integration started (0, or at the last `reinit`).
     steps_at_start: usize,
     tstop: Option<f64>,
-    // Work vectors.
-    y: Vec<f64>,
-    yp: Vec<f64>,
-    y_pred: Vec<f64>,
-    yp_pred: Vec<f64>,
-    ee: Vec<f64>,
-    res: Vec<f64>,
-    delta: Vec<f64>,
+    /// Error weights `1 / (rtol |y| + atol)` and those of the local error test (zero for the
+    /// components it excludes).
     ewt: Vec<f64>,
-    w_newton: Vec<f64>,
     w_err: Vec<f64>,
-    jac: JacState,
-    stats: Stats,
 }
 
 impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
@@ -114,60 +117,58 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         let mut res = vec![0.0; n];
         dae.residual(t0, y0, yp0, &mut res);
-        if let Some(i) = newton::first_non_finite(&res) {
+        if let Some(i) = first_non_finite(&res) {
             return Err(BdfError::NonFiniteResidual {
                 t: t0,
                 equation: dae.equation_name(i),
             });
         }
-        let mut phi = vec![vec![0.0; n]; MAXORD + 2];
-        phi[0].copy_from_slice(y0);
-        phi[1].copy_from_slice(yp0);
+        let mut phi = History::new(MAXORD + 2, n);
+        phi.col_mut(0).copy_from_slice(y0);
+        phi.col_mut(1).copy_from_slice(yp0);
         let mut ewt = vec![0.0; n];
         error_weights(&opts, y0, &mut ewt)?;
         let stats = Stats {
             residual_evaluations: 1,
             ..Stats::default()
         };
+        let mut corrector = Corrector::new(ls, n);
+        corrector.y.copy_from_slice(y0);
+        corrector.yp.copy_from_slice(yp0);
+        corrector.newton.res.copy_from_slice(&res);
+        corrector.newton.w.copy_from_slice(&ewt);
         Ok(Self {
             dae,
-            ls,
             n,
-            tn: t0,
-            hh: 0.0,
-            hused: 0.0,
-            kk: 1,
-            kused: 0,
-            knew: 1,
-            ns: 0,
-            phase: 0,
-            cj: 0.0,
-            psi: [0.0; MAXORD + 2],
-            alpha: [0.0; MAXORD + 2],
-            beta: [0.0; MAXORD + 2],
-            sigma: [0.0; MAXORD + 2],
-            gamma: [0.0; MAXORD + 2],
-            ck: 0.0,
-            err_k: 0.0,
-            err_km1: 0.0,
-            terr_k: 0.0,
-            terr_km1: 0.0,
-            phi,
-            h_initialised: false,
-            restart_step: None,
-            steps_at_start: 0,
-            tstop: None,
-            y: y0.to_vec(),
-            yp: yp0.to_vec(),
-            y_pred: vec![0.0; n],
-            yp_pred: vec![0.0; n],
-            ee: vec![0.0; n],
-            res,
-            delta: vec![0.0; n],
-            w_newton: ewt.clone(),
-            w_err: ewt.clone(),
-            ewt,
-            jac: JacState::default(),
+            state: BdfState {
+                tn: t0,
+                hh: 0.0,
+                hused: 0.0,
+                kk: 1,
+                kused: 0,
+                knew: 1,
+                ns: 0,
+                phase: 0,
+                cj: 0.0,
+                psi: [0.0; MAXORD + 2],
+                alpha: [0.0; MAXORD + 2],
+                beta: [0.0; MAXORD + 2],
+                sigma: [0.0; MAXORD + 2],
+                gamma: [0.0; MAXORD + 2],
+                ck: 0.0,
+                err_k: 0.0,
+                err_km1: 0.0,
+                terr_k: 0.0,
+                terr_km1: 0.0,
+                phi,
+                h_initialised: false,
+                restart_step: None,
+                steps_at_start: 0,
+                tstop: None,
+                w_err: ewt.clone(),
+                ewt,
+            },
+            corrector,
             stats,
             opts,
         })
@@ -202,31 +203,32 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 });
             }
         }
-        self.dae.residual(t0, y0, yp0, &mut self.res);
+        self.dae
+            .residual(t0, y0, yp0, &mut self.corrector.newton.res);
         self.stats.residual_evaluations += 1;
-        if let Some(i) = newton::first_non_finite(&self.res) {
+        if let Some(i) = first_non_finite(&self.corrector.newton.res) {
             return Err(BdfError::NonFiniteResidual {
                 t: t0,
                 equation: self.dae.equation_name(i),
             });
         }
-        error_weights(&self.opts, y0, &mut self.ewt)?;
-        self.restart_step = self.curvature_step();
-        self.phi[0].copy_from_slice(y0);
-        self.phi[1].copy_from_slice(yp0);
-        self.y.copy_from_slice(y0);
-        self.yp.copy_from_slice(yp0);
-        self.tn = t0;
-        self.hh = 0.0;
-        self.hused = 0.0;
-        self.kk = 1;
-        self.kused = 0;
-        self.ns = 0;
-        self.phase = 0;
-        self.h_initialised = false;
-        self.tstop = None;
-        self.jac = JacState::default();
-        self.steps_at_start = self.stats.steps;
+        error_weights(&self.opts, y0, &mut self.state.ewt)?;
+        self.state.restart_step = self.curvature_step();
+        self.state.phi.col_mut(0).copy_from_slice(y0);
+        self.state.phi.col_mut(1).copy_from_slice(yp0);
+        self.corrector.y.copy_from_slice(y0);
+        self.corrector.yp.copy_from_slice(yp0);
+        self.state.tn = t0;
+        self.state.hh = 0.0;
+        self.state.hused = 0.0;
+        self.state.kk = 1;
+        self.state.kused = 0;
+        self.state.ns = 0;
+        self.state.phase = 0;
+        self.state.h_initialised = false;
+        self.state.tstop = None;
+        self.corrector.reset();
+        self.state.steps_at_start = self.stats.steps;
         Ok(())
     }
 
@@ -234,25 +236,31 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// the last step's interpolating polynomial; `None` before a step or when its order is 1
     /// (or the curvature vanishes or is not finite).
     fn curvature_step(&mut self) -> Option<f64> {
-        if self.nst() == 0 || self.kused < 2 {
+        if self.nst() == 0 || self.state.kused < 2 {
             return None;
         }
         // y(t) = sum_j c_j(t) phi_j with c_j a product of the linear factors of
         // `dense::interpolate`; carry each c_j with its first and second derivatives at tn.
         let (mut c, mut d1, mut d2) = (1.0, 0.0, 0.0);
-        self.delta.fill(0.0);
-        for j in 1..=self.kused {
-            let offset = if j == 1 { 0.0 } else { self.psi[j - 2] };
-            let slope = 1.0 / self.psi[j - 1];
+        self.corrector.newton.delta.fill(0.0);
+        for j in 1..=self.state.kused {
+            let offset = if j == 1 { 0.0 } else { self.state.psi[j - 2] };
+            let slope = 1.0 / self.state.psi[j - 1];
             let factor = offset * slope;
             d2 = d2 * factor + 2.0 * d1 * slope;
             d1 = d1 * factor + c * slope;
             c *= factor;
-            for (y2, p) in self.delta.iter_mut().zip(&self.phi[j]) {
+            for (y2, p) in self
+                .corrector
+                .newton
+                .delta
+                .iter_mut()
+                .zip(self.state.phi.col(j))
+            {
                 *y2 += d2 * p;
             }
         }
-        let curvature = wrms(&self.delta, &self.ewt);
+        let curvature = wrms(&self.corrector.newton.delta, &self.state.ewt);
         (curvature.is_finite() && curvature > 0.0).then(|| (0.5 / curvature).sqrt())
     }
 
@@ -268,27 +276,27 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
 
     /// Time reached by the last accepted step.
     pub fn t(&self) -> f64 {
-        self.tn
+        self.state.tn
     }
 
     /// Solution at [`t`](Self::t).
     pub fn y(&self) -> &[f64] {
-        &self.y
+        &self.corrector.y
     }
 
     /// Derivative at [`t`](Self::t).
     pub fn yp(&self) -> &[f64] {
-        &self.yp
+        &self.corrector.yp
     }
 
     /// Order used in the last step (0 before the first).
     pub fn last_order(&self) -> usize {
-        self.kused
+        self.state.kused
     }
 
     /// Step size used in the last step (0 before the first).
     pub fn last_step(&self) -> f64 {
-        self.hused
+        self.state.hused
     }
 
     /// Never step past `tstop` (for example a discontinuity of the model's inputs).
@@ -296,20 +304,20 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// # Errors
     /// [`BdfError::InvalidOption`] if `tstop` is not ahead of the current time.
     pub fn set_stop_time(&mut self, tstop: f64) -> Result<(), BdfError> {
-        if tstop <= self.tn || !tstop.is_finite() {
+        if tstop <= self.state.tn || !tstop.is_finite() {
             return Err(BdfError::TimeOutOfRange {
                 t: tstop,
-                from: self.tn,
+                from: self.state.tn,
                 to: f64::INFINITY,
             });
         }
-        self.tstop = Some(tstop);
+        self.state.tstop = Some(tstop);
         Ok(())
     }
 
     fn init_step(&mut self, tout: f64) {
-        let tdist = (tout - self.tn).abs();
-        let mut h = match (self.opts.initial_step, self.restart_step) {
+        let tdist = (tout - self.state.tn).abs();
+        let mut h = match (self.opts.initial_step, self.state.restart_step) {
             (Some(h), _) => h,
             (None, Some(h)) if tdist > 0.0 => h.min(tdist).max(self.hmin()),
             (None, Some(h)) => h.max(self.hmin()),
@@ -317,9 +325,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 let mut h = if tdist > 0.0 {
                     1e-3 * tdist
                 } else {
-                    1e-6 * self.tn.abs().max(1.0)
+                    1e-6 * self.state.tn.abs().max(1.0)
                 };
-                let ypnorm = wrms(&self.phi[1], &self.ewt);
+                let ypnorm = wrms(self.state.phi.col(1), &self.state.ewt);
                 if ypnorm * h > 0.5 {
                     h = 0.5 / ypnorm;
                 }
@@ -327,12 +335,10 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             }
         };
         h = h.min(self.opts.max_step);
-        self.hh = h;
+        self.state.hh = h;
         // phi[1] holds h y'(t0) from here on.
-        for v in &mut self.phi[1] {
-            *v *= h;
-        }
-        self.h_initialised = true;
+        self.state.phi.scale(1, h);
+        self.state.h_initialised = true;
     }
 
     /// Integrate to `tout` (ahead of the initial time) and write `y(tout)` (and `y'(tout)` if
@@ -359,25 +365,25 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         if !tout.is_finite() {
             return Err(BdfError::TimeOutOfRange {
                 t: tout,
-                from: self.tn - self.hused,
+                from: self.state.tn - self.state.hused,
                 to: f64::INFINITY,
             });
         }
-        if !self.h_initialised {
-            if tout <= self.tn {
+        if !self.state.h_initialised {
+            if tout <= self.state.tn {
                 return Err(BdfError::TimeOutOfRange {
                     t: tout,
-                    from: self.tn,
+                    from: self.state.tn,
                     to: f64::INFINITY,
                 });
             }
             self.init_step(tout);
         }
         let mut steps = 0;
-        while self.tn < tout {
-            if let Some(ts) = self.tstop {
-                if self.tn >= ts {
-                    self.tstop = None;
+        while self.state.tn < tout {
+            if let Some(ts) = self.state.tstop {
+                if self.state.tn >= ts {
+                    self.state.tstop = None;
                     self.interpolate(ts, y_out, yp_out)?;
                     return Ok(ts);
                 }
@@ -386,7 +392,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 return Err(BdfError::TooManySteps {
                     max_steps: self.opts.max_steps,
                     tout,
-                    t: self.tn,
+                    t: self.state.tn,
                 });
             }
             self.step_internal()?;
@@ -406,12 +412,12 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// [`BdfError::NonFiniteResidual`] when a step cannot be completed even at the minimum
     /// step size; [`BdfError::InvalidTolerance`] when an error weight becomes non-positive.
     pub fn step(&mut self) -> Result<f64, BdfError> {
-        if !self.h_initialised {
-            let t = self.tstop.unwrap_or(self.tn);
+        if !self.state.h_initialised {
+            let t = self.state.tstop.unwrap_or(self.state.tn);
             self.init_step(t);
         }
         self.step_internal()?;
-        Ok(self.tn)
+        Ok(self.state.tn)
     }
 
     /// Interpolate the solution (and derivative) at `t` in `[t - h_last, t]` of the last step,
@@ -432,48 +438,61 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 found: y_out.len(),
             });
         }
-        let margin = 100.0 * f64::EPSILON * (self.tn.abs() + self.hused.abs());
-        if !t.is_finite() || t > self.tn + margin || t < self.tn - self.hused - margin {
+        let margin = 100.0 * f64::EPSILON * (self.state.tn.abs() + self.state.hused.abs());
+        if !t.is_finite()
+            || t > self.state.tn + margin
+            || t < self.state.tn - self.state.hused - margin
+        {
             return Err(BdfError::TimeOutOfRange {
                 t,
-                from: self.tn - self.hused,
-                to: self.tn,
+                from: self.state.tn - self.state.hused,
+                to: self.state.tn,
             });
         }
         if self.nst() == 0 {
-            y_out.copy_from_slice(&self.phi[0]);
+            y_out.copy_from_slice(self.state.phi.col(0));
             if let Some(yp) = yp_out {
-                yp.copy_from_slice(&self.yp);
+                yp.copy_from_slice(&self.corrector.yp);
             }
             return Ok(());
         }
-        super::dense::interpolate(&self.phi, &self.psi, self.kused, self.tn, t, y_out, yp_out);
+        super::dense::interpolate(
+            &self.state.phi,
+            &self.state.psi,
+            self.state.kused,
+            self.state.tn,
+            t,
+            y_out,
+            yp_out,
+        );
         Ok(())
     }
 
     /// Steps since the start of the current integration (IDA's `nst`).
     fn nst(&self) -> usize {
-        self.stats.steps - self.steps_at_start
+        self.stats.steps - self.state.steps_at_start
     }
 
     fn hmin(&self) -> f64 {
-        self.opts.min_step.max(4.0 * f64::EPSILON * self.tn.abs())
+        self.opts
+            .min_step
+            .max(4.0 * f64::EPSILON * self.state.tn.abs())
     }
 
     /// Weights for Newton and the error test from the current solution and step.
     fn update_weights(&mut self) -> Result<(), BdfError> {
-        error_weights(&self.opts, &self.phi[0], &mut self.ewt)?;
-        let hs = self.hh.abs().min(1.0);
+        error_weights(&self.opts, self.state.phi.col(0), &mut self.state.ewt)?;
+        let hs = self.state.hh.abs().min(1.0);
         for i in 0..self.n {
             let m = self.opts.index_of(i);
-            let w = self.ewt[i];
+            let w = self.state.ewt[i];
             if m <= 1 {
-                self.w_newton[i] = w;
-                self.w_err[i] = w;
+                self.corrector.newton.w[i] = w;
+                self.state.w_err[i] = w;
                 continue;
             }
             let s = w * hs.powi(i32::from(m) - 1);
-            (self.w_newton[i], self.w_err[i]) = match self.opts.higher_index {
+            (self.corrector.newton.w[i], self.state.w_err[i]) = match self.opts.higher_index {
                 // IDA's suppressalg: Newton keeps the plain weight. On the pendulum this gives
                 // fewer steps and more digits than scaling Newton's weights as well.
                 HigherIndexControl::Exclude => (w, 0.0),
@@ -485,56 +504,42 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
 
     fn step_internal(&mut self) -> Result<(), BdfError> {
         if self.nst() == 0 {
-            self.kk = 1;
-            self.kused = 0;
-            self.hused = 0.0;
-            self.psi[0] = self.hh;
-            self.cj = 1.0 / self.hh;
-            self.phase = 0;
-            self.ns = 0;
+            self.state.kk = 1;
+            self.state.kused = 0;
+            self.state.hused = 0.0;
+            self.state.psi[0] = self.state.hh;
+            self.state.cj = 1.0 / self.state.hh;
+            self.state.phase = 0;
+            self.state.ns = 0;
         }
-        if let Some(ts) = self.tstop {
-            if self.tn + self.hh > ts {
-                let hnew = ts - self.tn;
+        if let Some(ts) = self.state.tstop {
+            if self.state.tn + self.state.hh > ts {
+                let hnew = ts - self.state.tn;
                 if self.nst() == 0 {
-                    let r = hnew / self.hh;
-                    self.phi[1].iter_mut().for_each(|v| *v *= r);
-                    self.psi[0] = hnew;
+                    let r = hnew / self.state.hh;
+                    self.state.phi.scale(1, r);
+                    self.state.psi[0] = hnew;
                 }
-                self.hh = hnew;
+                self.state.hh = hnew;
             }
         }
-        let saved_t = self.tn;
+        let saved_t = self.state.tn;
         let mut ncf = 0;
         let mut nef = 0;
         loop {
             self.update_weights()?;
             self.set_coeffs();
-            self.tn = saved_t + self.hh;
+            self.state.tn = saved_t + self.state.hh;
             self.predict();
             let problem = NewtonProblem {
-                t: self.tn,
-                cj: self.cj,
-                y_pred: &self.y_pred,
-                yp_pred: &self.yp_pred,
-                w: &self.w_newton,
+                t: self.state.tn,
+                cj: self.state.cj,
                 max_iterations: self.opts.max_newton_iterations,
                 epcon: self.opts.newton_tolerance,
                 residual_tolerance: f64::INFINITY,
                 force_setup: self.nst() == 0 && ncf == 0 && nef == 0,
             };
-            let outcome = newton::solve(
-                &self.dae,
-                &mut self.ls,
-                &mut self.jac,
-                &mut self.stats,
-                &problem,
-                &mut self.y,
-                &mut self.yp,
-                &mut self.ee,
-                &mut self.res,
-                &mut self.delta,
-            );
+            let outcome = self.corrector.solve(&self.dae, &mut self.stats, &problem);
             match outcome {
                 Ok(_) => {
                     if self.error_test() {
@@ -543,40 +548,40 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                     self.restore(saved_t);
                     self.stats.error_test_failures += 1;
                     nef += 1;
-                    self.phase = 1;
+                    self.state.phase = 1;
                     if nef >= self.opts.max_error_test_failures {
                         return Err(BdfError::ErrorTestFailed {
-                            t: saved_t + self.hh,
-                            h: self.hh,
+                            t: saved_t + self.state.hh,
+                            h: self.state.hh,
                         });
                     }
-                    let h_old = self.hh;
+                    let h_old = self.state.hh;
                     if nef == 1 {
-                        let err = if self.knew + 1 == self.kk {
-                            self.err_km1
+                        let err = if self.state.knew + 1 == self.state.kk {
+                            self.state.err_km1
                         } else {
-                            self.err_k
+                            self.state.err_k
                         };
-                        self.kk = self.knew;
-                        let rr = 0.9 * (2.0 * err + 1e-4).powf(-1.0 / (self.kk as f64 + 1.0));
-                        self.hh *= rr.clamp(0.25, 0.9);
+                        self.state.kk = self.state.knew;
+                        let rr = 0.9 * (2.0 * err + 1e-4).powf(-1.0 / (self.state.kk as f64 + 1.0));
+                        self.state.hh *= rr.clamp(0.25, 0.9);
                     } else if nef == 2 {
-                        self.kk = self.knew;
-                        self.hh *= 0.25;
+                        self.state.kk = self.state.knew;
+                        self.state.hh *= 0.25;
                     } else {
                         // IDA drops to order 1 here. On solutions with fast transients (the
                         // transistor amplifier) that order needs tiny steps, and the climb back
                         // (k + 1 equal steps per order) is cut by the next failure: a cycle of
                         // failures at orders 1 and 2. Keep the suggested order for two more
                         // tries; order 1 only from the fifth failure.
-                        self.kk = if nef < KEEP_ORDER_FAILURES {
-                            self.knew
+                        self.state.kk = if nef < KEEP_ORDER_FAILURES {
+                            self.state.knew
                         } else {
                             1
                         };
-                        self.hh *= 0.25;
+                        self.state.hh *= 0.25;
                     }
-                    if self.hh.abs() < self.hmin() {
+                    if self.state.hh.abs() < self.hmin() {
                         return Err(BdfError::ErrorTestFailed {
                             t: saved_t + h_old,
                             h: h_old,
@@ -588,13 +593,17 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                     self.restore(saved_t);
                     self.stats.newton_failures += 1;
                     ncf += 1;
-                    self.phase = 1;
+                    self.state.phase = 1;
                     if let NewtonFailure::OutsidePattern(..) = fail {
-                        return Err(fail.into_error(&self.dae, saved_t + self.hh, self.hh));
+                        return Err(fail.into_error(
+                            &self.dae,
+                            saved_t + self.state.hh,
+                            self.state.hh,
+                        ));
                     }
-                    let h_old = self.hh;
-                    self.hh *= 0.25;
-                    if ncf >= self.opts.max_newton_failures || self.hh.abs() < self.hmin() {
+                    let h_old = self.state.hh;
+                    self.state.hh *= 0.25;
+                    if ncf >= self.opts.max_newton_failures || self.state.hh.abs() < self.hmin() {
                         if let Some(e) = self.index_three_start(fail, saved_t + h_old, h_old) {
                             return Err(e);
                         }
@@ -624,128 +633,137 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
 
     fn after_failure(&mut self, h_old: f64) {
         if self.nst() == 0 {
-            let r = self.hh / h_old;
-            self.psi[0] = self.hh;
-            self.phi[1].iter_mut().for_each(|v| *v *= r);
+            let r = self.state.hh / h_old;
+            self.state.psi[0] = self.state.hh;
+            self.state.phi.scale(1, r);
         }
     }
 
     /// IDA's `IDASetCoeffs`: coefficients of the modified divided differences for step `hh`
     /// and order `kk`, and the scaling of `phi` to `phi*`.
     fn set_coeffs(&mut self) {
-        let kk = self.kk;
-        if self.hh != self.hused || kk != self.kused {
-            self.ns = 0;
+        let kk = self.state.kk;
+        if self.state.hh != self.state.hused || kk != self.state.kused {
+            self.state.ns = 0;
         }
-        self.ns = (self.ns + 1).min(self.kused + 2);
-        if kk + 1 >= self.ns {
-            self.beta[0] = 1.0;
-            self.alpha[0] = 1.0;
-            let mut temp1 = self.hh;
-            self.gamma[0] = 0.0;
-            self.sigma[0] = 1.0;
+        self.state.ns = (self.state.ns + 1).min(self.state.kused + 2);
+        if kk + 1 >= self.state.ns {
+            self.state.beta[0] = 1.0;
+            self.state.alpha[0] = 1.0;
+            let mut temp1 = self.state.hh;
+            self.state.gamma[0] = 0.0;
+            self.state.sigma[0] = 1.0;
             for i in 1..=kk {
-                let temp2 = self.psi[i - 1];
-                self.psi[i - 1] = temp1;
-                self.beta[i] = self.beta[i - 1] * self.psi[i - 1] / temp2;
-                temp1 = temp2 + self.hh;
-                self.alpha[i] = self.hh / temp1;
-                self.sigma[i] = i as f64 * self.sigma[i - 1] * self.alpha[i];
-                self.gamma[i] = self.gamma[i - 1] + self.alpha[i - 1] / self.hh;
+                let temp2 = self.state.psi[i - 1];
+                self.state.psi[i - 1] = temp1;
+                self.state.beta[i] = self.state.beta[i - 1] * self.state.psi[i - 1] / temp2;
+                temp1 = temp2 + self.state.hh;
+                self.state.alpha[i] = self.state.hh / temp1;
+                self.state.sigma[i] = i as f64 * self.state.sigma[i - 1] * self.state.alpha[i];
+                self.state.gamma[i] =
+                    self.state.gamma[i - 1] + self.state.alpha[i - 1] / self.state.hh;
             }
-            self.psi[kk] = temp1;
+            self.state.psi[kk] = temp1;
         }
         let mut alphas = 0.0;
         let mut alpha0 = 0.0;
         for i in 0..kk {
             alphas -= 1.0 / (i as f64 + 1.0);
-            alpha0 -= self.alpha[i];
+            alpha0 -= self.state.alpha[i];
         }
-        self.cj = -alphas / self.hh;
-        self.ck = (self.alpha[kk] + alphas - alpha0).abs().max(self.alpha[kk]);
-        if self.ns <= kk {
-            for i in self.ns..=kk {
-                let b = self.beta[i];
-                self.phi[i].iter_mut().for_each(|v| *v *= b);
+        self.state.cj = -alphas / self.state.hh;
+        self.state.ck = (self.state.alpha[kk] + alphas - alpha0)
+            .abs()
+            .max(self.state.alpha[kk]);
+        if self.state.ns <= kk {
+            for i in self.state.ns..=kk {
+                let b = self.state.beta[i];
+                self.state.phi.scale(i, b);
             }
         }
     }
 
     /// IDA's `IDAPredict`.
     fn predict(&mut self) {
-        self.y_pred.copy_from_slice(&self.phi[0]);
-        self.yp_pred.fill(0.0);
-        for j in 1..=self.kk {
-            let g = self.gamma[j];
-            for i in 0..self.n {
-                self.y_pred[i] += self.phi[j][i];
-                self.yp_pred[i] += g * self.phi[j][i];
+        self.corrector.y_pred.copy_from_slice(self.state.phi.col(0));
+        self.corrector.yp_pred.fill(0.0);
+        for j in 1..=self.state.kk {
+            let g = self.state.gamma[j];
+            let phi = self.state.phi.col(j);
+            let pred = self
+                .corrector
+                .y_pred
+                .iter_mut()
+                .zip(&mut self.corrector.yp_pred);
+            for ((y, yp), p) in pred.zip(phi) {
+                *y += p;
+                *yp += g * p;
             }
         }
     }
 
     /// IDA's `IDARestore`: undo `set_coeffs` after a failed attempt.
     fn restore(&mut self, saved_t: f64) {
-        self.tn = saved_t;
-        for j in 1..=self.kk {
-            self.psi[j - 1] = self.psi[j] - self.hh;
+        self.state.tn = saved_t;
+        for j in 1..=self.state.kk {
+            self.state.psi[j - 1] = self.state.psi[j] - self.state.hh;
         }
-        if self.ns <= self.kk {
-            for j in self.ns..=self.kk {
-                let b = 1.0 / self.beta[j];
-                self.phi[j].iter_mut().for_each(|v| *v *= b);
+        if self.state.ns <= self.state.kk {
+            for j in self.state.ns..=self.state.kk {
+                let b = 1.0 / self.state.beta[j];
+                self.state.phi.scale(j, b);
             }
         }
     }
 
     /// IDA's `IDATestError`: local error test and the order `knew` suggested after it.
     fn error_test(&mut self) -> bool {
-        let kk = self.kk;
-        let enorm_k = wrms(&self.ee, &self.w_err);
-        self.err_k = self.sigma[kk] * enorm_k;
-        self.terr_k = (kk as f64 + 1.0) * self.err_k;
-        self.knew = kk;
+        let kk = self.state.kk;
+        let enorm_k = wrms(&self.corrector.ee, &self.state.w_err);
+        self.state.err_k = self.state.sigma[kk] * enorm_k;
+        self.state.terr_k = (kk as f64 + 1.0) * self.state.err_k;
+        self.state.knew = kk;
         if kk > 1 {
             for i in 0..self.n {
-                self.delta[i] = self.phi[kk][i] + self.ee[i];
+                self.corrector.newton.delta[i] = self.state.phi.col(kk)[i] + self.corrector.ee[i];
             }
-            let enorm_km1 = wrms(&self.delta, &self.w_err);
-            self.err_km1 = self.sigma[kk - 1] * enorm_km1;
-            self.terr_km1 = kk as f64 * self.err_km1;
+            let enorm_km1 = wrms(&self.corrector.newton.delta, &self.state.w_err);
+            self.state.err_km1 = self.state.sigma[kk - 1] * enorm_km1;
+            self.state.terr_km1 = kk as f64 * self.state.err_km1;
             if kk > 2 {
                 for i in 0..self.n {
-                    self.delta[i] += self.phi[kk - 1][i];
+                    self.corrector.newton.delta[i] += self.state.phi.col(kk - 1)[i];
                 }
-                let enorm_km2 = wrms(&self.delta, &self.w_err);
-                let err_km2 = self.sigma[kk - 2] * enorm_km2;
+                let enorm_km2 = wrms(&self.corrector.newton.delta, &self.state.w_err);
+                let err_km2 = self.state.sigma[kk - 2] * enorm_km2;
                 let terr_km2 = (kk as f64 - 1.0) * err_km2;
-                if self.terr_km1.max(terr_km2) <= self.terr_k {
-                    self.knew = kk - 1;
+                if self.state.terr_km1.max(terr_km2) <= self.state.terr_k {
+                    self.state.knew = kk - 1;
                 }
-            } else if self.terr_km1 <= 0.5 * self.terr_k {
-                self.knew = kk - 1;
+            } else if self.state.terr_km1 <= 0.5 * self.state.terr_k {
+                self.state.knew = kk - 1;
             }
         }
-        self.ck * enorm_k <= 1.0
+        self.state.ck * enorm_k <= 1.0
     }
 
     /// IDA's `IDACompleteStep`: accept the step, choose the next order and step, update `phi`.
     /// `failed_before`: the step passed after two or more error-test failures.
     fn complete_step(&mut self, failed_before: bool) {
         self.stats.steps += 1;
-        let kk = self.kk;
-        let kdiff = kk as isize - self.kused as isize;
-        self.kused = kk;
-        self.hused = self.hh;
+        let kk = self.state.kk;
+        let kdiff = kk as isize - self.state.kused as isize;
+        self.state.kused = kk;
+        self.state.hused = self.state.hh;
         let maxord = self.opts.max_order;
-        if self.knew + 1 == kk || kk == maxord {
-            self.phase = 1;
+        if self.state.knew + 1 == kk || kk == maxord {
+            self.state.phase = 1;
         }
         let hmax = self.opts.max_step;
-        if self.phase == 0 {
+        if self.state.phase == 0 {
             if self.nst() > 1 {
-                self.kk += 1;
-                self.hh = (2.0 * self.hh).min(hmax);
+                self.state.kk += 1;
+                self.state.hh = (2.0 * self.state.hh).min(hmax);
             }
         } else {
             #[derive(PartialEq)]
@@ -756,28 +774,29 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 Raise,
             }
             let mut action = Action::Unset;
-            if self.knew + 1 == kk {
+            if self.state.knew + 1 == kk {
                 action = Action::Lower;
-            } else if kk == maxord || kk + 1 >= self.ns || kdiff == 1 {
+            } else if kk == maxord || kk + 1 >= self.state.ns || kdiff == 1 {
                 action = Action::Maintain;
             }
             let mut err_kp1 = 0.0;
             if action == Action::Unset {
                 for i in 0..self.n {
-                    self.delta[i] = self.ee[i] - self.phi[kk + 1][i];
+                    self.corrector.newton.delta[i] =
+                        self.corrector.ee[i] - self.state.phi.col(kk + 1)[i];
                 }
-                let enorm_kp1 = wrms(&self.delta, &self.w_err);
+                let enorm_kp1 = wrms(&self.corrector.newton.delta, &self.state.w_err);
                 err_kp1 = enorm_kp1 / (kk as f64 + 2.0);
                 let terr_kp1 = enorm_kp1;
                 action = if kk == 1 {
-                    if terr_kp1 >= 0.5 * self.terr_k {
+                    if terr_kp1 >= 0.5 * self.state.terr_k {
                         Action::Maintain
                     } else {
                         Action::Raise
                     }
-                } else if self.terr_km1 <= self.terr_k.min(terr_kp1) {
+                } else if self.state.terr_km1 <= self.state.terr_k.min(terr_kp1) {
                     Action::Lower
-                } else if terr_kp1 >= self.terr_k {
+                } else if terr_kp1 >= self.state.terr_k {
                     Action::Maintain
                 } else {
                     Action::Raise
@@ -785,44 +804,45 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             }
             let err_knew = match action {
                 Action::Raise => {
-                    self.kk += 1;
+                    self.state.kk += 1;
                     err_kp1
                 }
                 Action::Lower => {
-                    self.kk -= 1;
-                    self.err_km1
+                    self.state.kk -= 1;
+                    self.state.err_km1
                 }
-                _ => self.err_k,
+                _ => self.state.err_k,
             };
             // The step ratio rr = (2 err + 1e-4)^(-1/(k+1)) is compared with 1 and 2 through
             // its base (rr >= 2 iff base <= 2^-(k+1), rr <= 1 iff base >= 1), so the power is
             // computed only when the step shrinks by it (most accepted steps keep or double h).
             let base = 2.0 * err_knew + 1e-4;
-            let exponent = -1.0 / (self.kk as f64 + 1.0);
-            let doubles = base <= 0.5f64.powi(self.kk as i32 + 1);
+            let exponent = -1.0 / (self.state.kk as f64 + 1.0);
+            let doubles = base <= 0.5f64.powi(self.state.kk as i32 + 1);
             let keeps = !doubles && base < 1.0;
             if failed_before && (doubles || keeps) {
                 // The step that just passed was found after repeated error-test failures: do
                 // not grow it at once (RADAU5 keeps the step after any rejection; after a
                 // single one that costs the index-3 pendulum accuracy), it would fail again.
             } else if doubles {
-                self.hh = (2.0 * self.hh).min(hmax);
+                self.state.hh = (2.0 * self.state.hh).min(hmax);
             } else if !keeps {
-                self.hh *= base.powf(exponent).clamp(0.5, 0.9);
+                self.state.hh *= base.powf(exponent).clamp(0.5, 0.9);
             }
         }
-        let ku = self.kused;
+        let ku = self.state.kused;
+        let phi = &mut self.state.phi;
+        let ee = &self.corrector.ee;
         if ku < MAXORD {
-            let (lo, hi) = self.phi.split_at_mut(ku + 1);
-            hi[0].copy_from_slice(&self.ee);
-            lo[ku].iter_mut().zip(&self.ee).for_each(|(p, e)| *p += e);
-        } else {
-            let ee = &self.ee;
-            self.phi[ku].iter_mut().zip(ee).for_each(|(p, e)| *p += e);
+            phi.col_mut(ku + 1).copy_from_slice(ee);
         }
+        phi.col_mut(ku)
+            .iter_mut()
+            .zip(ee)
+            .for_each(|(p, e)| *p += e);
         for j in (0..ku).rev() {
-            let (lo, hi) = self.phi.split_at_mut(j + 1);
-            lo[j].iter_mut().zip(&hi[0]).for_each(|(p, q)| *p += q);
+            let (lo, hi) = phi.pair_mut(j, j + 1);
+            lo.iter_mut().zip(hi).for_each(|(p, q)| *p += q);
         }
     }
 }

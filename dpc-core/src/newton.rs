@@ -1,0 +1,351 @@
+//! One Newton iteration for the implicit systems of dpc-core: the BDF corrector of
+//! [`crate::bdf::Bdf`] and [`crate::bdf::FixedBdf`], the consistent initialisation
+//! ([`crate::bdf::consistent_initial_values`]) and the controller's inner implicit-Euler steps
+//! ([`crate::controller::Dpc`]).
+//!
+//! [`NewtonWorkspace::solve`] owns the iteration: evaluate the residual (and, when the
+//! factorised matrix is stale, the iteration matrix at the same point), factorise, solve for the
+//! update, correct the iterate, stop. What differs between the callers is in two types the
+//! caller chooses:
+//!
+//! * the [`NewtonSystem`]: the unknowns and how an update corrects them (the BDF's `y` with
+//!   `y' = y'_pred + cj (y - y_pred)`, the initialisation's `(y'_d, y_a)` with backtracking, the
+//!   controller's `[X; Z; U]` at a fixed inner step);
+//! * the [`Convergence`] test: IDA's rate test `s |delta| <= epcon` (the BDF), the
+//!   weighted update test with a residual contraction rule for matrix reuse (the
+//!   initialisation), the scaled-residual and control tests with a residual fall-rate rule
+//!   for matrix reuse (the controller).
+//!
+//! The workspace keeps its factorisation between solves; the caller says when it is stale.
+//! Failures are typed ([`NewtonFailure`]) and mapped to each caller's error type.
+
+use crate::linear_solver::{FactorError, LinearSolver};
+
+/// Why a Newton solve stopped without a solution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum NewtonFailure {
+    /// Slow or diverging iteration, or no convergence within the iteration limit.
+    Convergence,
+    /// Singular iteration matrix (pivot column, zero row).
+    Singular(Option<usize>, Option<usize>),
+    /// Non-finite residual in this equation.
+    NonFinite(usize),
+    /// Matrix entry outside the declared pattern (row, column): not recoverable.
+    OutsidePattern(usize, usize),
+    /// A convergence weight `1 / (rtol |v| + atol)` of this component is not positive and
+    /// finite (its denominator is `value`).
+    Weight {
+        /// The component.
+        component: usize,
+        /// The denominator `rtol |v| + atol`.
+        value: f64,
+    },
+}
+
+impl NewtonFailure {
+    /// The linear solver's report of a failed factorisation.
+    fn from_factor(e: FactorError) -> Self {
+        match e {
+            FactorError::Singular { column, row } => Self::Singular(column, row),
+            FactorError::OutsidePattern { row, col } => Self::OutsidePattern(row, col),
+        }
+    }
+}
+
+/// The nonlinear system `G(v) = 0` Newton solves. The iterate `v` lives in the implementor.
+pub(crate) trait NewtonSystem<M: ?Sized> {
+    /// Evaluate at the current iterate the residual into `res` (when `residual`; `res` then
+    /// holds the residual at this iterate already, which a system that evaluates residual and
+    /// matrix in one pass may overwrite with the same values) and the iteration matrix
+    /// `dG/dv` into `matrix` (when given).
+    fn evaluate(&mut self, res: &mut [f64], residual: bool, matrix: Option<&mut M>);
+
+    /// Remember the current iterate (called before each correction).
+    fn keep(&mut self) {}
+
+    /// Go back to the iterate last remembered.
+    fn back(&mut self) {}
+
+    /// Correct the iterate by the Newton update `delta` (the solution of `G' delta = G`: the
+    /// iterate moves by `-delta`). The system may rescale `delta` in place (the convergence
+    /// test sees the rescaled update) or damp the step, in which case it evaluates the
+    /// residual at the corrected iterate into `res` and says so.
+    ///
+    /// # Errors
+    /// A failure the correction detects (a damped step's non-finite residual).
+    fn correct(&mut self, delta: &mut [f64], res: &mut [f64]) -> Result<Corrected, NewtonFailure>;
+}
+
+/// What a correction did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Corrected {
+    /// The fraction of the Newton update taken (1 for a full step).
+    pub lambda: f64,
+    /// `res` holds the residual at the corrected iterate.
+    pub residual_current: bool,
+}
+
+impl Corrected {
+    /// A full step after which the residual is not known.
+    pub const FULL: Self = Self {
+        lambda: 1.0,
+        residual_current: false,
+    };
+}
+
+/// What a convergence test decides.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Verdict {
+    /// The current iterate is the solution.
+    Converged,
+    /// Go on with the matrix as it is.
+    Continue,
+    /// Form a fresh matrix before the next solve. After a residual test: at once, at the
+    /// iterate before the last correction when `back`, at the current one otherwise (the
+    /// residual is evaluated again there). After an update test: at the next iterate.
+    Refresh {
+        /// Go back to the iterate before the last correction.
+        back: bool,
+    },
+    /// Stop without a solution.
+    Fail(NewtonFailure),
+}
+
+/// What a convergence test sees after an evaluation or a correction.
+pub(crate) struct Iterate<'a, L> {
+    /// The linear solver, with the factorisation in use.
+    pub ls: &'a L,
+    /// The residual at the current iterate (after a correction: only if the correction
+    /// evaluated it).
+    pub res: &'a [f64],
+    /// After a correction: the update taken (before the correction's damping `lambda`).
+    /// After an evaluation: scratch the test may overwrite.
+    pub delta: &'a mut [f64],
+    /// The weights of the update norm.
+    pub w: &'a mut [f64],
+    /// The matrix in use was formed in this pass (at the iterate the last evaluation saw).
+    pub fresh: bool,
+    /// Solves (Newton updates) so far in this solve.
+    pub solves: usize,
+    /// After a correction: what it did.
+    pub corrected: Corrected,
+}
+
+/// A convergence test for a [`NewtonSystem`] `S` solved with the linear solver `L`: it decides
+/// after every residual evaluation and every correction whether to stop, go on or refresh the
+/// matrix, and it enforces its own iteration limit.
+pub(crate) trait Convergence<S, L> {
+    /// Screen a residual just evaluated before the matrix formed with it is factorised (for
+    /// example for non-finite entries).
+    ///
+    /// # Errors
+    /// The failure that ends the solve.
+    fn screen(&mut self, _sys: &mut S, _res: &[f64]) -> Result<(), NewtonFailure> {
+        Ok(())
+    }
+
+    /// After the residual at the current iterate is known (at the start of every pass).
+    fn after_residual(&mut self, sys: &mut S, it: Iterate<'_, L>) -> Verdict;
+
+    /// After the matrix was refreshed on the test's request (the residual was evaluated again
+    /// with it): [`Verdict::Fail`] stops, anything else goes on to the solve.
+    fn after_refresh(&mut self, _sys: &mut S, _it: Iterate<'_, L>) -> Verdict {
+        Verdict::Continue
+    }
+
+    /// After a correction.
+    fn after_update(&mut self, sys: &mut S, it: Iterate<'_, L>) -> Verdict;
+}
+
+/// Work counters of the Newton solves in a workspace (cumulative; the caller resets them).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct NewtonCounts {
+    /// Passes: residual tests.
+    pub passes: usize,
+    /// Residual evaluations by the iteration (not those a damped correction makes).
+    pub residuals: usize,
+    /// Iteration matrices formed (each factorised once).
+    pub matrices: usize,
+    /// Linear solves (Newton updates).
+    pub solves: usize,
+}
+
+/// The work vectors of Newton, allocated once, and the state of the factorisation in the
+/// linear solver they are used with.
+#[derive(Debug, Clone)]
+pub(crate) struct NewtonWorkspace {
+    /// The linear solver holds a valid factorisation from this workspace's solves.
+    pub valid: bool,
+    /// A matrix was formed during the last solve.
+    pub formed: bool,
+    /// The residual.
+    pub res: Vec<f64>,
+    /// The Newton update (scratch for the caller between solves).
+    pub delta: Vec<f64>,
+    /// Weights of the update norm (set by the caller or by the test).
+    pub w: Vec<f64>,
+    /// Work done.
+    pub counts: NewtonCounts,
+}
+
+impl NewtonWorkspace {
+    /// Work vectors of dimension `n` (no factorisation yet).
+    pub fn new(n: usize) -> Self {
+        Self {
+            valid: false,
+            formed: false,
+            res: vec![0.0; n],
+            delta: vec![0.0; n],
+            w: vec![0.0; n],
+            counts: NewtonCounts::default(),
+        }
+    }
+
+    /// Solve `sys` from its current iterate under `test` with the linear solver `ls` (always
+    /// the same one for a workspace), with a fresh matrix at the start when `fresh` (or when
+    /// `ls` holds no valid factorisation). Returns the number of solves (Newton updates).
+    ///
+    /// # Errors
+    /// The failure the test or the factorisation reports; the iterate is then wherever the
+    /// iteration stopped.
+    pub fn solve<L, S, C>(
+        &mut self,
+        ls: &mut L,
+        sys: &mut S,
+        test: &mut C,
+        fresh: bool,
+    ) -> Result<usize, NewtonFailure>
+    where
+        L: LinearSolver,
+        S: NewtonSystem<L::Matrix>,
+        C: Convergence<S, L>,
+    {
+        self.formed = false;
+        let mut need_matrix = fresh || !self.valid;
+        let mut residual_current = false;
+        let mut solves = 0;
+
+        sys.keep();
+        loop {
+            self.counts.passes += 1;
+            if need_matrix || !residual_current {
+                self.evaluate(ls, sys, test, !residual_current, need_matrix)?;
+            }
+            let fresh_now = need_matrix;
+            need_matrix = false;
+            let verdict = test.after_residual(
+                sys,
+                Iterate {
+                    ls: &*ls,
+                    res: &self.res,
+                    delta: &mut self.delta,
+                    w: &mut self.w,
+                    fresh: fresh_now,
+                    solves,
+                    corrected: Corrected::FULL,
+                },
+            );
+            let mut fresh_now = fresh_now;
+            match verdict {
+                Verdict::Converged => return Ok(solves),
+                Verdict::Continue => {}
+                Verdict::Fail(f) => return Err(f),
+                Verdict::Refresh { back } => {
+                    if back {
+                        sys.back();
+                    }
+                    self.evaluate(ls, sys, test, true, true)?;
+                    fresh_now = true;
+                    let verdict = test.after_refresh(
+                        sys,
+                        Iterate {
+                            ls: &*ls,
+                            res: &self.res,
+                            delta: &mut self.delta,
+                            w: &mut self.w,
+                            fresh: true,
+                            solves,
+                            corrected: Corrected::FULL,
+                        },
+                    );
+                    if let Verdict::Fail(f) = verdict {
+                        return Err(f);
+                    }
+                }
+            }
+            sys.keep();
+            self.delta.copy_from_slice(&self.res);
+            ls.solve_in_place(&mut self.delta);
+            solves += 1;
+            self.counts.solves += 1;
+            let corrected = sys.correct(&mut self.delta, &mut self.res)?;
+            residual_current = corrected.residual_current;
+            let verdict = test.after_update(
+                sys,
+                Iterate {
+                    ls: &*ls,
+                    res: &self.res,
+                    delta: &mut self.delta,
+                    w: &mut self.w,
+                    fresh: fresh_now,
+                    solves,
+                    corrected,
+                },
+            );
+            match verdict {
+                Verdict::Converged => return Ok(solves),
+                Verdict::Continue => {}
+                Verdict::Refresh { .. } => need_matrix = true,
+                Verdict::Fail(f) => return Err(f),
+            }
+        }
+    }
+
+    /// Evaluate the residual (when `residual`) and the matrix (when `matrix`), screen the
+    /// residual, factorise the matrix.
+    fn evaluate<L, S, C>(
+        &mut self,
+        ls: &mut L,
+        sys: &mut S,
+        test: &mut C,
+        residual: bool,
+        matrix: bool,
+    ) -> Result<(), NewtonFailure>
+    where
+        L: LinearSolver,
+        S: NewtonSystem<L::Matrix>,
+        C: Convergence<S, L>,
+    {
+        if matrix {
+            sys.evaluate(&mut self.res, residual, Some(ls.matrix_mut()));
+            self.counts.matrices += 1;
+            self.formed = true;
+            self.valid = false;
+        } else {
+            sys.evaluate(&mut self.res, residual, None);
+        }
+        if residual {
+            self.counts.residuals += 1;
+            test.screen(sys, &self.res)?;
+        }
+        if matrix {
+            ls.factor().map_err(NewtonFailure::from_factor)?;
+            self.valid = true;
+        }
+        Ok(())
+    }
+}
+
+/// Weighted RMS norm `sqrt(sum (v_i w_i)^2 / n)`.
+#[inline]
+pub(crate) fn wrms(v: &[f64], w: &[f64]) -> f64 {
+    let n = v.len().max(1) as f64;
+    let s: f64 = v.iter().zip(w).map(|(a, b)| (a * b) * (a * b)).sum();
+    (s / n).sqrt()
+}
+
+/// First index of a non-finite entry.
+#[inline]
+pub(crate) fn first_non_finite(v: &[f64]) -> Option<usize> {
+    v.iter().position(|x| !x.is_finite())
+}
