@@ -1,7 +1,9 @@
-//! One Newton iteration for the implicit systems of dpc-core: the BDF corrector of
-//! [`crate::bdf::Bdf`] and [`crate::bdf::FixedBdf`], the consistent initialisation
-//! ([`crate::bdf::consistent_initial_values`]) and the controller's inner implicit-Euler steps
-//! ([`crate::controller::Dpc`]).
+//! One Newton iteration for the implicit systems of the BDF: the corrector of
+//! [`crate::bdf::Bdf`] and [`crate::bdf::FixedBdf`] and the consistent initialisation
+//! ([`crate::bdf::consistent_initial_values`]). The controller's inner implicit-Euler steps
+//! ([`crate::controller::Dpc`]) still run their own loop (with the same structure: a
+//! scaled-residual and control test, matrix reuse by the residual's fall rate); moving them
+//! onto this one is the next step.
 //!
 //! [`NewtonWorkspace::solve`] owns the iteration: evaluate the residual (and, when the
 //! factorised matrix is stale, the iteration matrix at the same point), factorise, solve for the
@@ -9,12 +11,10 @@
 //! caller chooses:
 //!
 //! * the [`NewtonSystem`]: the unknowns and how an update corrects them (the BDF's `y` with
-//!   `y' = y'_pred + cj (y - y_pred)`, the initialisation's `(y'_d, y_a)` with backtracking, the
-//!   controller's `[X; Z; U]` at a fixed inner step);
+//!   `y' = y'_pred + cj (y - y_pred)`, the initialisation's `(y'_d, y_a)` with backtracking);
 //! * the [`Convergence`] test: IDA's rate test `s |delta| <= epcon` (the BDF), the
 //!   weighted update test with a residual contraction rule for matrix reuse (the
-//!   initialisation), the scaled-residual and control tests with a residual fall-rate rule
-//!   for matrix reuse (the controller).
+//!   initialisation).
 //!
 //! The workspace keeps its factorisation between solves; the caller says when it is stale.
 //! Failures are typed ([`NewtonFailure`]) and mapped to each caller's error type.
