@@ -360,6 +360,20 @@ impl<L: LinearSolver> StageMatrices<L> {
         self.complex.solve_in_place(b);
     }
 
+    /// `out = 10 eps (|J| |y| + |M| |y'|)`, a bound of the round-off of `F(t, y, y')` (ten
+    /// roundings of every term `J_ij y_j`, `M_ij y'_j`, the allowance of RADAU5's lower bound
+    /// `10 eps / rtol` on Newton's tolerance), with the stored (possibly older) Jacobians.
+    pub fn residual_roundoff(&self, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        let n = out.len();
+        for (i, o) in out.iter_mut().enumerate() {
+            let mut s = 0.0;
+            for j in 0..n {
+                s += self.jy[(i, j)].abs() * y[j].abs() + self.jyp[(i, j)].abs() * yp[j].abs();
+            }
+            *o = 10.0 * f64::EPSILON * s;
+        }
+    }
+
     /// `out = M v` with the stored `M = dF/dy'`.
     #[cfg(test)]
     pub fn apply_mass(&self, v: &[f64], out: &mut [f64]) {

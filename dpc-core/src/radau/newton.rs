@@ -25,6 +25,11 @@
 //! to 2 digits in the positions at `rtol = 1e-4`, where Newton's error otherwise dominates. On
 //! smooth index-1 solutions the increments of the three stages nearly cancel in `ΔW`, and the
 //! test on `ΔZ` keeps the global error proportional to the tolerance.
+//!
+//! An iteration that would be abandoned (slow or no contraction) while its increment is no
+//! larger than the increment the round-off of the stage residuals alone causes has converged
+//! as far as floating point allows and is accepted: on higher-index problems the relaxed
+//! weights can put that round-off level above the Newton tolerance at every step size.
 
 use faer::c64;
 
@@ -214,11 +219,17 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
                 let remaining = (nit - 1 - newt) as i32;
                 let dyth = *faccon * dyno * theta.powi(remaining) / p.fnewt;
                 if dyth >= 1.0 {
+                    if at_roundoff(sm, tab, p, work, dyno) {
+                        return converged_at_roundoff(tab, p, work, dz, newt, theta);
+                    }
                     let qnewt = dyth.clamp(1e-4, 20.0);
                     let factor = 0.8 * qnewt.powf(-1.0 / (4.0 + f64::from(remaining)));
                     return NewtonOutcome::Failed { factor };
                 }
             } else {
+                if at_roundoff(sm, tab, p, work, dyno) {
+                    return converged_at_roundoff(tab, p, work, dz, newt, theta);
+                }
                 return NewtonOutcome::Failed { factor: 0.5 };
             }
         }
@@ -236,4 +247,64 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
             };
         }
     }
+}
+
+/// Newton's increment `dyno` is no larger than the increment that the round-off of the stage
+/// residuals alone causes, in the norm of the convergence test, so further iterations cannot
+/// reduce it. This happens on higher-index problems, whose weights are relaxed by `h`: a
+/// multiplier `mu` that enforces a position constraint `g = 0` through `q' = ... - h G^T mu`
+/// moves by `round-off(g) / (h |G|^2)` in every iteration, which its weight `h / atol'` turns
+/// into an increment independent of `h`; a tight Newton tolerance may not admit it, and no
+/// smaller step helps (Andrews' squeezing mechanism in the stabilised form at `rtol = 1e-10`).
+///
+/// The round-off bound of [`StageMatrices::residual_roundoff`] at the last stage stands for
+/// every stage's; it is transformed and solved as the residuals are (`|T^{-1}|` for `T^{-1}`).
+#[allow(clippy::needless_range_loop)]
+fn at_roundoff<L: LinearSolver>(
+    sm: &mut StageMatrices<L>,
+    tab: &Tableau,
+    p: &StageProblem<'_>,
+    work: &mut StageWork,
+    dyno: f64,
+) -> bool {
+    let n = p.y.len();
+    for ((s, y), z) in work.ys.iter_mut().zip(p.y).zip(&work.z[2]) {
+        *s = y + z;
+    }
+    let [r, dw, _] = &mut work.f;
+    sm.residual_roundoff(&work.ys, &work.yp[2], r);
+    let floor = if p.transformed_norm {
+        let s = tab
+            .t_inv
+            .map(|row| row.iter().map(|v| v.abs()).sum::<f64>());
+        for k in 0..n {
+            dw[k] = s[0] * r[k];
+            work.rc[k] = c64::new(s[1] * r[k], s[2] * r[k]);
+        }
+        sm.solve_real(dw);
+        sm.solve_complex(&mut work.rc);
+        transformed_norm(dw, &work.rc, p.w)
+    } else {
+        sm.solve_real(r);
+        super::wrms(r, p.w)
+    };
+    dyno <= floor
+}
+
+/// Accept the iterate whose increment `dz` is at the round-off level (see [`at_roundoff`]).
+fn converged_at_roundoff(
+    tab: &Tableau,
+    p: &StageProblem<'_>,
+    work: &mut StageWork,
+    dz: &[Vec<f64>; 3],
+    iterations: usize,
+    theta: f64,
+) -> NewtonOutcome {
+    for (zi, di) in work.z.iter_mut().zip(dz.iter()) {
+        for (a, b) in zi.iter_mut().zip(di) {
+            *a += b;
+        }
+    }
+    stage_derivatives(tab, p.h, &work.z, &mut work.yp);
+    NewtonOutcome::Converged { iterations, theta }
 }

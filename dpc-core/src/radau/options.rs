@@ -32,7 +32,10 @@ pub struct Options {
     /// of the transformed stage increments (RADAU5's test). `None` (default) uses RADAU5's rule
     /// `max(10 eps / rtol', min(0.03, sqrt(rtol')))` with the mapped `rtol'`, times `0.03` when
     /// [`index`](Self::index) marks a component of index 2 or 3 (their relaxed weights would
-    /// otherwise let Newton's error in the multipliers reach the positions).
+    /// otherwise let Newton's error in the multipliers reach the positions). An iteration that
+    /// would fail while its increment is no larger than the one the round-off of the stage
+    /// residuals causes (the bound `10 eps (|dF/dy| |y| + |dF/dy'| |y'|)` solved as Newton's
+    /// residuals are) counts as converged: further iterations cannot reduce it.
     pub newton_tolerance: Option<f64>,
     /// Keep the Jacobian for the next step when the last Newton contraction rate was at most
     /// this (default `0.001`, RADAU5's `THET`). A negative value re-evaluates it every step.
