@@ -124,3 +124,21 @@ pub enum BdfError {
     #[error("consistent initialisation failed: {0}")]
     InitialisationFailed(String),
 }
+
+impl BdfError {
+    /// [`BdfError::DimensionMismatch`] for the first of `lengths` (`(what, found)`) that is
+    /// not `expected`.
+    pub(crate) fn check_lengths(
+        expected: usize,
+        lengths: &[(&'static str, usize)],
+    ) -> Result<(), BdfError> {
+        match lengths.iter().find(|(_, found)| *found != expected) {
+            Some(&(what, found)) => Err(BdfError::DimensionMismatch {
+                what,
+                expected,
+                found,
+            }),
+            None => Ok(()),
+        }
+    }
+}

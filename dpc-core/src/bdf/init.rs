@@ -150,26 +150,15 @@ impl InitWorkspace {
         yp: &mut [f64],
     ) -> Result<Stats, BdfError> {
         let n = dae.dimension();
-        if self.y_try.len() != n {
-            return Err(BdfError::DimensionMismatch {
-                what: "initialisation workspace",
-                expected: n,
-                found: self.y_try.len(),
-            });
-        }
-        for (what, found) in [
-            ("y", y.len()),
-            ("yp", yp.len()),
-            ("linear solver", ls.dimension()),
-        ] {
-            if found != n {
-                return Err(BdfError::DimensionMismatch {
-                    what,
-                    expected: n,
-                    found,
-                });
-            }
-        }
+        BdfError::check_lengths(
+            n,
+            &[
+                ("initialisation workspace", self.y_try.len()),
+                ("y", y.len()),
+                ("yp", yp.len()),
+                ("linear solver", ls.dimension()),
+            ],
+        )?;
         opts.validate(n)?;
         for (i, d) in self.differential.iter_mut().enumerate() {
             *d = dae.is_differential(i);

@@ -98,19 +98,14 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         yp0: &[f64],
     ) -> Result<Self, BdfError> {
         let n = dae.dimension();
-        for (what, found) in [
-            ("y0", y0.len()),
-            ("yp0", yp0.len()),
-            ("linear solver", ls.dimension()),
-        ] {
-            if found != n {
-                return Err(BdfError::DimensionMismatch {
-                    what,
-                    expected: n,
-                    found,
-                });
-            }
-        }
+        BdfError::check_lengths(
+            n,
+            &[
+                ("y0", y0.len()),
+                ("yp0", yp0.len()),
+                ("linear solver", ls.dimension()),
+            ],
+        )?;
         opts.validate(n)?;
         if !t0.is_finite() {
             return Err(InvalidOption::new("t0", t0, "finite").into());
@@ -194,15 +189,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// [`BdfError::InvalidTolerance`] as for [`Bdf::new`].
     pub fn reinit(&mut self, t0: f64, y0: &[f64], yp0: &[f64]) -> Result<(), BdfError> {
         let n = self.n;
-        for (what, found) in [("y0", y0.len()), ("yp0", yp0.len())] {
-            if found != n {
-                return Err(BdfError::DimensionMismatch {
-                    what,
-                    expected: n,
-                    found,
-                });
-            }
-        }
+        BdfError::check_lengths(n, &[("y0", y0.len()), ("yp0", yp0.len())])?;
         self.dae
             .residual(t0, y0, yp0, &mut self.corrector.newton.res);
         self.stats.residual_evaluations += 1;
