@@ -197,15 +197,16 @@ fn options_at(t_end: f64, hold: Hold, rtol: f64) -> ClosedLoopOptions {
     }
 }
 
-fn cartesian_controller(
+/// A controller of the tracking DAE `T` with its declared reference `R`, `nu` from the compiled
+/// relative degrees (as for any plant) and the inner step `delta`.
+fn controller<T: TrackingDae + Default, R: Reference + Default>(
     delta: f64,
-) -> Dpc<CartPendulumTracking, CartPendulumReference, FaerDenseLu> {
-    // nu from the compiled relative degrees, as for any plant.
-    let tracking = CartPendulumTracking::default();
+) -> Dpc<T, R, FaerDenseLu> {
+    let tracking = T::default();
     let n = tracking.structure().n_equations();
     Dpc::new(
         tracking,
-        CartPendulumReference::default(),
+        R::default(),
         FaerDenseLu::new(n),
         DpcOptions {
             delta,
@@ -215,21 +216,35 @@ fn cartesian_controller(
     .expect("controller")
 }
 
+fn cartesian_controller(
+    delta: f64,
+) -> Dpc<CartPendulumTracking, CartPendulumReference, FaerDenseLu> {
+    controller(delta)
+}
+
 fn joint_controller(
     delta: f64,
 ) -> Dpc<CartPendulumJointTracking, CartPendulumJointReference, FaerDenseLu> {
-    let tracking = CartPendulumJointTracking::default();
-    let n = tracking.structure().n_equations();
-    Dpc::new(
-        tracking,
-        CartPendulumJointReference::default(),
-        FaerDenseLu::new(n),
-        DpcOptions {
-            delta,
-            ..DpcOptions::default()
-        },
-    )
-    .expect("controller")
+    controller(delta)
+}
+
+/// The closed loop of the plant `P` (default parameters) from `x0` under `dpc`, with the
+/// preliminary feedback `pf` if given.
+fn run<P, T, R>(
+    mut dpc: Dpc<T, R, FaerDenseLu>,
+    pf: Option<Prefeedback>,
+    x0: &[f64],
+    options: &ClosedLoopOptions,
+) -> ClosedLoop
+where
+    P: DaeModel + Default,
+    T: TrackingDae,
+    R: Reference,
+{
+    if let Some(pf) = pf {
+        dpc = dpc.with_prefeedback(pf).expect("prefeedback");
+    }
+    simulate(&P::default(), &mut dpc, x0, options).expect("run starts")
 }
 
 fn cartesian_state(s: f64, phi: f64, vs: f64, om: f64) -> [f64; 6] {
@@ -244,32 +259,17 @@ fn cartesian_state(s: f64, phi: f64, vs: f64, om: f64) -> [f64; 6] {
 }
 
 fn run_cartesian(pf: Option<Prefeedback>, t_end: f64, hold: Hold, delta: f64) -> ClosedLoop {
-    let mut dpc = cartesian_controller(delta);
-    if let Some(pf) = pf {
-        dpc = dpc.with_prefeedback(pf).expect("prefeedback");
-    }
     let x0 = cartesian_state(0.0, PHI0, 0.0, 0.0);
-    simulate(
-        &CartPendulum::default(),
-        &mut dpc,
-        &x0,
-        &options(t_end, hold),
-    )
-    .expect("run starts")
+    run::<CartPendulum, _, _>(cartesian_controller(delta), pf, &x0, &options(t_end, hold))
 }
 
 fn run_joint(pf: Option<Prefeedback>, t_end: f64, hold: Hold, delta: f64) -> ClosedLoop {
-    let mut dpc = joint_controller(delta);
-    if let Some(pf) = pf {
-        dpc = dpc.with_prefeedback(pf).expect("prefeedback");
-    }
-    simulate(
-        &CartPendulumJoint::default(),
-        &mut dpc,
+    run::<CartPendulumJoint, _, _>(
+        joint_controller(delta),
+        pf,
         &[0.0, PHI0, 0.0, 0.0],
         &options(t_end, hold),
     )
-    .expect("run starts")
 }
 
 /// Largest difference of the physical positions (cart, load) and of the tracking errors over
@@ -598,54 +598,22 @@ mod slider_crank {
     }
 
     fn run_descriptor(pf: Option<Prefeedback>, t_end: f64, delta: f64, rtol: f64) -> ClosedLoop {
-        let tracking = SliderCrankTracking::default();
-        let n = tracking.structure().n_equations();
-        let mut dpc = Dpc::new(
-            tracking,
-            SliderCrankReference::default(),
-            FaerDenseLu::new(n),
-            DpcOptions {
-                delta,
-                ..DpcOptions::default()
-            },
-        )
-        .expect("controller");
-        if let Some(pf) = pf {
-            dpc = dpc.with_prefeedback(pf).expect("prefeedback");
-        }
         let th0 = 1.1;
-        simulate(
-            &SliderCrank::default(),
-            &mut dpc,
+        run::<SliderCrank, _, _>(
+            controller::<SliderCrankTracking, SliderCrankReference>(delta),
+            pf,
             &[th0, slider(th0), 0.0, 0.0],
             &options_at(t_end, Hold::Input, rtol),
         )
-        .expect("run starts")
     }
 
     fn run_joint(pf: Option<Prefeedback>, t_end: f64, delta: f64, rtol: f64) -> ClosedLoop {
-        let tracking = SliderCrankJointTracking::default();
-        let n = tracking.structure().n_equations();
-        let mut dpc = Dpc::new(
-            tracking,
-            SliderCrankJointReference::default(),
-            FaerDenseLu::new(n),
-            DpcOptions {
-                delta,
-                ..DpcOptions::default()
-            },
-        )
-        .expect("controller");
-        if let Some(pf) = pf {
-            dpc = dpc.with_prefeedback(pf).expect("prefeedback");
-        }
-        simulate(
-            &SliderCrankJoint::default(),
-            &mut dpc,
+        run::<SliderCrankJoint, _, _>(
+            controller::<SliderCrankJointTracking, SliderCrankJointReference>(delta),
+            pf,
             &[1.1, 0.0],
             &options_at(t_end, Hold::Input, rtol),
         )
-        .expect("run starts")
     }
 
     /// Largest difference of the crank angle, the slider position and the tracking error.
