@@ -411,51 +411,46 @@ fn interleaved(points: &[Point], rounds: usize) {
     println!();
 }
 
+/// One criterion group: CasADi's kernel beside dpc's fused one on the same points.
+fn group<const N: usize, const NNZ: usize>(
+    c: &mut Criterion,
+    name: &str,
+    points: &[Point],
+    casadi: impl Fn(&Point, &mut CasadiOut<N, NNZ>),
+    dpc: impl Fn(&Point, &mut Dense<N>),
+) {
+    let mut g = c.benchmark_group(name);
+    g.bench_function("CasADi -O2", |b| {
+        let mut out = CasadiOut::<N, NNZ> {
+            residual: [0.0; N],
+            matrix: [0.0; NNZ],
+        };
+        b.iter(|| points.iter().for_each(|p| casadi(black_box(p), &mut out)))
+    });
+    g.bench_function("dpc fused", |b| {
+        let mut out = Dense::<N>::new();
+        b.iter(|| points.iter().for_each(|p| dpc(black_box(p), &mut out)))
+    });
+    g.finish();
+}
+
 fn bench(c: &mut Criterion) {
     let points = points(256);
     let (wheel, tracking) = (Wheel::default(), WheelTracking::default());
-    let mut g = c.benchmark_group("wheel residual + iteration matrix (256 points)");
-    g.bench_function("CasADi -O2", |b| {
-        let mut out = CasadiOut::<5, 16> {
-            residual: [0.0; 5],
-            matrix: [0.0; 16],
-        };
-        b.iter(|| {
-            points
-                .iter()
-                .for_each(|p| casadi_wheel(black_box(p), &mut out))
-        })
-    });
-    g.bench_function("dpc fused", |b| {
-        let mut out = Dense::<5>::new();
-        b.iter(|| {
-            points
-                .iter()
-                .for_each(|p| dpc_wheel_fused(&wheel, black_box(p), &mut out))
-        })
-    });
-    g.finish();
-    let mut g = c.benchmark_group("tracking DAE residual + iteration matrix (256 points)");
-    g.bench_function("CasADi -O2", |b| {
-        let mut out = CasadiOut::<7, 22> {
-            residual: [0.0; 7],
-            matrix: [0.0; 22],
-        };
-        b.iter(|| {
-            points
-                .iter()
-                .for_each(|p| casadi_tracking(black_box(p), &mut out))
-        })
-    });
-    g.bench_function("dpc fused", |b| {
-        let mut out = Dense::<7>::new();
-        b.iter(|| {
-            points
-                .iter()
-                .for_each(|p| dpc_tracking_fused(&tracking, black_box(p), &mut out))
-        })
-    });
-    g.finish();
+    group(
+        c,
+        "wheel residual + iteration matrix (256 points)",
+        &points,
+        casadi_wheel,
+        |p, out| dpc_wheel_fused(&wheel, p, out),
+    );
+    group(
+        c,
+        "tracking DAE residual + iteration matrix (256 points)",
+        &points,
+        casadi_tracking,
+        |p, out| dpc_tracking_fused(&tracking, p, out),
+    );
 }
 
 criterion_group!(benches, bench);
