@@ -761,24 +761,13 @@ fn check_section_order(def: &ModelDef, cx: &mut Ctxt) {
     }
 }
 
-/// The value of a numeric literal, optionally negated (`1.0`, `2`, `-9.81`).
-pub fn numeric_literal(e: ExprRef<'_>) -> Option<f64> {
+/// The expression under any unary minus signs and parentheses, and whether an odd number of
+/// minus signs negates it (`-(-(2))` is `2`, not negated).
+fn strip_signs(e: ExprRef<'_>) -> (ExprRef<'_>, bool) {
     let mut e = e;
     let mut negated = false;
     loop {
         match e.kind() {
-            ExprKind::Lit(Lit::Float(f)) if matches!(f.suffix(), "" | "f64") => {
-                return f
-                    .base10_parse::<f64>()
-                    .ok()
-                    .map(|v| if negated { -v } else { v })
-            }
-            ExprKind::Lit(Lit::Int(i)) if matches!(i.suffix(), "" | "f64") => {
-                return i
-                    .base10_parse::<f64>()
-                    .ok()
-                    .map(|v| if negated { -v } else { v })
-            }
             ExprKind::Unary {
                 op: UnaryOp::Neg,
                 operand,
@@ -788,34 +777,31 @@ pub fn numeric_literal(e: ExprRef<'_>) -> Option<f64> {
                 e = e.at(*operand);
             }
             ExprKind::Paren(inner) => e = e.at(*inner),
-            _ => return None,
+            _ => return (e, negated),
         }
     }
 }
 
+/// The value of a numeric literal, optionally negated (`1.0`, `2`, `-9.81`).
+pub fn numeric_literal(e: ExprRef<'_>) -> Option<f64> {
+    let (e, negated) = strip_signs(e);
+    let value = match e.kind() {
+        ExprKind::Lit(Lit::Float(f)) if matches!(f.suffix(), "" | "f64") => f.base10_parse::<f64>(),
+        ExprKind::Lit(Lit::Int(i)) if matches!(i.suffix(), "" | "f64") => i.base10_parse::<f64>(),
+        _ => return None,
+    };
+    value.ok().map(|v| if negated { -v } else { v })
+}
+
 /// The value of an integer literal, optionally negated, if it fits `i32`.
 fn integer_literal(e: ExprRef<'_>) -> Option<i32> {
-    let mut e = e;
-    let mut negated = false;
-    loop {
-        match e.kind() {
-            ExprKind::Lit(Lit::Int(i)) if matches!(i.suffix(), "" | "i32") => {
-                return i
-                    .base10_parse::<i32>()
-                    .ok()
-                    .map(|v| if negated { -v } else { v })
-            }
-            ExprKind::Unary {
-                op: UnaryOp::Neg,
-                operand,
-                ..
-            } => {
-                negated = !negated;
-                e = e.at(*operand);
-            }
-            ExprKind::Paren(inner) => e = e.at(*inner),
-            _ => return None,
-        }
+    let (e, negated) = strip_signs(e);
+    match e.kind() {
+        ExprKind::Lit(Lit::Int(i)) if matches!(i.suffix(), "" | "i32") => i
+            .base10_parse::<i32>()
+            .ok()
+            .map(|v| if negated { -v } else { v }),
+        _ => None,
     }
 }
 
