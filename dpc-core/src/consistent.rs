@@ -36,7 +36,7 @@
 use nalgebra::{DMatrix, DVector};
 use thiserror::Error;
 
-use crate::model::DaeModel;
+use crate::model::{DaeModel, Structure};
 
 /// Options of [`consistent_state`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -213,7 +213,11 @@ pub struct ConstraintStructure {
 impl ConstraintStructure {
     /// Classify the rows of `model`.
     pub fn of<M: DaeModel>(model: &M) -> Self {
-        let s = model.structure();
+        Self::from_structure(model.structure())
+    }
+
+    /// Classify the rows of a model with the structure `s` (what [`Self::of`] reads of it).
+    pub fn from_structure(s: &Structure) -> Self {
         let (ne, nx) = (s.n_equations(), s.n_states());
         let row_cols = |p: &[(usize, usize)], i: usize| -> Vec<usize> {
             p.iter().filter(|(r, _)| *r == i).map(|(_, c)| *c).collect()
@@ -268,9 +272,14 @@ impl ConstraintStructure {
     /// # Errors
     /// [`ConsistentError::Unsupported`] naming the first such row.
     pub fn check_supported<M: DaeModel>(&self, model: &M) -> Result<(), ConsistentError> {
+        self.check_supported_in(model.structure())
+    }
+
+    /// [`Self::check_supported`] for a model with the structure `s`.
+    fn check_supported_in(&self, s: &Structure) -> Result<(), ConsistentError> {
         match self.prescribed.first() {
             Some(&i) => Err(ConsistentError::Unsupported {
-                equation: model.structure().equation_name(i),
+                equation: s.equation_name(i),
                 reason: "a constraint that depends on the input prescribes a motion; consistent values depend on the input's derivatives",
             }),
             None => Ok(()),
@@ -345,7 +354,25 @@ pub fn consistent_state<M: DaeModel>(
     u: &[f64],
     opts: &ConsistentOptions,
 ) -> Result<ConsistentState, ConsistentError> {
-    let s = model.structure();
+    let eval =
+        |t: f64, x: &[f64], xdot: &[f64], z: &[f64], u: &[f64]| evaluate(model, t, x, xdot, z, u);
+    solve(model.structure(), &eval, t, x_given, u, opts)
+}
+
+/// A model's residual with every Jacobian block at a point `(t, x, x', z, u)`, behind a
+/// reference to a closure: the iteration of [`consistent_state`] is compiled once in this
+/// crate instead of once per model in every crate that uses it (only [`evaluate`] is).
+type Evaluate<'a> = &'a dyn Fn(f64, &[f64], &[f64], &[f64], &[f64]) -> Result<Jac, ConsistentError>;
+
+/// [`consistent_state`] for the model with structure `s` evaluated by `eval`.
+fn solve(
+    s: &Structure,
+    eval: Evaluate<'_>,
+    t: f64,
+    x_given: &[f64],
+    u: &[f64],
+    opts: &ConsistentOptions,
+) -> Result<ConsistentState, ConsistentError> {
     let (ne, nx, nz, nu) = (s.n_equations(), s.n_states(), s.n_algebraic(), s.n_inputs());
     for (what, v, n) in [("x", x_given, nx), ("u", u, nu)] {
         if v.len() != n {
@@ -356,8 +383,8 @@ pub fn consistent_state<M: DaeModel>(
             });
         }
     }
-    let structure = ConstraintStructure::of(model);
-    structure.check_supported(model)?;
+    let structure = ConstraintStructure::from_structure(s);
+    structure.check_supported_in(s)?;
     let ConstraintStructure {
         kinematic,
         position_constraints: position,
@@ -401,7 +428,7 @@ pub fn consistent_state<M: DaeModel>(
     let all_states: Vec<usize> = (0..nx).collect();
     let mut it = 0;
     loop {
-        let j = evaluate(model, t, &x, &xdot, &z, u)?;
+        let j = eval(t, &x, &xdot, &z, u)?;
         let (worst, wi) = rel(&j, &constraints, &x);
         if worst <= opts.tol {
             break;
@@ -434,7 +461,7 @@ pub fn consistent_state<M: DaeModel>(
         }
         (p, p_x)
     };
-    let j = evaluate(model, t, &x, &xdot, &z, u)?;
+    let j = eval(t, &x, &xdot, &z, u)?;
     for (k, row) in kinematic.iter().enumerate() {
         if let Some(i) = *row {
             if j.f_xdot[(i, k)] == 0.0 {
@@ -450,7 +477,7 @@ pub fn consistent_state<M: DaeModel>(
     let free: Vec<usize> = (0..nx).filter(|k| !pos_states.contains(k)).collect();
     let mut it = 0;
     loop {
-        let j = evaluate(model, t, &x, &xdot, &z, u)?;
+        let j = eval(t, &x, &xdot, &z, u)?;
         let (p, p_x) = velocities(&j, &xdot);
         let g = DMatrix::from_fn(position.len(), nx, |a, k| j.f_x[(position[a], k)]);
         let h = &g * &p;
@@ -488,13 +515,13 @@ pub fn consistent_state<M: DaeModel>(
     // 3. Derivatives and multipliers at fixed x.
     let n = nx + nz;
     let (kappa, curvature_error) = {
-        let j = evaluate(model, t, &x, &xdot, &z, u)?;
+        let j = eval(t, &x, &xdot, &z, u)?;
         let (p, _) = velocities(&j, &xdot);
-        curvature(model, t, &x, &xdot, &z, u, &position, &p)?
+        curvature(eval, t, &x, &xdot, &z, u, &position, &p)?
     };
     let mut it = 0;
     loop {
-        let j = evaluate(model, t, &x, &xdot, &z, u)?;
+        let j = eval(t, &x, &xdot, &z, u)?;
         let (_, p_x) = velocities(&j, &xdot);
         let rows = ne + position.len() + velocity.len();
         let mut jac = DMatrix::zeros(rows, n);
@@ -602,7 +629,7 @@ pub fn consistent_state<M: DaeModel>(
     }
     iterations[2] = it;
 
-    let j = evaluate(model, t, &x, &xdot, &z, u)?;
+    let j = eval(t, &x, &xdot, &z, u)?;
     let residual = (0..ne)
         .map(|i| {
             let scale: f64 = (0..nx)
@@ -634,8 +661,8 @@ pub fn consistent_state<M: DaeModel>(
 /// difference of the analytic Jacobian, and the Richardson estimate of its error from the
 /// difference at twice the step.
 #[allow(clippy::too_many_arguments)]
-fn curvature<M: DaeModel>(
-    model: &M,
+fn curvature(
+    eval: Evaluate<'_>,
     t: f64,
     x: &[f64],
     xdot: &[f64],
@@ -657,8 +684,8 @@ fn curvature<M: DaeModel>(
                 .map(|(a, b)| a + sign * h * b)
                 .collect()
         };
-        let jp = evaluate(model, t, &shift(1.0), xdot, z, u)?;
-        let jm = evaluate(model, t, &shift(-1.0), xdot, z, u)?;
+        let jp = eval(t, &shift(1.0), xdot, z, u)?;
+        let jm = eval(t, &shift(-1.0), xdot, z, u)?;
         Ok(rows
             .iter()
             .map(|&i| {

@@ -41,7 +41,7 @@
 //! ```
 
 use crate::linear_analysis::LinearSystem;
-use crate::model::DaeModel;
+use crate::model::{DaeModel, Structure};
 use nalgebra::DMatrix;
 use thiserror::Error;
 
@@ -235,7 +235,16 @@ pub fn linearize<M: DaeModel>(
     model: &M,
     point: OperatingPoint<'_>,
 ) -> Result<LinearSystem, LinearizeError> {
-    let structure = model.structure();
+    let jacobians = Jacobians::at(model, point)?;
+    linearize_jacobians(model.structure(), jacobians)
+}
+
+/// [`linearize`] from the Jacobians of a model with the structure `structure`: compiled once
+/// in this crate, not once per model in every crate that linearises one.
+fn linearize_jacobians(
+    structure: &Structure,
+    jacobians: Jacobians,
+) -> Result<LinearSystem, LinearizeError> {
     let (nx, nz, nu, ne) = (
         structure.n_states(),
         structure.n_algebraic(),
@@ -251,7 +260,7 @@ pub fn linearize<M: DaeModel>(
         h_z,
         h_u,
         ..
-    } = Jacobians::at(model, point)?;
+    } = jacobians;
     // [F_x' F_z] [dx'; dz] = -[F_x F_u] [dx; du].
     let mut lhs = DMatrix::zeros(ne, nx + nz);
     lhs.columns_mut(0, nx).copy_from(&f_xdot);

@@ -69,7 +69,7 @@ use thiserror::Error;
 use super::subspace::{self, RankDecision};
 use super::{pencil, LinearError, LinearSystem};
 use crate::linearize::{Jacobians, OperatingPoint, PointError};
-use crate::model::DaeModel;
+use crate::model::{DaeModel, Structure};
 
 /// Options of [`linearize_descriptor`] and [`realise`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -307,7 +307,18 @@ pub fn descriptor_system<M: DaeModel>(
     point: OperatingPoint<'_>,
     opts: &DescriptorOptions,
 ) -> Result<DescriptorSystem, DescriptorError> {
-    let structure = model.structure();
+    let jacobians = Jacobians::at(model, point)?;
+    descriptor_from_jacobians(model.structure(), point, jacobians, opts)
+}
+
+/// [`descriptor_system`] from the Jacobians at `point` of a model with the structure
+/// `structure`: compiled once in this crate, not once per model in every crate that uses it.
+fn descriptor_from_jacobians(
+    structure: &Structure,
+    point: OperatingPoint<'_>,
+    jacobians: Jacobians,
+    opts: &DescriptorOptions,
+) -> Result<DescriptorSystem, DescriptorError> {
     let (nx, nz, ny, ne) = (
         structure.n_states(),
         structure.n_algebraic(),
@@ -323,7 +334,7 @@ pub fn descriptor_system<M: DaeModel>(
         h_x,
         h_z,
         h_u,
-    } = Jacobians::at(model, point)?;
+    } = jacobians;
     if r.iter().any(|v| !v.is_finite()) {
         return Err(DescriptorError::NonFinite { what: "residual" });
     }
@@ -433,6 +444,16 @@ pub fn realise(
     sys: &DescriptorSystem,
     opts: &DescriptorOptions,
     state_name: impl Fn(usize) -> String,
+) -> Result<ManifoldRealisation, DescriptorError> {
+    realise_named(sys, opts, &state_name)
+}
+
+/// [`realise`] with the names behind a reference, so that its decompositions are compiled once
+/// in this crate, not once per closure in every crate that calls it.
+fn realise_named(
+    sys: &DescriptorSystem,
+    opts: &DescriptorOptions,
+    state_name: &dyn Fn(usize) -> String,
 ) -> Result<ManifoldRealisation, DescriptorError> {
     let n = sys.e.ncols();
     let nx = sys.n_states;
