@@ -234,7 +234,10 @@ fn stabilised_forms_reach_test_set_accuracy() {
         assert!(d >= floor, "tol {tol}: scd {d}");
     }
     let all: Vec<usize> = (0..10).collect();
-    for (tol, floor) in [(1e-4, 1.5), (1e-6, 3.0), (1e-8, 4.6)] {
+    // At 1e-10: 6.65 (the jitter runs 5.2 / 6.7 / 6.7; the velocity y7 limits two of them, the
+    // multipliers the third), where a difference step for dg/dt that grew with t gave 5.22:
+    // the hidden constraint was off by 3e-9 at t = 3.
+    for (tol, floor) in [(1e-4, 1.5), (1e-6, 3.0), (1e-8, 4.6), (1e-10, 6.1)] {
         let d = median_over_jitter(tol, |t| scd(&car_axis_stabilised(t).0, &CAR_AXIS_REF, &all));
         let index3 = median_over_jitter(tol, |t| {
             scd(&car_axis(t, NalgebraLu::<10>::new()).0, &CAR_AXIS_REF, &all)
