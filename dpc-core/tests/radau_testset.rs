@@ -247,10 +247,15 @@ fn stabilised_forms_reach_test_set_accuracy() {
         (1e-8, 4.6, 5.8),
         (1e-10, 5.0, 7.3),
     ] {
-        let d = median_over_jitter(tol, |t| scd(&car_axis_stabilised(t).0, &CAR_AXIS_REF, &all));
-        let mixed = median_over_jitter(tol, |t| {
-            mescd(&car_axis_stabilised(t).0, &CAR_AXIS_REF, &all, tol, tol)
-        });
+        // One run per jitter for both measures.
+        let runs = [0.9, 1.0, 1.1].map(|f| car_axis_stabilised(tol * f).0);
+        let median = |measure: &dyn Fn(&[f64]) -> f64| {
+            let mut v = runs.each_ref().map(|y| measure(y));
+            v.sort_by(f64::total_cmp);
+            v[1]
+        };
+        let d = median(&|y| scd(y, &CAR_AXIS_REF, &all));
+        let mixed = median(&|y| mescd(y, &CAR_AXIS_REF, &all, tol, tol));
         let index3 = median_over_jitter(tol, |t| {
             scd(&car_axis(t, NalgebraLu::<10>::new()).0, &CAR_AXIS_REF, &all)
         });
