@@ -234,15 +234,36 @@ fn stabilised_forms_reach_test_set_accuracy() {
         assert!(d >= floor, "tol {tol}: scd {d}");
     }
     let all: Vec<usize> = (0..10).collect();
-    for (tol, floor) in [(1e-4, 1.5), (1e-6, 3.0), (1e-8, 4.6)] {
-        let d = median_over_jitter(tol, |t| scd(&car_axis_stabilised(t).0, &CAR_AXIS_REF, &all));
+    // At 1e-10: 6.65 (the jitter runs 5.2 / 6.7 / 6.7: the velocity y7 limits two of them, the
+    // multipliers the third). The multipliers' error at t = 3 is local, C h^3 with the last
+    // step, and scatters by up to 2 digits between neighbouring tolerances (5.2 / 6.6 / 5.2
+    // before dg/dt's difference step stopped growing with t): the floor at 1e-10 is set below
+    // that scatter.
+    // The mixed-error digits (deTestSet's measure, error over 1 + |r|), medians measured:
+    // 3.12 / 4.69 / 6.28 / 7.83, rising by 0.8 a decade; their floors are half a digit below.
+    for (tol, floor, floor_mixed) in [
+        (1e-4, 1.5, 2.6),
+        (1e-6, 3.0, 4.2),
+        (1e-8, 4.6, 5.8),
+        (1e-10, 5.0, 7.3),
+    ] {
+        // One run per jitter for both measures.
+        let runs = [0.9, 1.0, 1.1].map(|f| car_axis_stabilised(tol * f).0);
+        let median = |measure: &dyn Fn(&[f64]) -> f64| {
+            let mut v = runs.each_ref().map(|y| measure(y));
+            v.sort_by(f64::total_cmp);
+            v[1]
+        };
+        let d = median(&|y| scd(y, &CAR_AXIS_REF, &all));
+        let mixed = median(&|y| mescd(y, &CAR_AXIS_REF, &all, tol, tol));
         let index3 = median_over_jitter(tol, |t| {
             scd(&car_axis(t, NalgebraLu::<10>::new()).0, &CAR_AXIS_REF, &all)
         });
         let (_, mu, s) = car_axis_stabilised(tol);
         let mu_max = mu.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        println!("car axis GGL tol {tol:e}: median scd {d:.2} (index 3: {index3:.2}), max |mu| {mu_max:.1e}, {s:?}");
+        println!("car axis GGL tol {tol:e}: median scd {d:.2} (index 3: {index3:.2}), mescd {mixed:.2}, max |mu| {mu_max:.1e}, {s:?}");
         assert!(d >= floor, "tol {tol}: scd {d}");
+        assert!(mixed >= floor_mixed, "tol {tol}: mescd {mixed}");
         assert!(d >= index3 + 1.0, "tol {tol}: GGL {d} vs index 3 {index3}");
         assert!(mu_max <= 100.0 * tol, "tol {tol}: mu {mu:?}");
     }
