@@ -1,45 +1,389 @@
-//! The BDF's work-precision table (README, "BDF integrator"): per tolerance, the steps, the
-//! significant correct digits against the Test Set's reference and the time per solve, on
-//! Robertson (index 1, to `t = 1e11`) and the Cartesian pendulum (index 3, to `t = 3`).
-//! `bench/ida_peer.sh` prints SUNDIALS IDA's table on the same problems beside it.
+//! dpc-core's rows of the peer work-precision table (`docs/integrators.md`, README,
+//! "Integrators"): per problem and tolerance, the steps, error-test failures, Newton failures,
+//! Jacobian evaluations, significant correct digits (scd) against the reference and the mean
+//! time per solve, for the BDF and Radau IIA on
+//!
+//! * Robertson (index 1, to `t = 1e11`, `atol = (1e-8, 1e-14, 1e-6) rtol / 1e-4`),
+//! * the Test Set's transistor amplifier (index 1, singular non-diagonal mass matrix, all eight
+//!   unknowns scored),
+//! * the Cartesian pendulum (index 3, to `t = 3`, scored on `x, y`),
+//! * Andrews' squeezing mechanism (scored on `y1..y7`) and the car axis (all ten scored), each
+//!   in the Test Set's index-3 form and in the stabilised index-2 form of
+//!   [`dpc_core::stabilised::Stabilised`],
+//!
+//! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
+//! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
+//! (`bench/diffsol_peer`).
 //!
 //! ```sh
-//! cargo run --release -p dpc-core --example work_precision
+//! cargo run --release -p dpc-core --example work_precision              # all rows
+//! cargo run --release -p dpc-core --example work_precision -- amplifier # the rows of one problem
 //! ```
 
+#[path = "../tests/common/peer_table.rs"]
+mod peer_table;
 #[path = "../tests/common/bdf_problems.rs"]
 mod problems;
+#[path = "../tests/common/testset_index1.rs"]
+mod testset_index1;
+#[path = "../tests/common/testset_index3.rs"]
+mod testset_index3;
 
-use problems::{pendulum, robertson, Pendulum, PENDULUM_T, THETA0};
-use std::time::Instant;
+use dpc_core::bdf::{self, Bdf, HigherIndexControl, Tolerance};
+use dpc_core::linear_solver::NalgebraLu;
+use dpc_core::radau::{self, Radau};
+use dpc_core::stabilised::Stabilised;
+use dpc_core::ImplicitDae;
+use peer_table::Run;
+use problems::{
+    robertson_atol, Pendulum, Robertson, PENDULUM_INDEX, PENDULUM_T, ROBERTSON_REF,
+    ROBERTSON_T_END, THETA0,
+};
+use testset_index1::{TransistorAmplifier, TRANSAMP_REF, TRANSAMP_T_END};
+use testset_index3::*;
 
-/// Solves per timing, the best of which is not taken: the mean over them is printed.
-const REPETITIONS: u32 = 20;
+/// The BDF with the stack LU of size `N` from `(y0, yp0)` at `t = 0` to `t_end`.
+fn bdf_run<const N: usize, D: ImplicitDae>(
+    dae: D,
+    (y0, yp0): (&[f64], &[f64]),
+    opts: bdf::Options,
+    t_end: f64,
+) -> Result<Run, String> {
+    let mut s =
+        Bdf::new(dae, NalgebraLu::<N>::new(), opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
+    s.set_stop_time(t_end).map_err(|e| e.to_string())?;
+    let mut y = vec![0.0; N];
+    s.solve_to(t_end, &mut y, None).map_err(|e| e.to_string())?;
+    let st = s.stats();
+    Ok(Run {
+        steps: st.steps,
+        error_test_failures: st.error_test_failures,
+        newton_failures: st.newton_failures,
+        jacobians: st.jacobian_evaluations,
+        y,
+    })
+}
+
+/// Radau IIA with the stack LU of size `N`, as [`bdf_run`].
+fn radau_run<const N: usize, D: ImplicitDae>(
+    dae: D,
+    (y0, yp0): (&[f64], &[f64]),
+    opts: radau::Options,
+    t_end: f64,
+) -> Result<Run, String> {
+    let mut s =
+        Radau::new(dae, NalgebraLu::<N>::new(), opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
+    s.set_stop_time(t_end).map_err(|e| e.to_string())?;
+    let mut y = vec![0.0; N];
+    s.solve_to(t_end, &mut y, None).map_err(|e| e.to_string())?;
+    let st = s.stats();
+    Ok(Run {
+        steps: st.steps,
+        error_test_failures: st.error_test_failures,
+        newton_failures: st.newton_failures,
+        jacobians: st.jacobian_evaluations,
+        y,
+    })
+}
+
+/// The problems of the table, in its order (the sort key's first field).
+#[derive(Clone, Copy)]
+enum Problem {
+    Robertson = 1,
+    Amplifier,
+    Pendulum,
+    Andrews,
+    AndrewsStabilised,
+    CarAxis,
+    CarAxisStabilised,
+}
+
+impl Problem {
+    /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
+    fn name(self) -> &'static str {
+        match self {
+            Self::Robertson => "Robertson (index 1)",
+            Self::Amplifier => "transistor amplifier (index 1)",
+            Self::Pendulum => "pendulum (index 3; x, y)",
+            Self::Andrews => "Andrews (index 3; y1..y7)",
+            Self::AndrewsStabilised => "Andrews (stabilised index 2; y1..y7)",
+            Self::CarAxis => "car axis (index 3; all)",
+            Self::CarAxisStabilised => "car axis (stabilised index 2; all)",
+        }
+    }
+}
+
+/// The integrators of the table, in its order (the sort key's last field).
+#[derive(Clone, Copy)]
+enum Code {
+    Radau = 1,
+    Bdf,
+    BdfScale,
+}
+
+impl Code {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Radau => "dpc Radau",
+            Self::Bdf => "dpc BDF",
+            Self::BdfScale => "dpc BDF (Scale)",
+        }
+    }
+}
+
+/// Prints the row of `code` on `problem` at `rtol = 1e-k`, scored over `scored` against
+/// `reference`, unless the command line names a problem (part of its label) and not this one.
+fn row(
+    problem: Problem,
+    k: i32,
+    code: Code,
+    reference: &[f64],
+    scored: &[usize],
+    solve: impl Fn() -> Result<Run, String>,
+) {
+    if let Some(only) = std::env::args().nth(1) {
+        if !problem.name().contains(only.as_str()) {
+            return;
+        }
+    }
+    peer_table::row(
+        (problem as u8, problem.name()),
+        k,
+        (code as u8, code.name()),
+        |y| scd(y, reference, scored),
+        solve,
+    );
+}
+
+/// `index` per unknown of a stabilised form: the first `differential` of index 1, the rest 2.
+fn stabilised_index(m: usize, differential: usize) -> Vec<u8> {
+    (0..m)
+        .map(|i| if i < differential { 1 } else { 2 })
+        .collect()
+}
 
 fn main() {
-    println!("| problem | rtol | steps | significant digits | time [ms] |");
-    println!("|---|---|---|---|---|");
-    for k in 4..=10 {
-        let rtol = 10f64.powi(-k);
-        let (scd, steps, _) = robertson(rtol);
-        let start = Instant::now();
-        for _ in 0..REPETITIONS {
-            robertson(rtol);
-        }
-        let ms = start.elapsed().as_secs_f64() / f64::from(REPETITIONS) * 1e3;
-        println!("| Robertson (t=1e11) | 1e-{k} | {steps} | {scd:.2} | {ms:.3} |");
-    }
-    let reference = Pendulum::default().reference(THETA0, PENDULUM_T);
-    for k in 4..=10 {
-        let rtol = 10f64.powi(-k);
-        let (positions, all, steps, _) = pendulum(rtol, &reference);
-        let start = Instant::now();
-        for _ in 0..REPETITIONS {
-            pendulum(rtol, &reference);
-        }
-        let ms = start.elapsed().as_secs_f64() / f64::from(REPETITIONS) * 1e3;
-        println!(
-            "| pendulum (t=3) | 1e-{k} | {steps} | {positions:.2} (x,y) / {all:.2} (all) | {ms:.3} |"
+    let all8: Vec<usize> = (0..8).collect();
+    let all10: Vec<usize> = (0..10).collect();
+    let pendulum_ref = Pendulum::default().reference(THETA0, PENDULUM_T);
+    let (ay0, ayp0) = Andrews::initial();
+    let car = CarAxis::default();
+    let (cy0, cyp0) = car.initial();
+    let andrews_ggl = || {
+        Stabilised::new(
+            Andrews,
+            (21..27).collect(),
+            (0..7).map(|j| (j, j)).collect(),
+        )
+        .map_err(|e| e.to_string())
+    };
+    let car_ggl = || {
+        Stabilised::new(car, vec![8, 9], (0..4).map(|j| (j, j)).collect())
+            .map_err(|e| e.to_string())
+    };
+    for k in [4, 6, 8] {
+        let tol = 10f64.powi(-k);
+        let scalar = bdf::Options::with_tolerances(tol, tol);
+
+        let robertson_opts = bdf::Options {
+            rtol: Tolerance::Scalar(tol),
+            atol: Tolerance::Vector(robertson_atol(tol)),
+            ..bdf::Options::default()
+        };
+        row(
+            Problem::Robertson,
+            k,
+            Code::Bdf,
+            &ROBERTSON_REF,
+            &[0, 1, 2],
+            || {
+                let (y0, yp0) = ([1.0, 0.0, 0.0], [-0.04, 0.04, 0.0]);
+                bdf_run::<3, _>(
+                    Robertson,
+                    (&y0, &yp0),
+                    robertson_opts.clone(),
+                    ROBERTSON_T_END,
+                )
+            },
         );
+
+        let (ty0, typ0) = TransistorAmplifier::initial();
+        row(
+            Problem::Amplifier,
+            k,
+            Code::Bdf,
+            &TRANSAMP_REF,
+            &all8,
+            || {
+                bdf_run::<8, _>(
+                    TransistorAmplifier,
+                    (&ty0, &typ0),
+                    scalar.clone(),
+                    TRANSAMP_T_END,
+                )
+            },
+        );
+
+        let p = Pendulum::default();
+        let (py0, pyp0) = p.initial(THETA0);
+        row(
+            Problem::Pendulum,
+            k,
+            Code::Radau,
+            &pendulum_ref,
+            &[0, 1],
+            || {
+                let opts = radau::Options {
+                    index: PENDULUM_INDEX.to_vec(),
+                    ..radau::Options::with_tolerances(tol, tol)
+                };
+                radau_run::<5, _>(p, (&py0, &pyp0), opts, PENDULUM_T)
+            },
+        );
+        row(
+            Problem::Pendulum,
+            k,
+            Code::Bdf,
+            &pendulum_ref,
+            &[0, 1],
+            || {
+                let opts = bdf::Options {
+                    index: PENDULUM_INDEX.to_vec(),
+                    ..scalar.clone()
+                };
+                bdf_run::<5, _>(p, (&py0, &pyp0), opts, PENDULUM_T)
+            },
+        );
+
+        let a0 = (&ay0[..], &ayp0[..]);
+        row(
+            Problem::Andrews,
+            k,
+            Code::Radau,
+            &ANDREWS_REF,
+            &ANDREWS_SCORED,
+            || {
+                let opts = radau::Options {
+                    index: andrews_index(),
+                    ..radau::Options::with_tolerances(tol, tol)
+                };
+                radau_run::<27, _>(Andrews, a0, opts, ANDREWS_T_END)
+            },
+        );
+        for (code, higher_index) in [
+            (Code::Bdf, HigherIndexControl::Exclude),
+            (Code::BdfScale, HigherIndexControl::Scale),
+        ] {
+            row(
+                Problem::Andrews,
+                k,
+                code,
+                &ANDREWS_REF,
+                &ANDREWS_SCORED,
+                || {
+                    let opts = bdf::Options {
+                        index: andrews_index(),
+                        higher_index,
+                        ..scalar.clone()
+                    };
+                    bdf_run::<27, _>(Andrews, a0, opts, ANDREWS_T_END)
+                },
+            );
+        }
+
+        let ggl = |code| {
+            row(
+                Problem::AndrewsStabilised,
+                k,
+                code,
+                &ANDREWS_REF,
+                &ANDREWS_SCORED,
+                || {
+                    let s = andrews_ggl()?;
+                    let (y0, yp0) = s.extend(&ay0, &ayp0);
+                    let index = stabilised_index(33, 14);
+                    match code {
+                        Code::Radau => {
+                            let opts = radau::Options {
+                                index,
+                                ..radau::Options::with_tolerances(tol, tol)
+                            };
+                            radau_run::<33, _>(s, (&y0, &yp0), opts, ANDREWS_T_END)
+                        }
+                        _ => {
+                            let opts = bdf::Options {
+                                index,
+                                ..scalar.clone()
+                            };
+                            bdf_run::<33, _>(s, (&y0, &yp0), opts, ANDREWS_T_END)
+                        }
+                    }
+                },
+            )
+        };
+        ggl(Code::Radau);
+        ggl(Code::Bdf);
+
+        let c0 = (&cy0[..], &cyp0[..]);
+        row(
+            Problem::CarAxis,
+            k,
+            Code::Radau,
+            &CAR_AXIS_REF,
+            &all10,
+            || {
+                let opts = radau::Options {
+                    index: CAR_AXIS_INDEX.to_vec(),
+                    ..radau::Options::with_tolerances(tol, tol)
+                };
+                radau_run::<10, _>(car, c0, opts, CAR_AXIS_T_END)
+            },
+        );
+        for (code, higher_index) in [
+            (Code::Bdf, HigherIndexControl::Exclude),
+            (Code::BdfScale, HigherIndexControl::Scale),
+        ] {
+            row(Problem::CarAxis, k, code, &CAR_AXIS_REF, &all10, || {
+                let opts = bdf::Options {
+                    index: CAR_AXIS_INDEX.to_vec(),
+                    higher_index,
+                    ..scalar.clone()
+                };
+                bdf_run::<10, _>(car, c0, opts, CAR_AXIS_T_END)
+            });
+        }
+
+        let ggl = |code| {
+            row(
+                Problem::CarAxisStabilised,
+                k,
+                code,
+                &CAR_AXIS_REF,
+                &all10,
+                || {
+                    let s = car_ggl()?;
+                    let (y0, yp0) = s.extend(&cy0, &cyp0);
+                    let index = stabilised_index(12, 8);
+                    match code {
+                        Code::Radau => {
+                            let opts = radau::Options {
+                                index,
+                                ..radau::Options::with_tolerances(tol, tol)
+                            };
+                            radau_run::<12, _>(s, (&y0, &yp0), opts, CAR_AXIS_T_END)
+                        }
+                        _ => {
+                            let opts = bdf::Options {
+                                index,
+                                ..scalar.clone()
+                            };
+                            bdf_run::<12, _>(s, (&y0, &yp0), opts, CAR_AXIS_T_END)
+                        }
+                    }
+                },
+            )
+        };
+        ggl(Code::Radau);
+        ggl(Code::Bdf);
     }
 }
