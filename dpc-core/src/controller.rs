@@ -24,13 +24,15 @@
 //! here), so small updates do not prove a small residual. Newton is warm-started from the
 //! previous sample's solution at the same inner step, shifted to the new measurement.
 //!
-//! Newton is simplified: the factorised iteration matrix is kept across iterations, inner
-//! steps and samples (for the same `delta`) while it converges, and evaluated afresh, together
-//! with the residual in one pass, when the scaled residual falls by less than
-//! [`MATRIX_REUSE_RATE`] per iteration (going back to the better iterate if it grew). The
-//! stopping test is the same whatever matrix is used, so the controls agree with those of full
-//! Newton to within the tolerance. The tracking inputs `w` and, under a preliminary feedback,
-//! the nominal motion are evaluated once per inner step.
+//! Each inner step is solved by the crate's one Newton iteration (the crate-private `newton`
+//! module, which also runs the BDF corrector): the step is a Newton system, the test above
+//! its convergence test. Newton is simplified: the factorised
+//! iteration matrix is kept across iterations, inner steps and samples (for the same `delta`)
+//! while it converges, and evaluated afresh, together with the residual in one pass, when the
+//! scaled residual falls by less than [`MATRIX_REUSE_RATE`] per iteration (going back to the
+//! better iterate if it grew). The stopping test is the same whatever matrix is used, so the
+//! controls agree with those of full Newton to within the tolerance. The tracking inputs `w`
+//! and, under a preliminary feedback, the nominal motion are evaluated once per inner step.
 //!
 //! All buffers are allocated at construction: with the fixed-size
 //! [`NalgebraLu`](crate::linear_solver::NalgebraLu) back end an update allocates nothing.
@@ -81,7 +83,11 @@
 use crate::consistent::ConstraintStructure;
 use crate::error::InvalidOption;
 use crate::linear_solver::{FactorError, LinearSolver};
-use crate::numeric::{max_or_nan, Readable, Time};
+use crate::newton::{
+    Convergence, Corrected, Iterate, NewtonCounts, NewtonFailure, NewtonSystem, NewtonWorkspace,
+    Verdict,
+};
+use crate::numeric::{Readable, Time};
 use crate::prefeedback::{FeedbackChain, Prefeedback};
 use crate::reference::{Reference, ReferenceError};
 use crate::sink::MatrixSink;
@@ -279,18 +285,18 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     /// The previous sample's value at the last inner step done (replaced in `warm`).
     warm_before: Vec<f64>,
     have_warm: bool,
-    /// The `delta` whose iteration matrix the solver holds factorised, if any.
-    factored_delta: Option<f64>,
-    /// Work counters of the update in progress.
-    iterations: usize,
-    matrices: usize,
+    /// The Newton workspace: residual, update, the work counters of the update in progress
+    /// and whether the solver holds a valid factorisation.
+    newton: NewtonWorkspace,
+    /// The `delta` the factorised iteration matrix was formed with (meaningful while
+    /// `newton.valid`).
+    factored_delta: f64,
     x_prev: Vec<f64>,
     y: Vec<f64>,
     /// The iterate before the last Newton correction (where a reused matrix that stopped
     /// converging goes back to).
     y_last: Vec<f64>,
     xdot: Vec<f64>,
-    res: Vec<f64>,
     w: Vec<f64>,
     scratch: Vec<f64>,
     u_first: Vec<f64>,
@@ -394,14 +400,12 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             warm: vec![vec![0.0; n]; steps],
             warm_before: vec![0.0; n],
             have_warm: false,
-            factored_delta: None,
-            iterations: 0,
-            matrices: 0,
+            newton: NewtonWorkspace::new(n),
+            factored_delta: f64::NAN,
             x_prev: vec![0.0; nx],
             y: vec![0.0; n],
             y_last: vec![0.0; n],
             xdot: vec![0.0; nx],
-            res: vec![0.0; n],
             w: vec![0.0; nw],
             scratch: vec![0.0; (order + 1) * ny],
             u_first: vec![0.0; n_inputs],
@@ -456,7 +460,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             chain,
         });
         self.have_warm = false;
-        self.factored_delta = None;
+        self.newton.valid = false;
         Ok(self)
     }
 
@@ -469,76 +473,6 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// while the controller keeps updating).
     pub(crate) fn shared_prefeedback(&self) -> Option<std::sync::Arc<Prefeedback>> {
         self.prefeedback.as_ref().map(|p| p.law.clone())
-    }
-
-    /// With a preliminary feedback, the algebraic unknowns `[Z; u]` the plant sees for the
-    /// current iterate `[X; Z; v]` (about the nominal of the current inner step).
-    fn fill_plant_inputs(&mut self) {
-        let nx = self.nx;
-        if let Some(pf) = self.prefeedback.as_mut() {
-            let n_u = self.u_first.len();
-            let nz = pf.z_eval.len() - n_u;
-            let (xs, zs) = self.y.split_at(nx);
-            pf.z_eval[..nz].copy_from_slice(&zs[..nz]);
-            pf.law
-                .input_about(xs, &zs[nz..], &pf.x0, &pf.u0, &mut pf.z_eval[nz..]);
-        }
-    }
-
-    /// The residual at the current iterate into `res`; with `matrix`, also the Newton matrix
-    /// `dG/dY + c dG/dX'` for the unknowns `Y = [X; Z; U]` (or, under a preliminary feedback,
-    /// `Y = [X; Z; v]` with `dG/dX` gaining `dG/du K_n`), in the same pass, factorised.
-    fn evaluate(&mut self, t: f64, delta: f64, matrix: bool) -> Result<(), DpcError> {
-        let nx = self.nx;
-        for ((d, y), x) in self.xdot.iter_mut().zip(&self.y).zip(&self.x_prev) {
-            *d = (y - x) / delta;
-        }
-        self.fill_plant_inputs();
-        let (xs, zs) = self.y.split_at(nx);
-        let z_eval = match &self.prefeedback {
-            Some(pf) => &pf.z_eval[..],
-            None => zs,
-        };
-        if !matrix {
-            self.model
-                .residual(t, xs, &self.xdot, z_eval, &self.w, &mut self.res);
-            return Ok(());
-        }
-        let c = 1.0 / delta;
-        let out = self.solver.matrix_mut();
-        match self.prefeedback.as_mut() {
-            None => self.model.residual_and_iteration_matrix(
-                t,
-                xs,
-                &self.xdot,
-                zs,
-                &self.w,
-                c,
-                &mut self.res,
-                out,
-            ),
-            Some(pf) => {
-                let mut capture = pf.chain.capture(out);
-                self.model.residual_and_iteration_matrix(
-                    t,
-                    xs,
-                    &self.xdot,
-                    &pf.z_eval,
-                    &self.w,
-                    c,
-                    &mut self.res,
-                    &mut capture,
-                );
-                pf.chain.apply(self.solver.matrix_mut());
-            }
-        }
-        self.matrices += 1;
-        self.factored_delta = None;
-        self.solver
-            .factor()
-            .map_err(|source| DpcError::Singular { t, source })?;
-        self.factored_delta = Some(delta);
-        Ok(())
     }
 
     /// The `nu` in use.
@@ -565,7 +499,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// reference).
     pub fn reset(&mut self) {
         self.have_warm = false;
-        self.factored_delta = None;
+        self.newton.valid = false;
     }
 
     /// Compute the control `u` (length = the plant's inputs) at sample time `t` from the
@@ -594,12 +528,11 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         }
         let mut report = UpdateReport::default();
         let mut delta = self.opts.delta;
-        self.iterations = 0;
-        self.matrices = 0;
+        self.newton.counts = NewtonCounts::default();
         for attempt in 0..=self.opts.max_retries {
             let inner = self.integrate(t, x, delta);
-            report.newton_iterations = self.iterations;
-            report.iteration_matrices = self.matrices;
+            report.newton_iterations = self.newton.counts.passes;
+            report.iteration_matrices = self.newton.counts.matrices;
             match inner? {
                 Inner::Converged { residual } => {
                     report.retries = attempt;
@@ -683,9 +616,14 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                     self.y[nx..].fill(0.0);
                 }
             }
-            match self.newton(tj, delta)? {
+            match self.inner_step(tj, delta) {
                 Ok(residual) => worst = worst.max(residual),
-                Err(residual) => return Ok(Inner::Failed { step: j, residual }),
+                Err(InnerFailure::Converge { residual }) => {
+                    return Ok(Inner::Failed { step: j, residual })
+                }
+                Err(InnerFailure::Factor(source)) => {
+                    return Err(DpcError::Singular { t: tj, source })
+                }
             }
             std::mem::swap(&mut self.warm[j - 1], &mut self.warm_before);
             self.warm[j - 1].copy_from_slice(&self.y);
@@ -700,81 +638,256 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         Ok(Inner::Converged { residual: worst })
     }
 
-    /// The residual in `res` scaled for the convergence test: dynamic rows times `delta`,
-    /// relative to `1 + |X|_inf`.
-    fn res_scaled(&self, delta: f64) -> f64 {
-        let nx = self.nx;
-        let scale = 1.0 + max_or_nan(self.y[..nx].iter().map(|v| v.abs()));
-        max_or_nan(self.res.iter().zip(&self.dynamic_row).map(|(r, &dynamic)| {
-            if dynamic {
-                (r * delta).abs()
-            } else {
-                r.abs()
-            }
-        })) / scale
+    /// One inner implicit-Euler step at `tj` from the guess in `y`, solved by the crate's
+    /// Newton ([`crate::newton`]) with the matrix kept from the last step if it was formed
+    /// with the same `delta`: the scaled residual reached, or why it failed.
+    fn inner_step(&mut self, tj: f64, delta: f64) -> Result<f64, InnerFailure> {
+        let fresh = self.factored_delta != delta;
+        let mut system = InnerStep {
+            model: &self.model,
+            t: tj,
+            delta,
+            nx: self.nx,
+            x_prev: &self.x_prev,
+            w: &self.w,
+            y: &mut self.y,
+            y_last: &mut self.y_last,
+            xdot: &mut self.xdot,
+            prefeedback: self.prefeedback.as_mut(),
+            factored_delta: &mut self.factored_delta,
+        };
+        let mut test = ResidualTest {
+            opts: &self.opts,
+            delta,
+            dynamic_row: &self.dynamic_row,
+            constraint_rows: &self.constraint_rows,
+            residual: f64::INFINITY,
+            last: f64::INFINITY,
+            last_control: f64::INFINITY,
+        };
+        match self
+            .newton
+            .solve(&mut self.solver, &mut system, &mut test, fresh)
+        {
+            Ok(_) => Ok(test.residual),
+            Err(failure) => Err(match failure.factor_error() {
+                Some(source) => InnerFailure::Factor(source),
+                None => InnerFailure::Converge {
+                    residual: test.residual,
+                },
+            }),
+        }
     }
+}
 
-    /// The residual in `res` as it reaches the control, relative to `1 + |X|_inf`: the
-    /// dynamic rows unscaled, the plant's constraint rows amplified by `delta^-k` (`k = 2`
-    /// for position, 1 for velocity constraints), the other rows as they are (see
-    /// [`DpcOptions::control_tolerance`]).
-    fn res_at_control(&self, delta: f64) -> f64 {
-        let scale = 1.0 + max_or_nan(self.y[..self.nx].iter().map(|v| v.abs()));
-        let rows = max_or_nan(self.res.iter().map(|r| r.abs()));
-        let constraints = max_or_nan(
-            self.constraint_rows
-                .iter()
-                .map(|&(i, k)| (self.res[i] / delta.powi(k)).abs()),
-        );
-        max_or_nan([rows, constraints]) / scale
-    }
+/// Why an inner step failed.
+enum InnerFailure {
+    /// Newton did not converge (or met a NaN residual): the last scaled residual.
+    Converge { residual: f64 },
+    /// The iteration matrix could not be factorised.
+    Factor(FactorError),
+}
 
-    /// Simplified Newton for one inner step from the guess in `y`: `Ok` with the scaled
-    /// residual it reached when it converged, `Err` with the last one when it did not within
-    /// [`DpcOptions::max_newton_iterations`].
-    fn newton(&mut self, tj: f64, delta: f64) -> Result<Result<f64, f64>, DpcError> {
-        self.y_last.copy_from_slice(&self.y);
-        let mut last = f64::INFINITY;
-        let mut last_control = f64::INFINITY;
-        let mut residual = f64::INFINITY;
-        for _ in 0..self.opts.max_newton_iterations {
-            self.iterations += 1;
-            let reused = self.factored_delta == Some(delta);
-            self.evaluate(tj, delta, !reused)?;
-            residual = self.res_scaled(delta);
-            if residual <= self.opts.residual_tolerance {
-                let control = self.res_at_control(delta);
-                if control <= self.opts.control_tolerance || control >= 0.5 * last_control {
-                    return Ok(Ok(residual));
-                }
-                last_control = control;
+/// One inner implicit-Euler step as the system Newton solves: the unknowns `Y = [X; Z; U]`
+/// (under a preliminary feedback `[X; Z; v]`) with `X' = (X - X_prev) / delta`.
+struct InnerStep<'a, T> {
+    model: &'a T,
+    t: f64,
+    delta: f64,
+    nx: usize,
+    /// `X` at the previous inner step.
+    x_prev: &'a [f64],
+    /// The tracking inputs at `t`.
+    w: &'a [f64],
+    y: &'a mut [f64],
+    y_last: &'a mut [f64],
+    xdot: &'a mut [f64],
+    prefeedback: Option<&'a mut PrefeedbackWork>,
+    /// Set to `delta` when a matrix is formed.
+    factored_delta: &'a mut f64,
+}
+
+impl<T: TrackingDae, M: MatrixSink + ?Sized> NewtonSystem<M> for InnerStep<'_, T> {
+    /// The residual (and with `matrix` the Newton matrix `dG/dY + c dG/dX'`, `c = 1/delta`,
+    /// in the same pass; under a preliminary feedback with `dG/dX` gaining `dG/du K_n`). The
+    /// solver's matrix was zeroed once: the model writes every structural entry.
+    fn evaluate(&mut self, res: &mut [f64], _residual: bool, matrix: Option<&mut M>) {
+        let (nx, delta) = (self.nx, self.delta);
+        for ((d, y), x) in self.xdot.iter_mut().zip(self.y.iter()).zip(self.x_prev) {
+            *d = (y - x) / delta;
+        }
+        let (xs, zs) = self.y.split_at(nx);
+        // With a preliminary feedback: the algebraic unknowns `[Z; u]` the plant sees (about
+        // the nominal of this inner step).
+        if let Some(pf) = self.prefeedback.as_mut() {
+            let nz = pf.z_eval.len() - pf.u0.len();
+            if nz > 0 {
+                // (A call of `memcpy` even when empty, as for the wheel.)
+                pf.z_eval[..nz].copy_from_slice(&zs[..nz]);
             }
-            // A NaN residual counts as no progress.
-            let falls_by = |factor: f64| residual <= factor * last;
-            if reused && !falls_by(MATRIX_REUSE_RATE) {
-                // The reused matrix converges too slowly or diverges: a fresh one, here or,
-                // if this iterate is worse, at the previous one.
-                if !falls_by(1.0) {
-                    self.y.copy_from_slice(&self.y_last);
-                }
-                self.evaluate(tj, delta, true)?;
-                residual = self.res_scaled(delta);
-            }
-            if residual.is_nan() {
-                return Ok(Err(residual));
-            }
-            self.y_last.copy_from_slice(&self.y);
-            last = residual;
-            for d in self.res.iter_mut() {
-                *d = -*d;
-            }
-            self.solver.solve_in_place(&mut self.res);
-            for (yi, d) in self.y.iter_mut().zip(&self.res) {
-                *yi += d;
+            pf.law
+                .input_about(xs, &zs[nz..], &pf.x0, &pf.u0, &mut pf.z_eval[nz..]);
+        }
+        let z_eval = match &self.prefeedback {
+            Some(pf) => &pf.z_eval[..],
+            None => zs,
+        };
+        let Some(out) = matrix else {
+            self.model
+                .residual(self.t, xs, self.xdot, z_eval, self.w, res);
+            return;
+        };
+        let c = 1.0 / delta;
+        match self.prefeedback.as_mut() {
+            None => self
+                .model
+                .residual_and_iteration_matrix(self.t, xs, self.xdot, zs, self.w, c, res, out),
+            Some(pf) => {
+                let mut capture = pf.chain.capture(&mut *out);
+                self.model.residual_and_iteration_matrix(
+                    self.t,
+                    xs,
+                    self.xdot,
+                    &pf.z_eval,
+                    self.w,
+                    c,
+                    res,
+                    &mut capture,
+                );
+                pf.chain.apply(out);
             }
         }
-        Ok(Err(residual))
+        *self.factored_delta = delta;
     }
+
+    fn keep(&mut self) {
+        self.y_last.copy_from_slice(self.y);
+    }
+
+    fn back(&mut self) {
+        self.y.copy_from_slice(self.y_last);
+    }
+
+    fn correct(&mut self, delta: &mut [f64], _res: &mut [f64]) -> Result<Corrected, NewtonFailure> {
+        for (yi, d) in self.y.iter_mut().zip(delta.iter()) {
+            *yi -= d;
+        }
+        Ok(Corrected::FULL)
+    }
+}
+
+/// The controller's convergence test: the residual scaled by `delta` on the dynamic rows
+/// below [`DpcOptions::residual_tolerance`] and the residual as it reaches the control below
+/// [`DpcOptions::control_tolerance`] (or no longer falling); a reused matrix is refreshed
+/// when the scaled residual falls by less than [`MATRIX_REUSE_RATE`], at the previous
+/// iterate if this one is worse; a NaN residual or [`DpcOptions::max_newton_iterations`]
+/// passes fail.
+struct ResidualTest<'a> {
+    opts: &'a DpcOptions,
+    delta: f64,
+    dynamic_row: &'a [bool],
+    constraint_rows: &'a [(usize, i32)],
+    /// The scaled residual last evaluated.
+    residual: f64,
+    /// The scaled residual at the iterate the last update started from.
+    last: f64,
+    /// The control residual of the last iterate that passed the scaled test but not this one.
+    last_control: f64,
+}
+
+impl ResidualTest<'_> {
+    /// The residual `res` scaled for the convergence test: dynamic rows times `delta`,
+    /// relative to `1 + |X|_inf`; NaN if either holds a NaN.
+    fn scaled(&self, res: &[f64], x: &[f64]) -> f64 {
+        let (x_max, x_nan) = largest(x.iter().map(|v| v.abs()));
+        let (r_max, r_nan) = largest(res.iter().zip(self.dynamic_row).map(|(r, &dynamic)| {
+            let factor = if dynamic { self.delta } else { 1.0 };
+            (r * factor).abs()
+        }));
+        if x_nan || r_nan {
+            f64::NAN
+        } else {
+            r_max / (1.0 + x_max)
+        }
+    }
+
+    /// The residual `res` as it reaches the control, relative to `1 + |X|_inf`: the dynamic
+    /// rows unscaled, the plant's constraint rows amplified by `delta^-k` (`k = 2` for
+    /// position, 1 for velocity constraints), the other rows as they are (see
+    /// [`DpcOptions::control_tolerance`]).
+    fn at_control(&self, res: &[f64], x: &[f64]) -> f64 {
+        let (x_max, x_nan) = largest(x.iter().map(|v| v.abs()));
+        let (rows, rows_nan) = largest(res.iter().map(|r| r.abs()));
+        let (constraints, constraints_nan) = largest(
+            self.constraint_rows
+                .iter()
+                .map(|&(i, k)| (res[i] / self.delta.powi(k)).abs()),
+        );
+        if x_nan || rows_nan || constraints_nan {
+            f64::NAN
+        } else {
+            rows.max(constraints) / (1.0 + x_max)
+        }
+    }
+
+    /// Go on from the scaled residual just evaluated, unless it is NaN.
+    fn go_on(&mut self) -> Verdict {
+        if self.residual.is_nan() {
+            return Verdict::Fail(NewtonFailure::Convergence);
+        }
+        self.last = self.residual;
+        Verdict::Continue
+    }
+}
+
+impl<T, L> Convergence<InnerStep<'_, T>, L> for ResidualTest<'_> {
+    fn after_residual(&mut self, sys: &mut InnerStep<'_, T>, it: Iterate<'_, L>) -> Verdict {
+        let x = &sys.y[..sys.nx];
+        self.residual = self.scaled(it.res, x);
+        if self.residual <= self.opts.residual_tolerance {
+            let control = self.at_control(it.res, x);
+            if control <= self.opts.control_tolerance || control >= 0.5 * self.last_control {
+                return Verdict::Converged;
+            }
+            self.last_control = control;
+        }
+        // A NaN residual counts as no progress.
+        let falls_by = |factor: f64| self.residual <= factor * self.last;
+        if !it.fresh && !falls_by(MATRIX_REUSE_RATE) {
+            // The reused matrix converges too slowly or diverges: a fresh one, here or, if
+            // this iterate is worse, at the previous one.
+            return Verdict::Refresh {
+                back: !falls_by(1.0),
+            };
+        }
+        self.go_on()
+    }
+
+    fn after_refresh(&mut self, sys: &mut InnerStep<'_, T>, it: Iterate<'_, L>) -> Verdict {
+        self.residual = self.scaled(it.res, &sys.y[..sys.nx]);
+        self.go_on()
+    }
+
+    fn after_update(&mut self, _sys: &mut InnerStep<'_, T>, it: Iterate<'_, L>) -> Verdict {
+        if it.solves >= self.opts.max_newton_iterations {
+            Verdict::Fail(NewtonFailure::Convergence)
+        } else {
+            Verdict::Continue
+        }
+    }
+}
+
+/// The largest of `values` (non-negative) and whether one of them is NaN: what
+/// [`max_or_nan`](crate::numeric::max_or_nan) decides, in one pass without an early exit
+/// that the compiler keeps branch-free (the test runs at every Newton iteration).
+#[inline]
+fn largest(values: impl Iterator<Item = f64>) -> (f64, bool) {
+    let (mut max, mut nan) = (0.0_f64, false);
+    for v in values {
+        nan |= v.is_nan();
+        max = if v > max { v } else { max };
+    }
+    (max, nan)
 }
 
 /// `eps * delta^-nu`, the relative size of rounding errors in a control extracted after `nu`
@@ -803,6 +916,26 @@ mod tests {
             ladder(1e-3, f64::INFINITY).retries_to_reach_max_delta(),
             None
         );
+    }
+
+    #[test]
+    fn the_convergence_test_maximum_is_max_or_nan() {
+        use crate::numeric::max_or_nan;
+        let cases: [&[f64]; 5] = [
+            &[],
+            &[0.0, 3.0, 1e-300, 2.0],
+            &[1.0, f64::NAN, 5.0],
+            &[f64::INFINITY, 2.0],
+            &[4.0, 7.0, f64::NAN],
+        ];
+        for values in cases {
+            let (max, nan) = largest(values.iter().copied());
+            let reference = max_or_nan(values.iter().copied());
+            assert_eq!(nan, reference.is_nan(), "{values:?}");
+            if !nan {
+                assert_eq!(max.to_bits(), reference.to_bits(), "{values:?}");
+            }
+        }
     }
 
     #[test]

@@ -1,9 +1,7 @@
-//! One Newton iteration for the implicit systems of the BDF: the corrector of
-//! [`crate::bdf::Bdf`] and [`crate::bdf::FixedBdf`] and the consistent initialisation
-//! ([`crate::bdf::consistent_initial_values`]). The controller's inner implicit-Euler steps
-//! ([`crate::controller::Dpc`]) still run their own loop (with the same structure: a
-//! scaled-residual and control test, matrix reuse by the residual's fall rate); moving them
-//! onto this one is the next step.
+//! The crate's one Newton iteration, for every implicit system it solves: the corrector of
+//! [`crate::bdf::Bdf`] and [`crate::bdf::FixedBdf`], the consistent initialisation
+//! ([`crate::bdf::consistent_initial_values`]) and the controller's inner implicit-Euler steps
+//! ([`crate::controller::Dpc`]).
 //!
 //! [`NewtonWorkspace::solve`] owns the iteration: evaluate the residual (and, when the
 //! factorised matrix is stale, the iteration matrix at the same point), factorise, solve for the
@@ -11,10 +9,12 @@
 //! caller chooses:
 //!
 //! * the [`NewtonSystem`]: the unknowns and how an update corrects them (the BDF's `y` with
-//!   `y' = y'_pred + cj (y - y_pred)`, the initialisation's `(y'_d, y_a)` with backtracking);
+//!   `y' = y'_pred + cj (y - y_pred)`, the initialisation's `(y'_d, y_a)` with backtracking,
+//!   the controller's `[X; Z; U]` with `X' = (X - X_prev) / delta`);
 //! * the [`Convergence`] test: IDA's rate test `s |delta| <= epcon` (the BDF), the
 //!   weighted update test with a residual contraction rule for matrix reuse (the
-//!   initialisation).
+//!   initialisation), the scaled-residual and control test with matrix reuse by the
+//!   residual's fall rate (the controller).
 //!
 //! The workspace keeps its factorisation between solves; the caller says when it is stale.
 //! Failures are typed ([`NewtonFailure`]) and mapped to each caller's error type.
@@ -48,6 +48,15 @@ impl NewtonFailure {
         match e {
             FactorError::Singular { column, row } => Self::Singular(column, row),
             FactorError::OutsidePattern { row, col } => Self::OutsidePattern(row, col),
+        }
+    }
+
+    /// The linear solver's report back, when this failure is a failed factorisation.
+    pub fn factor_error(self) -> Option<FactorError> {
+        match self {
+            Self::Singular(column, row) => Some(FactorError::Singular { column, row }),
+            Self::OutsidePattern(row, col) => Some(FactorError::OutsidePattern { row, col }),
+            Self::Convergence | Self::NonFinite(_) | Self::Weight { .. } => None,
         }
     }
 }
@@ -233,18 +242,8 @@ impl NewtonWorkspace {
             }
             let fresh_now = need_matrix;
             need_matrix = false;
-            let verdict = test.after_residual(
-                sys,
-                Iterate {
-                    ls: &*ls,
-                    res: &self.res,
-                    delta: &mut self.delta,
-                    w: &mut self.w,
-                    fresh: fresh_now,
-                    solves,
-                    corrected: Corrected::FULL,
-                },
-            );
+            let verdict =
+                test.after_residual(sys, self.view(ls, fresh_now, solves, Corrected::FULL));
             let mut fresh_now = fresh_now;
             match verdict {
                 Verdict::Converged => return Ok(solves),
@@ -256,18 +255,8 @@ impl NewtonWorkspace {
                     }
                     self.evaluate(ls, sys, test, true, true)?;
                     fresh_now = true;
-                    let verdict = test.after_refresh(
-                        sys,
-                        Iterate {
-                            ls: &*ls,
-                            res: &self.res,
-                            delta: &mut self.delta,
-                            w: &mut self.w,
-                            fresh: true,
-                            solves,
-                            corrected: Corrected::FULL,
-                        },
-                    );
+                    let verdict =
+                        test.after_refresh(sys, self.view(ls, true, solves, Corrected::FULL));
                     if let Verdict::Fail(f) = verdict {
                         return Err(f);
                     }
@@ -280,24 +269,32 @@ impl NewtonWorkspace {
             self.counts.solves += 1;
             let corrected = sys.correct(&mut self.delta, &mut self.res)?;
             residual_current = corrected.residual_current;
-            let verdict = test.after_update(
-                sys,
-                Iterate {
-                    ls: &*ls,
-                    res: &self.res,
-                    delta: &mut self.delta,
-                    w: &mut self.w,
-                    fresh: fresh_now,
-                    solves,
-                    corrected,
-                },
-            );
+            let verdict = test.after_update(sys, self.view(ls, fresh_now, solves, corrected));
             match verdict {
                 Verdict::Converged => return Ok(solves),
                 Verdict::Continue => {}
                 Verdict::Refresh { .. } => need_matrix = true,
                 Verdict::Fail(f) => return Err(f),
             }
+        }
+    }
+
+    /// What a convergence test sees of this workspace and the solver `ls`.
+    fn view<'a, L>(
+        &'a mut self,
+        ls: &'a L,
+        fresh: bool,
+        solves: usize,
+        corrected: Corrected,
+    ) -> Iterate<'a, L> {
+        Iterate {
+            ls,
+            res: &self.res,
+            delta: &mut self.delta,
+            w: &mut self.w,
+            fresh,
+            solves,
+            corrected,
         }
     }
 

@@ -99,21 +99,42 @@ impl ScalarReference for Constant {
             0.0
         }
     }
+
+    fn add_derivatives(&self, _t: f64, order: usize, out: &mut [f64], stride: usize) {
+        // The higher orders add a zero, as `derivative` gives (which turns a -0 into +0).
+        out[0] += self.0;
+        for k in 1..=order {
+            out[k * stride] += 0.0;
+        }
+    }
 }
 
 /// `xi(t) = sum_j c_j t^j`, coefficients lowest power first.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Polynomial(pub Vec<f64>);
 
-impl ScalarReference for Polynomial {
-    fn derivative(&self, t: f64, k: usize) -> f64 {
-        // Horner on the k-th derivative's coefficients c_j * j!/(j-k)!.
+impl Polynomial {
+    /// Horner on the k-th derivative's coefficients `c_j * j!/(j-k)!`.
+    #[inline]
+    fn horner(&self, t: f64, k: usize) -> f64 {
         let mut acc = 0.0;
         for j in (k..self.0.len()).rev() {
             let falling: f64 = ((j - k + 1)..=j).map(|v| v as f64).product();
             acc = acc * t + self.0[j] * falling;
         }
         acc
+    }
+}
+
+impl ScalarReference for Polynomial {
+    fn derivative(&self, t: f64, k: usize) -> f64 {
+        self.horner(t, k)
+    }
+
+    fn add_derivatives(&self, t: f64, order: usize, out: &mut [f64], stride: usize) {
+        for k in 0..=order {
+            out[k * stride] += self.horner(t, k);
+        }
     }
 }
 

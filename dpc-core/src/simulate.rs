@@ -1410,34 +1410,25 @@ impl<'h, 'p, M: DaeModel> PlantIntegrator<'h, 'p, M> {
     }
 
     fn work(&self) -> PlantWork {
-        let (s, rejected) = match (&self.bdf, &self.radau) {
-            (Some(b), _) => {
-                let s = b.stats();
+        // The BDF's and Radau's `Stats` are two types with the same counters.
+        macro_rules! counts {
+            ($s:expr) => {{
+                let s = $s;
                 (
-                    (
-                        s.steps,
-                        s.residual_evaluations,
-                        s.jacobian_evaluations,
-                        s.factorisations,
-                    ),
+                    s.steps,
                     s.error_test_failures + s.newton_failures,
+                    s.residual_evaluations,
+                    s.jacobian_evaluations,
+                    s.factorisations,
                 )
-            }
-            (None, Some(r)) => {
-                let s = r.stats();
-                (
-                    (
-                        s.steps,
-                        s.residual_evaluations,
-                        s.jacobian_evaluations,
-                        s.factorisations,
-                    ),
-                    s.error_test_failures + s.newton_failures,
-                )
-            }
-            (None, None) => ((0, 0, 0, 0), 0),
+            }};
+        }
+        let (steps, rejected, residuals, jacobians, factorisations) = match (&self.bdf, &self.radau)
+        {
+            (Some(b), _) => counts!(b.stats()),
+            (None, Some(r)) => counts!(r.stats()),
+            (None, None) => (0, 0, 0, 0, 0),
         };
-        let (steps, residuals, jacobians, factorisations) = s;
         PlantWork {
             integrator: if self.intervals > 0 {
                 self.method
