@@ -162,6 +162,39 @@ fn stabilised_index(m: usize, differential: usize) -> Vec<u8> {
         .collect()
 }
 
+/// The stabilised form `s` of a problem, from the declared form's `(y0, yp0)`, by `code`
+/// (Radau, or the BDF with the table's `scalar` options), each with the stabilised form's
+/// index per unknown (the first `differential` of index 1).
+#[allow(clippy::too_many_arguments)]
+fn stabilised_run<const N: usize, D: ImplicitDae>(
+    code: Code,
+    s: Stabilised<D>,
+    (y0, yp0): (&[f64], &[f64]),
+    differential: usize,
+    tol: f64,
+    scalar: &bdf::Options,
+    t_end: f64,
+) -> Result<Run, String> {
+    let (y0, yp0) = s.extend(y0, yp0);
+    let index = stabilised_index(N, differential);
+    match code {
+        Code::Radau => {
+            let opts = radau::Options {
+                index,
+                ..radau::Options::with_tolerances(tol, tol)
+            };
+            radau_run::<N, _>(s, (&y0, &yp0), opts, t_end)
+        }
+        Code::Bdf | Code::BdfScale => {
+            let opts = bdf::Options {
+                index,
+                ..scalar.clone()
+            };
+            bdf_run::<N, _>(s, (&y0, &yp0), opts, t_end)
+        }
+    }
+}
+
 fn main() {
     let all8: Vec<usize> = (0..8).collect();
     let all10: Vec<usize> = (0..10).collect();
@@ -291,7 +324,7 @@ fn main() {
             );
         }
 
-        let ggl = |code| {
+        for code in [Code::Radau, Code::Bdf] {
             row(
                 Problem::AndrewsStabilised,
                 k,
@@ -299,30 +332,19 @@ fn main() {
                 &ANDREWS_REF,
                 &ANDREWS_SCORED,
                 || {
-                    let s = andrews_ggl()?;
-                    let (y0, yp0) = s.extend(&ay0, &ayp0);
-                    let index = stabilised_index(33, 14);
-                    match code {
-                        Code::Radau => {
-                            let opts = radau::Options {
-                                index,
-                                ..radau::Options::with_tolerances(tol, tol)
-                            };
-                            radau_run::<33, _>(s, (&y0, &yp0), opts, ANDREWS_T_END)
-                        }
-                        _ => {
-                            let opts = bdf::Options {
-                                index,
-                                ..scalar.clone()
-                            };
-                            bdf_run::<33, _>(s, (&y0, &yp0), opts, ANDREWS_T_END)
-                        }
-                    }
+                    let a0 = (&ay0[..], &ayp0[..]);
+                    stabilised_run::<33, _>(
+                        code,
+                        andrews_ggl()?,
+                        a0,
+                        14,
+                        tol,
+                        &scalar,
+                        ANDREWS_T_END,
+                    )
                 },
-            )
-        };
-        ggl(Code::Radau);
-        ggl(Code::Bdf);
+            );
+        }
 
         let c0 = (&cy0[..], &cyp0[..]);
         row(
@@ -353,37 +375,15 @@ fn main() {
             });
         }
 
-        let ggl = |code| {
+        for code in [Code::Radau, Code::Bdf] {
             row(
                 Problem::CarAxisStabilised,
                 k,
                 code,
                 &CAR_AXIS_REF,
                 &all10,
-                || {
-                    let s = car_ggl()?;
-                    let (y0, yp0) = s.extend(&cy0, &cyp0);
-                    let index = stabilised_index(12, 8);
-                    match code {
-                        Code::Radau => {
-                            let opts = radau::Options {
-                                index,
-                                ..radau::Options::with_tolerances(tol, tol)
-                            };
-                            radau_run::<12, _>(s, (&y0, &yp0), opts, CAR_AXIS_T_END)
-                        }
-                        _ => {
-                            let opts = bdf::Options {
-                                index,
-                                ..scalar.clone()
-                            };
-                            bdf_run::<12, _>(s, (&y0, &yp0), opts, CAR_AXIS_T_END)
-                        }
-                    }
-                },
-            )
-        };
-        ggl(Code::Radau);
-        ggl(Code::Bdf);
+                || stabilised_run::<12, _>(code, car_ggl()?, c0, 8, tol, &scalar, CAR_AXIS_T_END),
+            );
+        }
     }
 }
