@@ -165,22 +165,6 @@ impl Sinusoid {
     }
 }
 
-impl ScalarReference for Sinusoid {
-    fn derivative(&self, t: f64, k: usize) -> f64 {
-        let mut value = 0.0;
-        self.each_derivative(t, k, |j, v| {
-            if j == k {
-                value = v;
-            }
-        });
-        value
-    }
-
-    fn add_derivatives(&self, t: f64, order: usize, out: &mut [f64], stride: usize) {
-        self.each_derivative(t, order, |k, v| out[k * stride] += v);
-    }
-}
-
 /// `xi(t) = scale * (t atan t - ln(1 + t^2) / 2)`, the integral of `scale * atan t` from 0,
 /// used for the heading reference of the paper's wheel example (Section 5).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -216,21 +200,29 @@ impl AtanIntegral {
     }
 }
 
-impl ScalarReference for AtanIntegral {
-    fn derivative(&self, t: f64, k: usize) -> f64 {
-        let mut value = 0.0;
-        self.each_derivative(t, k, |j, v| {
-            if j == k {
-                value = v;
+/// `ScalarReference` for a type whose `each_derivative(t, order, f)` hands every derivative of
+/// orders `0..=order` to `f` in one pass.
+macro_rules! scalar_reference_by_each_derivative {
+    ($($ty:ty),*) => {$(
+        impl ScalarReference for $ty {
+            fn derivative(&self, t: f64, k: usize) -> f64 {
+                let mut value = 0.0;
+                self.each_derivative(t, k, |j, v| {
+                    if j == k {
+                        value = v;
+                    }
+                });
+                value
             }
-        });
-        value
-    }
 
-    fn add_derivatives(&self, t: f64, order: usize, out: &mut [f64], stride: usize) {
-        self.each_derivative(t, order, |k, v| out[k * stride] += v);
-    }
+            fn add_derivatives(&self, t: f64, order: usize, out: &mut [f64], stride: usize) {
+                self.each_derivative(t, order, |k, v| out[k * stride] += v);
+            }
+        }
+    )*};
 }
+
+scalar_reference_by_each_derivative!(Sinusoid, AtanIntegral);
 
 /// The sum of scalar references.
 pub struct Sum(pub Vec<Box<dyn ScalarReference + Send + Sync>>);
