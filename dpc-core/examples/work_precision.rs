@@ -42,49 +42,47 @@ use problems::{
 use testset_index1::{TransistorAmplifier, TRANSAMP_REF, TRANSAMP_T_END};
 use testset_index3::*;
 
-/// The BDF with the stack LU of size `N` from `(y0, yp0)` at `t = 0` to `t_end`.
-fn bdf_run<const N: usize, D: ImplicitDae>(
-    dae: D,
-    (y0, yp0): (&[f64], &[f64]),
-    opts: bdf::Options,
-    t_end: f64,
-) -> Result<Run, String> {
-    let mut s =
-        Bdf::new(dae, NalgebraLu::<N>::new(), opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
-    s.set_stop_time(t_end).map_err(|e| e.to_string())?;
-    let mut y = vec![0.0; N];
-    s.solve_to(t_end, &mut y, None).map_err(|e| e.to_string())?;
-    let st = s.stats();
-    Ok(Run {
-        steps: st.steps,
-        error_test_failures: st.error_test_failures,
-        newton_failures: st.newton_failures,
-        jacobians: st.jacobian_evaluations,
-        y,
-    })
+/// `fn $name::<N, D>(dae, (y0, yp0), opts, t_end)`: the integrator `$solver` with the stack LU
+/// of size `N` from `(y0, yp0)` at `t = 0` to `t_end`, and its work (the BDF's and Radau's
+/// constructors, stop times, `solve_to` and statistics have the same shape).
+macro_rules! run_with {
+    ($(#[$doc:meta])* $name:ident, $solver:ident, $options:ty) => {
+        $(#[$doc])*
+        fn $name<const N: usize, D: ImplicitDae>(
+            dae: D,
+            (y0, yp0): (&[f64], &[f64]),
+            opts: $options,
+            t_end: f64,
+        ) -> Result<Run, String> {
+            let mut s = $solver::new(dae, NalgebraLu::<N>::new(), opts, 0.0, y0, yp0)
+                .map_err(|e| e.to_string())?;
+            s.set_stop_time(t_end).map_err(|e| e.to_string())?;
+            let mut y = vec![0.0; N];
+            s.solve_to(t_end, &mut y, None).map_err(|e| e.to_string())?;
+            let st = s.stats();
+            Ok(Run {
+                steps: st.steps,
+                error_test_failures: st.error_test_failures,
+                newton_failures: st.newton_failures,
+                jacobians: st.jacobian_evaluations,
+                y,
+            })
+        }
+    };
 }
 
-/// Radau IIA with the stack LU of size `N`, as [`bdf_run`].
-fn radau_run<const N: usize, D: ImplicitDae>(
-    dae: D,
-    (y0, yp0): (&[f64], &[f64]),
-    opts: radau::Options,
-    t_end: f64,
-) -> Result<Run, String> {
-    let mut s =
-        Radau::new(dae, NalgebraLu::<N>::new(), opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
-    s.set_stop_time(t_end).map_err(|e| e.to_string())?;
-    let mut y = vec![0.0; N];
-    s.solve_to(t_end, &mut y, None).map_err(|e| e.to_string())?;
-    let st = s.stats();
-    Ok(Run {
-        steps: st.steps,
-        error_test_failures: st.error_test_failures,
-        newton_failures: st.newton_failures,
-        jacobians: st.jacobian_evaluations,
-        y,
-    })
-}
+run_with!(
+    /// The BDF from `(y0, yp0)` at `t = 0` to `t_end`.
+    bdf_run,
+    Bdf,
+    bdf::Options
+);
+run_with!(
+    /// Radau IIA, as [`bdf_run`].
+    radau_run,
+    Radau,
+    radau::Options
+);
 
 /// The problems of the table, in its order (the sort key's first field).
 #[derive(Clone, Copy)]
