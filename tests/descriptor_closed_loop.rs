@@ -616,6 +616,15 @@ mod slider_crank {
         )
     }
 
+    /// The joint form's `K_n` (`kj`) on `(th, om)` placed on the descriptor form's states
+    /// `(th, xs, om, vs)`: the coordinates both forms share, so the same nonlinear feedback.
+    fn shared_gain(kj: &DMatrix<f64>) -> DMatrix<f64> {
+        let mut shared = DMatrix::zeros(1, 4);
+        shared[(0, 0)] = kj[(0, 0)];
+        shared[(0, 2)] = kj[(0, 1)];
+        shared
+    }
+
     /// Largest difference of the crank angle, the slider position and the tracking error.
     fn difference(c: &ClosedLoop, j: &ClosedLoop) -> f64 {
         c.samples
@@ -687,9 +696,7 @@ mod slider_crank {
     fn plant_tolerance_near_round_off_runs_through() {
         let (dc, dj) = designs();
         let kj = dj.plant_gain().expect("K_n");
-        let mut shared = DMatrix::zeros(1, 4);
-        shared[(0, 0)] = kj[(0, 0)];
-        shared[(0, 2)] = kj[(0, 1)];
+        let shared = shared_gain(&kj);
         for delta in [1e-7, 1e-3] {
             let (c_nominal, _) = nominals();
             let c = run_descriptor(
@@ -732,9 +739,7 @@ mod slider_crank {
         // The joint form's K_n on (th, om), the coordinates both forms share: the same
         // nonlinear feedback, the same trajectory.
         let kj = dj.plant_gain().expect("K_n");
-        let mut shared = DMatrix::zeros(1, 4);
-        shared[(0, 0)] = kj[(0, 0)];
-        shared[(0, 2)] = kj[(0, 1)];
+        let shared = shared_gain(&kj);
         let shared_run = |delta: f64, rtol: f64| {
             let (c_nominal, j_nominal) = nominals();
             let c = run_descriptor(
