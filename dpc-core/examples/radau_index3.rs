@@ -17,7 +17,6 @@ mod testset;
 
 use dpc_core::linear_solver::FaerDenseLu;
 use dpc_core::radau::{Options, Radau, Stats};
-use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
 use testset::*;
 
@@ -80,14 +79,9 @@ fn andrews(tol: f64, form: Form) -> Option<(Vec<f64>, Stats)> {
             "Andrews",
         ),
         Form::Stabilised => {
-            let s = Stabilised::new(
-                Andrews,
-                (21..27).collect(),
-                (0..7).map(|j| (j, j)).collect(),
-            )
-            .ok()?;
+            let s = Andrews::stabilised();
             let (y, yp) = s.extend(&y0, &yp0);
-            let index = stabilised_index(14, 33);
+            let index = stabilised_index(Andrews::STABILISED_DIFFERENTIAL, 33);
             run(s, index, (&y, &yp), ANDREWS_T_END, tol, "Andrews (GGL)")
         }
     }
@@ -106,9 +100,9 @@ fn car_axis(tol: f64, form: Form) -> Option<(Vec<f64>, Stats)> {
             "car axis",
         ),
         Form::Stabilised => {
-            let s = Stabilised::new(p, vec![8, 9], (0..4).map(|j| (j, j)).collect()).ok()?;
+            let s = p.stabilised();
             let (y, yp) = s.extend(&y0, &yp0);
-            let index = stabilised_index(8, 12);
+            let index = stabilised_index(CarAxis::STABILISED_DIFFERENTIAL, 12);
             run(s, index, (&y, &yp), CAR_AXIS_T_END, tol, "car axis (GGL)")
         }
     }

@@ -200,18 +200,6 @@ fn main() {
     let (ay0, ayp0) = Andrews::initial();
     let car = CarAxis::default();
     let (cy0, cyp0) = car.initial();
-    let andrews_ggl = || {
-        Stabilised::new(
-            Andrews,
-            (21..27).collect(),
-            (0..7).map(|j| (j, j)).collect(),
-        )
-        .map_err(|e| e.to_string())
-    };
-    let car_ggl = || {
-        Stabilised::new(car, vec![8, 9], (0..4).map(|j| (j, j)).collect())
-            .map_err(|e| e.to_string())
-    };
     for k in [4, 6, 8] {
         let tol = 10f64.powi(-k);
         let scalar = bdf::Options::with_tolerances(tol, tol);
@@ -333,9 +321,9 @@ fn main() {
                     let a0 = (&ay0[..], &ayp0[..]);
                     stabilised_run::<33, _>(
                         code,
-                        andrews_ggl()?,
+                        Andrews::stabilised(),
                         a0,
-                        14,
+                        Andrews::STABILISED_DIFFERENTIAL,
                         tol,
                         &scalar,
                         ANDREWS_T_END,
@@ -380,7 +368,17 @@ fn main() {
                 code,
                 &CAR_AXIS_REF,
                 &all10,
-                || stabilised_run::<12, _>(code, car_ggl()?, c0, 8, tol, &scalar, CAR_AXIS_T_END),
+                || {
+                    stabilised_run::<12, _>(
+                        code,
+                        car.stabilised(),
+                        c0,
+                        CarAxis::STABILISED_DIFFERENTIAL,
+                        tol,
+                        &scalar,
+                        CAR_AXIS_T_END,
+                    )
+                },
             );
         }
     }

@@ -155,21 +155,18 @@ fn pendulum_index3_matches_independent_reference() {
     }
 }
 
-/// The GGL-stabilised form of `dae` ([`Stabilised`]) from its consistent `(y0, yp0)` to
-/// `t_end` at `rtol = atol = tol`, with the first `differential` unknowns of index 1 and the
-/// rest of index 2: (the declared unknowns at `t_end`, the multipliers `mu`, stats).
-#[allow(clippy::too_many_arguments)]
+/// The GGL-stabilised form `s` ([`Stabilised`]) from the declared form's consistent
+/// `(y0, yp0)` to `t_end` at `rtol = atol = tol`, with the first `differential` unknowns of
+/// index 1 and the rest of index 2: (the declared unknowns at `t_end`, the multipliers `mu`,
+/// stats).
 fn stabilised<D: ImplicitDae>(
-    dae: D,
-    rows: Vec<usize>,
-    kinematic: Vec<(usize, usize)>,
+    s: Stabilised<D>,
     differential: usize,
     (y0, yp0): (&[f64], &[f64]),
     t_end: f64,
     tol: f64,
 ) -> (Vec<f64>, Vec<f64>, Stats) {
-    let n = dae.dimension();
-    let s = Stabilised::new(dae, rows, kinematic).unwrap();
+    let n = y0.len();
     let (y, yp) = s.extend(y0, yp0);
     let m = s.dimension();
     let opts = Options {
@@ -188,12 +185,9 @@ fn stabilised<D: ImplicitDae>(
 
 fn andrews_stabilised(tol: f64) -> (Vec<f64>, Vec<f64>, Stats) {
     let (y0, yp0) = Andrews::initial();
-    let kinematic = (0..7).map(|j| (j, j)).collect();
     stabilised(
-        Andrews,
-        (21..27).collect(),
-        kinematic,
-        14,
+        Andrews::stabilised(),
+        Andrews::STABILISED_DIFFERENTIAL,
         (&y0, &yp0),
         ANDREWS_T_END,
         tol,
@@ -203,12 +197,9 @@ fn andrews_stabilised(tol: f64) -> (Vec<f64>, Vec<f64>, Stats) {
 fn car_axis_stabilised(tol: f64) -> (Vec<f64>, Vec<f64>, Stats) {
     let p = CarAxis::default();
     let (y0, yp0) = p.initial();
-    let kinematic = (0..4).map(|j| (j, j)).collect();
     stabilised(
-        p,
-        vec![8, 9],
-        kinematic,
-        8,
+        p.stabilised(),
+        CarAxis::STABILISED_DIFFERENTIAL,
         (&y0, &yp0),
         CAR_AXIS_T_END,
         tol,
@@ -294,15 +285,8 @@ fn stabilised_pendulum_keeps_both_constraints() {
     let reference = p.reference(THETA0, PENDULUM_T);
     let (y0, yp0) = p.initial(THETA0);
     for tol in [1e-4, 1e-6, 1e-8] {
-        let (y, mu, s) = stabilised(
-            Pendulum::default(),
-            vec![4],
-            vec![(0, 0), (1, 1)],
-            4,
-            (&y0, &yp0),
-            PENDULUM_T,
-            tol,
-        );
+        let ggl = Stabilised::new(Pendulum::default(), vec![4], vec![(0, 0), (1, 1)]).unwrap();
+        let (y, mu, s) = stabilised(ggl, 4, (&y0, &yp0), PENDULUM_T, tol);
         let all = scd(&y, &reference, &[0, 1, 2, 3, 4]);
         let (_, index3, _) = pendulum(tol, &reference);
         let position = y[0] * y[0] + y[1] * y[1] - 1.0;

@@ -39,7 +39,6 @@ use diffsol::{
     BdfState, NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverProblem,
     OdeSolverState,
 };
-use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
 use nalgebra::DMatrix;
 use peer_table::{row, Run};
@@ -274,20 +273,8 @@ fn main() {
     let (ay0, ayp0) = Andrews::initial();
     let car = CarAxis::default();
     let (cy0, cyp0) = car.initial();
-    let andrews_ggl = || {
-        Stabilised::new(
-            Andrews,
-            (21..27).collect(),
-            (0..7).map(|j| (j, j)).collect(),
-        )
-        .expect("Andrews' constraint rows")
-    };
-    let (gy0, gyp0) = andrews_ggl().extend(&ay0, &ayp0);
-    let car_ggl = || {
-        Stabilised::new(car, vec![8, 9], (0..4).map(|j| (j, j)).collect())
-            .expect("the car axis' constraint rows")
-    };
-    let (hy0, hyp0) = car_ggl().extend(&cy0, &cyp0);
+    let (gy0, gyp0) = Andrews::stabilised().extend(&ay0, &ayp0);
+    let (hy0, hyp0) = car.stabilised().extend(&cy0, &cyp0);
     let p = Pendulum::default();
     let (py0, pyp0) = p.initial(THETA0);
     for k in [4, 6, 8] {
@@ -326,7 +313,15 @@ fn main() {
                 k,
                 code,
                 |y| scd(y, &ANDREWS_REF, &ANDREWS_SCORED),
-                || general(andrews_ggl(), (&gy0, &gyp0), ANDREWS_T_END, tol, given),
+                || {
+                    general(
+                        Andrews::stabilised(),
+                        (&gy0, &gyp0),
+                        ANDREWS_T_END,
+                        tol,
+                        given,
+                    )
+                },
             );
             row(
                 (6, "car axis (index 3; all)"),
@@ -340,7 +335,7 @@ fn main() {
                 k,
                 code,
                 |y| scd(y, &CAR_AXIS_REF, &all10),
-                || general(car_ggl(), (&hy0, &hyp0), CAR_AXIS_T_END, tol, given),
+                || general(car.stabilised(), (&hy0, &hyp0), CAR_AXIS_T_END, tol, given),
             );
         }
     }

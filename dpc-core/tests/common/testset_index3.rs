@@ -6,6 +6,7 @@
 // Matrix entries are written by (row, column) index, as the formulas are.
 #![allow(clippy::needless_range_loop)]
 
+use dpc_core::stabilised::Stabilised;
 use dpc_core::{ImplicitDae, MatrixSink};
 
 /// Significant correct digits `min_i -log10(|y_i - r_i| / |r_i|)` over `components`.
@@ -138,6 +139,20 @@ mod andrews_constants {
 }
 
 impl Andrews {
+    /// Unknowns of index 1 in the stabilised form (the positions and velocities).
+    pub const STABILISED_DIFFERENTIAL: usize = 14;
+
+    /// The stabilised index-2 form: the position constraints `y22..y27`, each position
+    /// `y1..y7` with its kinematic row.
+    pub fn stabilised() -> Stabilised<Andrews> {
+        Stabilised::new(
+            Andrews,
+            (21..27).collect(),
+            (0..7).map(|j| (j, j)).collect(),
+        )
+        .expect("Andrews' constraint rows")
+    }
+
     /// Consistent initial values `(y0, y0')` of the Test Set (`y'_15..27 = 0`).
     #[allow(clippy::excessive_precision)]
     pub fn initial() -> ([f64; 27], [f64; 27]) {
@@ -382,6 +397,16 @@ pub const CAR_AXIS_REF: [f64; 10] = [
 ];
 
 impl CarAxis {
+    /// Unknowns of index 1 in the stabilised form (the positions and velocities).
+    pub const STABILISED_DIFFERENTIAL: usize = 8;
+
+    /// The stabilised index-2 form: the constraints `y9`, `y10`, each position `y1..y4` with
+    /// its kinematic row.
+    pub fn stabilised(self) -> Stabilised<CarAxis> {
+        Stabilised::new(self, vec![8, 9], (0..4).map(|j| (j, j)).collect())
+            .expect("the car axis' constraint rows")
+    }
+
     fn k(&self) -> f64 {
         self.m * self.eps * self.eps / 2.0
     }
