@@ -10,33 +10,28 @@
 use proc_macro2::TokenStream;
 use std::time::{Duration, Instant};
 
+#[path = "../../tests/common/model_text.rs"]
+mod model_text;
+
 /// The arm's declaration (`models/src/arm_declaration.rs`, the one `models/src/arm.rs`
-/// instantiates): the `model! { ... }` inside its `macro_rules!`, with its parameters `$doc`,
-/// `$name`, `$tracking` and `$n` still to be replaced.
+/// instantiates) as text.
 fn arm_template() -> String {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../models/src/arm_declaration.rs"
     );
-    let source = std::fs::read_to_string(path).expect("models/src/arm_declaration.rs");
-    let start = source
-        .find("dpc::model! {")
-        .expect("a model in the declaration")
-        + 13;
-    let end = source.rfind("};").expect("the end of the macro rule");
-    let body = &source[start..end];
-    body[..body.rfind('}').expect("the model's closing brace")].to_string()
+    std::fs::read_to_string(path).expect("models/src/arm_declaration.rs")
 }
 
-/// The arm with `n` links and `steps` roots `4.0` in `W` per joint.
+/// The arm with `n` links, instantiated from the declaration as `models/src/arm.rs` does,
+/// with `steps` roots `4.0` in `W` per joint (the declaration has two).
 fn arm(template: &str, n: usize, steps: usize) -> TokenStream {
+    let call = format!("flexible_joint_arm!(\"The arm.\", Arm{n}, Arm{n}Tracking, {n});");
+    let [model] = &model_text::template_models(&call, template)[..] else {
+        panic!("one model in the declaration");
+    };
     let roots = vec!["4.0"; steps].join(", ");
-    let text = template
-        .replace("$doc", "\"The arm.\"")
-        .replace("$name", &format!("Arm{n}"))
-        .replace("$tracking", &format!("Arm{n}Tracking"))
-        .replace("$n", &n.to_string())
-        .replace("[4.0, 4.0]", &format!("[{roots}]"));
+    let text = model.replace("[4.0, 4.0]", &format!("[{roots}]"));
     assert!(
         text.contains(&format!("N = {n}")) && text.contains(&format!("[{roots}]")),
         "the template changed: {text}"

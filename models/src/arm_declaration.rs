@@ -2,10 +2,10 @@
 // `flexible_joint_arm!(DOC, Name, NameTracking, N)` declares the plant `Name` with `N` links
 // (and `NameParams`, `NameTracking`, `NameReference`), two stabilised Hirschorn steps per
 // joint, `W(s) = (s + 4)^2`. Included by `models/src/arm.rs` (Arm1, Arm2, Arm6) and by the
-// compile-time examples and the benchmark (`examples/arm_compile/common.rs`); the tests and
-// the expansion benchmark read it as text (`tests/common/model_text.rs`,
-// `dpc-codegen/benches/arms.rs`). The arguments are token trees, so the macro receives them as
-// written.
+// compile-time examples and the benchmark (`examples/arm_compile/common.rs`); the tests, the
+// expansion benchmark (`dpc-codegen/benches/arms.rs`) and the routine-splitting test read it
+// as text, instantiated by `template_models` of `tests/common/model_text.rs`. The arguments
+// are token trees, so the macro receives them as written.
 
 macro_rules! flexible_joint_arm {
     ($doc:tt, $name:ident, $tracking:ident, $n:tt) => {

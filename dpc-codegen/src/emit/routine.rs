@@ -532,28 +532,29 @@ fn split_routine(
     }
 }
 
+/// The model texts of the repository's declarations, shared with the workspace's tests.
+#[cfg(test)]
+#[path = "../../../tests/common/model_text.rs"]
+mod model_text;
+
 #[cfg(test)]
 mod tests {
     use super::{reads, Plan};
     use std::collections::BTreeSet;
 
-    /// The arm of `models/src/arm.rs` with six links: its declaration
-    /// (`models/src/arm_declaration.rs`) with the template's parameters replaced.
+    /// The arm of `models/src/arm.rs` with six links, instantiated from its declaration
+    /// (`models/src/arm_declaration.rs`) as `models/src/arm.rs` does.
     fn six_link_arm() -> proc_macro2::TokenStream {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../models/src/arm_declaration.rs"
         );
         let source = std::fs::read_to_string(path).expect("models/src/arm_declaration.rs");
-        let start = source.find("dpc::model! {").expect("a model") + "dpc::model! {".len();
-        let body = &source[start..source.rfind("};").expect("the rule's end")];
-        body[..body.rfind('}').expect("the model's end")]
-            .replace("$doc", "\"The arm.\"")
-            .replace("$name", "Arm6")
-            .replace("$tracking", "Arm6Tracking")
-            .replace("$n", "6")
-            .parse()
-            .expect("the arm tokenises")
+        let call = "flexible_joint_arm!(\"The arm.\", Arm6, Arm6Tracking, 6);";
+        let [model] = &super::model_text::template_models(call, &source)[..] else {
+            panic!("one model in the declaration");
+        };
+        model.parse().expect("the arm tokenises")
     }
 
     /// A split routine computes what the one piece computes: every part reads each temporary
