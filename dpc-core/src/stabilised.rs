@@ -71,6 +71,23 @@
 //!         out.set(4, 1, 2.0 * y[1]);
 //!     }
 //!     fn is_differential(&self, i: usize) -> bool { i < 4 }
+//!     // Optional: the constraint's derivatives by hand (without them, differences).
+//!     fn constraint_gradient<S: MatrixSink + ?Sized>(&self, _t: f64, y: &[f64], out: &mut S) -> bool {
+//!         out.set(4, 0, 2.0 * y[0]);
+//!         out.set(4, 1, 2.0 * y[1]);
+//!         true
+//!     }
+//!     fn constraint_time_derivative(&self, _t: f64, _y: &[f64], _out: &mut [f64]) -> bool {
+//!         true // the constraint does not depend on t
+//!     }
+//!     fn constraint_curvature<S: MatrixSink + ?Sized>(
+//!         &self, _t: f64, _y: &[f64], v: &[f64], out: &mut S,
+//!     ) -> bool {
+//!         // d/d(x, y) of 2 x v_x + 2 y v_y
+//!         out.set(4, 0, 2.0 * v[0]);
+//!         out.set(4, 1, 2.0 * v[1]);
+//!         true
+//!     }
 //! }
 //!
 //! // Row 4 is the position constraint; rows 0 and 1 give x' and y'.
