@@ -46,6 +46,50 @@ pub trait ImplicitDae {
         self.iteration_matrix(t, y, yp, c, out);
     }
 
+    /// The gradients of the position constraints, `dF_g/dy` for each equation `g` that is a
+    /// position constraint (an equation `0 = g(t, q)` of the unknowns alone, without `y'`), when
+    /// the DAE supplies them exactly: index reduction ([`Stabilised`](crate::stabilised::Stabilised))
+    /// then uses them instead of differences of [`iteration_matrix`](Self::iteration_matrix).
+    ///
+    /// Write `(g, j, dF_g/dy_j)` into `out` (an `n x n` destination zeroed by the caller, which
+    /// keeps only the rows it stabilises) for every position-constraint row `g` and every
+    /// unknown `j` the row depends on, and return `true`. The default supplies nothing and
+    /// returns `false`.
+    fn constraint_gradient<S: MatrixSink + ?Sized>(&self, t: f64, y: &[f64], out: &mut S) -> bool {
+        let _ = (t, y, out);
+        false
+    }
+
+    /// The explicit time derivatives `dF_g/dt` of the position constraints (a support that
+    /// moves with time), when supplied exactly: write them into `out[g]` (`out` has length
+    /// [`dimension`](Self::dimension) and is zeroed by the caller, which reads only the rows it
+    /// stabilises) and return `true`. A DAE whose constraints do not depend on `t` writes
+    /// nothing and returns `true`. The default returns `false` (the caller then differences
+    /// the residual in `t`).
+    fn constraint_time_derivative(&self, t: f64, y: &[f64], out: &mut [f64]) -> bool {
+        let _ = (t, y, out);
+        false
+    }
+
+    /// The curvature of the position constraints along the velocities `v`, when supplied
+    /// exactly: the derivative in `y_k` of `sum_j dF_g/dy_j v_j + dF_g/dt` at fixed `v`,
+    /// `sum_j d^2 F_g/(dy_j dy_k) v_j + d^2 F_g/(dt dy_k)`, written as `(g, k, value)` into `out`
+    /// (`n x n`, zeroed by the caller) for every position-constraint row `g`; return `true`.
+    /// `v` has length [`dimension`](Self::dimension) and is zero at every unknown that is not a
+    /// position. This is the row of Newton's iteration matrix of the hidden velocity
+    /// constraints `G(t, q) v + dg/dt = 0` in `q`. The default returns `false` (the caller then
+    /// differences the constraint gradients along the motion).
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        v: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let _ = (t, y, v, out);
+        false
+    }
+
     /// Whether component `i` is differential (`y_i'` appears in `F`) rather than algebraic.
     ///
     /// Used by consistent initialisation (which keeps differential components and solves for
@@ -101,6 +145,21 @@ impl<T: ImplicitDae + ?Sized> ImplicitDae for &T {
         out: &mut S,
     ) {
         (**self).residual_and_iteration_matrix(t, y, yp, c, residual, out);
+    }
+    fn constraint_gradient<S: MatrixSink + ?Sized>(&self, t: f64, y: &[f64], out: &mut S) -> bool {
+        (**self).constraint_gradient(t, y, out)
+    }
+    fn constraint_time_derivative(&self, t: f64, y: &[f64], out: &mut [f64]) -> bool {
+        (**self).constraint_time_derivative(t, y, out)
+    }
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        v: &[f64],
+        out: &mut S,
+    ) -> bool {
+        (**self).constraint_curvature(t, y, v, out)
     }
     fn is_differential(&self, i: usize) -> bool {
         (**self).is_differential(i)

@@ -85,6 +85,131 @@ impl MatrixSink for faer::Mat<f64> {
     }
 }
 
+/// The entries of a few rows and columns of a matrix, captured into a compact dense block;
+/// every other entry written is dropped.
+///
+/// For a caller that needs a handful of entries of a Jacobian whose writer produces all of
+/// them (the constraint rows of an iteration matrix, say): the cost of clearing and reading
+/// grows with the number of selected entries, not with the matrix's size. Writes to unselected
+/// entries cost one table look-up.
+#[derive(Debug, Clone)]
+pub struct Selection {
+    rows: usize,
+    cols: usize,
+    /// Per row of the full matrix, its row in `values` (`NONE` when not selected).
+    row_slot: Vec<usize>,
+    /// Per column of the full matrix, its column in `values` (`NONE` when not selected).
+    col_slot: Vec<usize>,
+    /// Number of selected columns (the stride of `values`).
+    width: usize,
+    /// The selected entries, row by row.
+    values: Vec<f64>,
+}
+
+const NONE: usize = usize::MAX;
+
+impl Selection {
+    /// A selection of the entries `(r, k)` of a `rows x cols` matrix with `r` in
+    /// `selected_rows` and `k` in `selected_cols` (every column when `None`), all zero.
+    /// Indices out of range or repeated are ignored (their entries are never captured twice).
+    pub fn new(
+        rows: usize,
+        cols: usize,
+        selected_rows: &[usize],
+        selected_cols: Option<&[usize]>,
+    ) -> Self {
+        let slots = |n: usize, selected: &mut dyn Iterator<Item = usize>| {
+            let mut slot = vec![NONE; n];
+            let mut next = 0;
+            for i in selected {
+                if i < n && slot[i] == NONE {
+                    slot[i] = next;
+                    next += 1;
+                }
+            }
+            (slot, next)
+        };
+        let (row_slot, height) = slots(rows, &mut selected_rows.iter().copied());
+        let (col_slot, width) = match selected_cols {
+            Some(c) => slots(cols, &mut c.iter().copied()),
+            None => slots(cols, &mut (0..cols)),
+        };
+        Self {
+            rows,
+            cols,
+            row_slot,
+            col_slot,
+            width,
+            values: vec![0.0; height * width],
+        }
+    }
+
+    /// The captured entry `(row, col)` (indices of the full matrix); zero for an entry outside
+    /// the selection.
+    #[inline]
+    pub fn get(&self, row: usize, col: usize) -> f64 {
+        self.slot(row, col).map_or(0.0, |s| self.values[s])
+    }
+
+    #[inline]
+    fn slot(&self, row: usize, col: usize) -> Option<usize> {
+        let r = *self.row_slot.get(row)?;
+        let c = *self.col_slot.get(col)?;
+        (r != NONE && c != NONE).then(|| r * self.width + c)
+    }
+}
+
+impl MatrixSink for Selection {
+    fn rows(&self) -> usize {
+        self.rows
+    }
+    fn cols(&self) -> usize {
+        self.cols
+    }
+    #[inline]
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        if let Some(s) = self.slot(row, col) {
+            self.values[s] = value;
+        }
+    }
+    #[inline]
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        if let Some(s) = self.slot(row, col) {
+            self.values[s] += value;
+        }
+    }
+    fn fill_zero(&mut self) {
+        self.values.fill(0.0);
+    }
+}
+
+/// Two sinks written at once: every entry goes to both (a destination and a [`Selection`]
+/// that keeps a few of its entries for the caller, for example).
+pub struct Tee<'a, A: ?Sized, B: ?Sized>(pub &'a mut A, pub &'a mut B);
+
+impl<A: MatrixSink + ?Sized, B: MatrixSink + ?Sized> MatrixSink for Tee<'_, A, B> {
+    fn rows(&self) -> usize {
+        self.0.rows()
+    }
+    fn cols(&self) -> usize {
+        self.0.cols()
+    }
+    #[inline]
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        self.0.set(row, col, value);
+        self.1.set(row, col, value);
+    }
+    #[inline]
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        self.0.add(row, col, value);
+        self.1.add(row, col, value);
+    }
+    fn fill_zero(&mut self) {
+        self.0.fill_zero();
+        self.1.fill_zero();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -100,5 +225,37 @@ mod tests {
         }
         assert_eq!(a[(0, 1)], b[(0, 1)]);
         assert_eq!(a[(1, 0)], b[(1, 0)]);
+    }
+
+    #[test]
+    fn selection_keeps_only_its_entries() {
+        let mut s = Selection::new(4, 5, &[3, 1, 9], Some(&[0, 4, 4]));
+        assert_eq!((s.rows(), s.cols()), (4, 5));
+        for r in 0..4 {
+            for k in 0..5 {
+                s.set(r, k, (10 * r + k) as f64);
+            }
+        }
+        s.add(1, 4, 0.5);
+        s.add(2, 4, 0.5);
+        for r in 0..4 {
+            for k in 0..5 {
+                let kept = [1, 3].contains(&r) && [0, 4].contains(&k);
+                let want = if kept { (10 * r + k) as f64 } else { 0.0 };
+                let want = if (r, k) == (1, 4) { want + 0.5 } else { want };
+                assert_eq!(s.get(r, k), want, "({r}, {k})");
+            }
+        }
+        assert_eq!(s.get(7, 0), 0.0);
+        s.fill_zero();
+        assert_eq!(s.get(3, 4), 0.0);
+        // Every column when none are named.
+        let mut all = Selection::new(3, 3, &[2], None);
+        let mut m = SMatrix::<f64, 3, 3>::zeros();
+        let mut tee = Tee(&mut m, &mut all);
+        tee.set(2, 1, 4.0);
+        tee.add(0, 1, 1.0);
+        assert_eq!((all.get(2, 1), all.get(0, 1)), (4.0, 0.0));
+        assert_eq!((m[(2, 1)], m[(0, 1)]), (4.0, 1.0));
     }
 }

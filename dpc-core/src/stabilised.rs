@@ -18,15 +18,28 @@
 //! velocities' and multipliers' error weights must be relaxed by the step size (`h` and `h^2`,
 //! as RADAU5 does), which leaves them far less accurate at the same tolerance.
 //!
-//! [`Stabilised`] wraps any [`ImplicitDae`]; it reads `G` and `c_j` from the wrapped DAE's
-//! iteration matrix, so the user writes the model once: `dg/dt` (for a constraint that moves
-//! with time) is a central difference of the residual in `t` with a step of `cbrt(eps)`
-//! wherever `t` lies (truncation error `6e-12 |d^3 g/dt^3|`, exactly zero for a constraint
-//! without `t`), and the second derivatives of the constraints that the hidden constraints'
-//! row of Newton's iteration matrix needs (`(dG/dq) phi`) are one central difference of the
-//! gradient along the motion. The term `(dG/dq)^T mu` is left out of
-//! the iteration matrix (it vanishes with `mu`); simplified Newton converges with it, at a rate
-//! the integrator monitors.
+//! [`Stabilised`] wraps any [`ImplicitDae`], so the user writes the model once. It needs, at
+//! every residual, `G` (the constraint rows' gradients at the positions), `dg/dt` and the
+//! kinematic rows' coefficients `c_j = dF_i/dq_j'`, and for Newton's iteration matrix also the
+//! constraints' curvature `d/dq (G(t, q) phi + dg/dt)` at fixed `phi` (the term `(dG/dq)^T mu`
+//! is left out of the iteration matrix: it vanishes with `mu`, and simplified Newton converges
+//! without it at a rate the integrator monitors). Each comes from the wrapped DAE's exact
+//! derivatives when it supplies them ([`ImplicitDae::constraint_gradient`],
+//! [`ImplicitDae::constraint_time_derivative`], [`ImplicitDae::constraint_curvature`]; each
+//! is optional), else from differences:
+//!
+//! * `G` from the wrapped DAE's iteration matrix at `c = 0`, and `c_j` from it at `c = 1`
+//!   (with exact gradients, `c_j` from one residual with `q'` moved: the kinematic rows are
+//!   linear in `q_j'`); only the entries needed are kept (a [`Selection`]);
+//! * `dg/dt` (for a constraint that moves with time) as a central difference of the residual
+//!   in `t` with a step of `cbrt(eps)` wherever `t` lies (truncation error
+//!   `6e-12 |d^3 g/dt^3|`, exactly zero for a constraint without `t`);
+//! * the curvature as one central difference of `G` along the motion `(1, phi)`.
+//!
+//! Per residual the stabilised form costs one residual of the wrapped DAE and its exact
+//! derivatives, or three residuals and two iteration matrices without them; per iteration
+//! matrix, the wrapped DAE's iteration matrix, two residuals and the exact derivatives, or
+//! four iteration matrices and a residual without them.
 //!
 //! ```
 //! use dpc_core::stabilised::Stabilised;
@@ -58,6 +71,23 @@
 //!         out.set(4, 1, 2.0 * y[1]);
 //!     }
 //!     fn is_differential(&self, i: usize) -> bool { i < 4 }
+//!     // Optional: the constraint's derivatives by hand (without them, differences).
+//!     fn constraint_gradient<S: MatrixSink + ?Sized>(&self, _t: f64, y: &[f64], out: &mut S) -> bool {
+//!         out.set(4, 0, 2.0 * y[0]);
+//!         out.set(4, 1, 2.0 * y[1]);
+//!         true
+//!     }
+//!     fn constraint_time_derivative(&self, _t: f64, _y: &[f64], _out: &mut [f64]) -> bool {
+//!         true // the constraint does not depend on t
+//!     }
+//!     fn constraint_curvature<S: MatrixSink + ?Sized>(
+//!         &self, _t: f64, _y: &[f64], v: &[f64], out: &mut S,
+//!     ) -> bool {
+//!         // d/d(x, y) of 2 x v_x + 2 y v_y
+//!         out.set(4, 0, 2.0 * v[0]);
+//!         out.set(4, 1, 2.0 * v[1]);
+//!         true
+//!     }
 //! }
 //!
 //! // Row 4 is the position constraint; rows 0 and 1 give x' and y'.
@@ -72,8 +102,7 @@
 
 use std::cell::RefCell;
 
-use nalgebra::DMatrix;
-
+use crate::sink::{Selection, Tee};
 use crate::{ImplicitDae, MatrixSink};
 
 /// A malformed description of the constraints of [`Stabilised::new`].
@@ -99,22 +128,36 @@ pub enum StabilisedError {
     },
 }
 
-/// Work of one evaluation: the wrapped DAE's residual and its Jacobians.
+/// Work of one evaluation: the wrapped DAE's residual and the few entries of its Jacobians
+/// the stabilisation reads (nothing here grows with the square of the dimension).
 struct Scratch {
     res: Vec<f64>,
-    /// The residual at `t + dt` and `t - dt`, for the constraints' time derivative.
+    /// The residual at `t + dt` and `t - dt` (the constraints' time derivative by
+    /// differences), or at `y'` moved (the kinematic coefficients `c_j`).
     res_plus: Vec<f64>,
     res_minus: Vec<f64>,
-    /// `dF/dy`.
-    f_y: DMatrix<f64>,
-    /// `dF/dy'`.
-    f_yp: DMatrix<f64>,
-    /// `dF/dy + c dF/dy'`.
-    f_c: DMatrix<f64>,
-    /// `y` moved along the velocities, and `dF/dy` there (forwards and backwards).
+    /// `y'` moved along the position unknowns (the kinematic coefficients by a difference).
+    yp_moved: Vec<f64>,
+    /// `dF_g/dt` of the constraint rows, when the DAE supplies it.
+    dgdt: Vec<f64>,
+    /// `G` (constraint rows, position columns) and, when `G` comes from the iteration matrix
+    /// at `c = 0`, `dF_i/dq_j` of the kinematic rows.
+    grad: Selection,
+    /// The same entries of the iteration matrix at `c = 1` (for `c_j` when `G` is not
+    /// supplied).
+    grad_c1: Selection,
+    /// `c_j = dF_i/dq_j'` per kinematic pair.
+    coef: Vec<f64>,
+    /// The velocities `phi_j` the kinematic rows give, per unknown (zero off the positions).
+    phi: Vec<f64>,
+    /// The kinematic rows of `dF/dy + c dF/dy'`, every column.
+    kin_c: Selection,
+    /// The constraints' curvature (constraint rows, position columns), when supplied.
+    curv: Selection,
+    /// `y` moved along the velocities, and `G` there (forwards and backwards).
     y_moved: Vec<f64>,
-    f_y_plus: DMatrix<f64>,
-    f_y_minus: DMatrix<f64>,
+    grad_plus: Selection,
+    grad_minus: Selection,
 }
 
 /// The GGL-stabilised index-2 form of an index-3 DAE (see the [module documentation](self)).
@@ -133,7 +176,7 @@ pub struct Stabilised<D> {
 impl<D: ImplicitDae> Stabilised<D> {
     /// Stabilise `dae`'s position constraints `rows` (equations that depend on positions
     /// only), with, per position unknown `q_j` that they involve, its kinematic row:
-    /// `kinematic = [(j, row), ...]`, the row whose only derivative is `q_j'`.
+    /// `kinematic = [(j, row), ...]`, the row whose only derivative is `q_j'`, linear in it.
     ///
     /// # Errors
     /// [`StabilisedError`] for an index out of range or a repeated row or unknown. Without
@@ -168,16 +211,25 @@ impl<D: ImplicitDae> Stabilised<D> {
                 return Err(StabilisedError::Repeated { what, index });
             }
         }
+        let positions: Vec<usize> = kinematic.iter().map(|&(j, _)| j).collect();
+        let kin_rows: Vec<usize> = kinematic.iter().map(|&(_, i)| i).collect();
+        let both: Vec<usize> = rows.iter().chain(&kin_rows).copied().collect();
+        let constraint_block = || Selection::new(n, n, &rows, Some(&positions));
         let scratch = RefCell::new(Scratch {
             res: vec![0.0; n],
             res_plus: vec![0.0; n],
             res_minus: vec![0.0; n],
-            f_y: DMatrix::zeros(n, n),
-            f_yp: DMatrix::zeros(n, n),
-            f_c: DMatrix::zeros(n, n),
+            yp_moved: vec![0.0; n],
+            dgdt: vec![0.0; n],
+            grad: Selection::new(n, n, &both, Some(&positions)),
+            grad_c1: Selection::new(n, n, &both, Some(&positions)),
+            coef: vec![0.0; kinematic.len()],
+            phi: vec![0.0; n],
+            kin_c: Selection::new(n, n, &kin_rows, None),
+            curv: constraint_block(),
             y_moved: vec![0.0; n],
-            f_y_plus: DMatrix::zeros(n, n),
-            f_y_minus: DMatrix::zeros(n, n),
+            grad_plus: constraint_block(),
+            grad_minus: constraint_block(),
         });
         Ok(Self {
             dae,
@@ -208,35 +260,86 @@ impl<D: ImplicitDae> Stabilised<D> {
         (ys, yps)
     }
 
-    /// `dF/dy` and `dF/dy'` of the wrapped DAE at `(t, y, y')`, from its iteration matrix at
-    /// `c = 0` and `c = 1`.
-    fn jacobians(&self, t: f64, y: &[f64], yp: &[f64], sc: &mut Scratch) {
-        sc.f_y.fill(0.0);
-        self.dae.iteration_matrix(t, y, yp, 0.0, &mut sc.f_y);
-        sc.f_yp.fill(0.0);
-        self.dae.iteration_matrix(t, y, yp, 1.0, &mut sc.f_yp);
-        sc.f_yp -= &sc.f_y;
+    /// `G` into `sc.grad`: the DAE's exact gradients when it supplies them (returns `true`),
+    /// else its iteration matrix at `c = 0` (which also leaves `dF_i/dq_j` of the kinematic
+    /// rows there).
+    fn gradient(&self, t: f64, y: &[f64], yp: &[f64], sc: &mut Scratch) -> bool {
+        sc.grad.fill_zero();
+        if self.dae.constraint_gradient(t, y, &mut sc.grad) {
+            return true;
+        }
+        sc.grad.fill_zero();
+        self.dae.iteration_matrix(t, y, yp, 0.0, &mut sc.grad);
+        false
+    }
+
+    /// `c_j = dF_i/dq_j'` of the kinematic rows into `sc.coef`, from the iteration matrix at
+    /// `c = 1` less the one at `c = 0` already in `sc.grad` (`exact_gradient` false), or, when
+    /// `G` was supplied and the iteration matrix not evaluated, from one residual at `y'`
+    /// moved along every position (each kinematic row has only its own `q_j'`, linearly;
+    /// `sc.res` holds the residual at `(t, y, y')`).
+    fn coefficients(&self, t: f64, y: &[f64], yp: &[f64], exact_gradient: bool, sc: &mut Scratch) {
+        if exact_gradient {
+            sc.yp_moved.copy_from_slice(yp);
+            for &(j, _) in &self.kinematic {
+                sc.yp_moved[j] += 1.0 + yp[j].abs();
+            }
+            self.dae.residual(t, y, &sc.yp_moved, &mut sc.res_plus);
+            for (c, &(j, i)) in sc.coef.iter_mut().zip(&self.kinematic) {
+                *c = (sc.res_plus[i] - sc.res[i]) / (sc.yp_moved[j] - yp[j]);
+            }
+        } else {
+            sc.grad_c1.fill_zero();
+            self.dae.iteration_matrix(t, y, yp, 1.0, &mut sc.grad_c1);
+            for (c, &(j, i)) in sc.coef.iter_mut().zip(&self.kinematic) {
+                *c = sc.grad_c1.get(i, j) - sc.grad.get(i, j);
+            }
+        }
+    }
+
+    /// The velocities `phi_j = q_j' - F_i / c_j` the kinematic rows give (`F_i = c_j (q_j' -
+    /// phi_j)`) into `sc.phi`, with `sc.res` and `sc.coef` evaluated: (largest `|q_j|`, largest
+    /// `|phi_j|`).
+    fn velocities(&self, y: &[f64], yp: &[f64], sc: &mut Scratch) -> (f64, f64) {
+        let (mut q_max, mut phi_max) = (0.0f64, 0.0f64);
+        for (&(j, i), &c) in self.kinematic.iter().zip(&sc.coef) {
+            let phi = yp[j] - sc.res[i] / c;
+            sc.phi[j] = phi;
+            q_max = q_max.max(y[j].abs());
+            phi_max = phi_max.max(phi.abs());
+        }
+        (q_max, phi_max)
     }
 
     /// The hidden constraints' dependence through `G` and `dg/dt`: `d/dq_k (G(t, q) phi + dg/dt)`
-    /// at fixed `phi` is `sum_j d^2 g/dq_j dq_k phi_j + d^2 g/dt dq_k`, the derivative of the
-    /// gradient `G_k` along `(1, phi)` (the Hessian is symmetric), taken as one central
-    /// difference of `dF/dy` along the motion. Without it, simplified Newton converges slowly
-    /// (for the pendulum the term is `2 (x', y')`, as large as the rest of the row).
+    /// at fixed `phi` is `sum_j d^2 g/dq_j dq_k phi_j + d^2 g/dt dq_k`, added into the rows
+    /// `n + a` of `out`. The DAE's exact curvature when supplied; else the derivative of the
+    /// gradient `G_k` along `(1, phi)` (the Hessian is symmetric), one central difference of
+    /// `G` (exact gradients, or the iteration matrix at `c = 0`) along the motion. Without the
+    /// term simplified Newton converges slowly (for the pendulum it is `2 (x', y')`, as large
+    /// as the rest of the row). `sc.res`, `sc.coef` must be evaluated at `(t, y, y')`.
     fn constraint_curvature<S: MatrixSink + ?Sized>(
         &self,
         t: f64,
         y: &[f64],
         yp: &[f64],
+        exact_gradient: bool,
         sc: &mut Scratch,
         out: &mut S,
     ) {
         let n = self.dae.dimension();
-        self.dae.residual(t, &y[..n], &yp[..n], &mut sc.res);
-        let (mut q_max, mut phi_max) = (0.0f64, 0.0f64);
-        for &(j, i) in &self.kinematic {
-            q_max = q_max.max(y[j].abs());
-            phi_max = phi_max.max((yp[j] - sc.res[i] / sc.f_yp[(i, j)]).abs());
+        let (q_max, phi_max) = self.velocities(y, yp, sc);
+        sc.curv.fill_zero();
+        if self.dae.constraint_curvature(t, y, &sc.phi, &mut sc.curv) {
+            for (a, &g) in self.rows.iter().enumerate() {
+                for &(k, _) in &self.kinematic {
+                    let d = sc.curv.get(g, k);
+                    if d != 0.0 && d.is_finite() {
+                        out.add(n + a, k, d);
+                    }
+                }
+            }
+            return;
         }
         // A step of cbrt(eps) relative to the positions and to time.
         let mut eps = f64::EPSILON.cbrt() * t.abs().max(1.0);
@@ -244,23 +347,25 @@ impl<D: ImplicitDae> Stabilised<D> {
             eps = eps.min(f64::EPSILON.cbrt() * (1.0 + q_max) / phi_max);
         }
         for (sign, plus) in [(1.0, true), (-1.0, false)] {
-            sc.y_moved.copy_from_slice(&y[..n]);
-            for &(j, i) in &self.kinematic {
-                let phi = yp[j] - sc.res[i] / sc.f_yp[(i, j)];
-                sc.y_moved[j] += sign * eps * phi;
+            sc.y_moved.copy_from_slice(y);
+            for &(j, _) in &self.kinematic {
+                sc.y_moved[j] += sign * eps * sc.phi[j];
             }
             let m = if plus {
-                &mut sc.f_y_plus
+                &mut sc.grad_plus
             } else {
-                &mut sc.f_y_minus
+                &mut sc.grad_minus
             };
-            m.fill(0.0);
-            self.dae
-                .iteration_matrix(t + sign * eps, &sc.y_moved, &yp[..n], 0.0, m);
+            m.fill_zero();
+            let t_moved = t + sign * eps;
+            if !(exact_gradient && self.dae.constraint_gradient(t_moved, &sc.y_moved, m)) {
+                m.fill_zero();
+                self.dae.iteration_matrix(t_moved, &sc.y_moved, yp, 0.0, m);
+            }
         }
         for (a, &g) in self.rows.iter().enumerate() {
             for &(k, _) in &self.kinematic {
-                let d = (sc.f_y_plus[(g, k)] - sc.f_y_minus[(g, k)]) / (2.0 * eps);
+                let d = (sc.grad_plus.get(g, k) - sc.grad_minus.get(g, k)) / (2.0 * eps);
                 if d != 0.0 && d.is_finite() {
                     out.add(n + a, k, d);
                 }
@@ -269,17 +374,20 @@ impl<D: ImplicitDae> Stabilised<D> {
     }
 
     /// The stabilisation's terms: per constraint `a` (row `g`) and position unknown `j` (with
-    /// kinematic row `i`) where `G_aj = dF_g/dy_j` is not zero, `(a, i, j, G_aj, c_j)` with
-    /// `c_j = dF_i/dy_j'`.
+    /// kinematic row `i`, pair `p`) where `G_aj = dF_g/dy_j` is not zero, `(a, i, j, G_aj,
+    /// c_j)` with `c_j = dF_i/dy_j'`.
     fn terms<'s>(
         &'s self,
         sc: &'s Scratch,
     ) -> impl Iterator<Item = (usize, usize, usize, f64, f64)> + 's {
         self.rows.iter().enumerate().flat_map(move |(a, &g)| {
-            self.kinematic.iter().filter_map(move |&(j, i)| {
-                let gj = sc.f_y[(g, j)];
-                (gj != 0.0).then(|| (a, i, j, gj, sc.f_yp[(i, j)]))
-            })
+            self.kinematic
+                .iter()
+                .zip(&sc.coef)
+                .filter_map(move |(&(j, i), &c)| {
+                    let gj = sc.grad.get(g, j);
+                    (gj != 0.0).then_some((a, i, j, gj, c))
+                })
         })
     }
 }
@@ -294,30 +402,36 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
             return self.dae.residual(t, y, yp, out);
         }
         let n = self.dae.dimension();
+        let (y, yp, mu) = (&y[..n], &yp[..n], &y[n..]);
         let sc = &mut *self.scratch.borrow_mut();
-        self.dae.residual(t, &y[..n], &yp[..n], &mut sc.res);
-        self.jacobians(t, &y[..n], &yp[..n], sc);
+        self.dae.residual(t, y, yp, &mut sc.res);
+        let exact = self.gradient(t, y, yp, sc);
+        self.coefficients(t, y, yp, exact, sc);
         out[..n].copy_from_slice(&sc.res);
         out[n..].fill(0.0);
-        // A constraint that depends on time (a prescribed motion of the support, for
-        // example) has the hidden constraint G phi + dg/dt = 0; dg/dt by a central difference
-        // (zero exactly for a constraint without t). Its truncation error, dt^2 |d3g/dt3| / 6,
-        // does not depend on where the time origin lies, so neither does the step: it only
-        // stays far above the ulp of t, and the difference is divided by the distance of the
-        // two times as rounded.
-        let dt = f64::EPSILON.cbrt().max(f64::EPSILON.sqrt() * t.abs());
-        let (t_plus, t_minus) = (t + dt, t - dt);
-        self.dae
-            .residual(t_plus, &y[..n], &yp[..n], &mut sc.res_plus);
-        self.dae
-            .residual(t_minus, &y[..n], &yp[..n], &mut sc.res_minus);
-        for (a, &g) in self.rows.iter().enumerate() {
-            let d = sc.res_plus[g] - sc.res_minus[g];
-            if d != 0.0 {
-                out[n + a] = d / (t_plus - t_minus);
+        sc.dgdt.fill(0.0);
+        if self.dae.constraint_time_derivative(t, y, &mut sc.dgdt) {
+            for (a, &g) in self.rows.iter().enumerate() {
+                out[n + a] = sc.dgdt[g];
+            }
+        } else {
+            // A constraint that depends on time (a prescribed motion of the support, for
+            // example) has the hidden constraint G phi + dg/dt = 0; dg/dt by a central
+            // difference (zero exactly for a constraint without t). Its truncation error,
+            // dt^2 |d3g/dt3| / 6, does not depend on where the time origin lies, so neither
+            // does the step: it only stays far above the ulp of t, and the difference is
+            // divided by the distance of the two times as rounded.
+            let dt = f64::EPSILON.cbrt().max(f64::EPSILON.sqrt() * t.abs());
+            let (t_plus, t_minus) = (t + dt, t - dt);
+            self.dae.residual(t_plus, y, yp, &mut sc.res_plus);
+            self.dae.residual(t_minus, y, yp, &mut sc.res_minus);
+            for (a, &g) in self.rows.iter().enumerate() {
+                let d = sc.res_plus[g] - sc.res_minus[g];
+                if d != 0.0 {
+                    out[n + a] = d / (t_plus - t_minus);
+                }
             }
         }
-        let mu = &y[n..];
         for (a, i, j, gj, cj) in self.terms(sc) {
             // q_j' - F_i / c_j is the velocity phi_j the kinematic row gives (F_i = c_j (q_j' - phi_j)).
             out[n + a] += gj * (yp[j] - sc.res[i] / cj);
@@ -337,33 +451,34 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
             return self.dae.iteration_matrix(t, y, yp, c, out);
         }
         let n = self.dae.dimension();
+        let (y, yp) = (&y[..n], &yp[..n]);
         let sc = &mut *self.scratch.borrow_mut();
-        self.jacobians(t, &y[..n], &yp[..n], sc);
-        let Scratch { f_y, f_yp, f_c, .. } = &mut *sc;
-        for (d, (a, b)) in f_c.iter_mut().zip(f_y.iter().zip(f_yp.iter())) {
-            *d = a + c * b;
-        }
-        for k in 0..n {
-            for r in 0..n {
-                let v = sc.f_c[(r, k)];
-                if v != 0.0 {
-                    out.set(r, k, v);
-                }
+        self.dae.residual(t, y, yp, &mut sc.res);
+        let exact = self.gradient(t, y, yp, sc);
+        // The wrapped DAE's rows straight into `out`, keeping the kinematic rows.
+        sc.kin_c.fill_zero();
+        self.dae
+            .iteration_matrix(t, y, yp, c, &mut Tee(&mut *out, &mut sc.kin_c));
+        if exact || c == 0.0 {
+            self.coefficients(t, y, yp, exact, sc);
+        } else {
+            // c_j from the matrices at c and at 0.
+            for (cj, &(j, i)) in sc.coef.iter_mut().zip(&self.kinematic) {
+                *cj = (sc.kin_c.get(i, j) - sc.grad.get(i, j)) / c;
             }
         }
-        let Scratch { f_c, .. } = &*sc;
         for (a, i, j, gj, cj) in self.terms(sc) {
             out.add(i, n + a, cj * gj);
             // d/dy + c d/dy' of G_aj (q_j' - F_i / c_j) at fixed G and c_j.
             out.add(n + a, j, gj * c);
             for k in 0..n {
-                let v = f_c[(i, k)];
+                let v = sc.kin_c.get(i, k);
                 if v != 0.0 {
                     out.add(n + a, k, -gj * v / cj);
                 }
             }
         }
-        self.constraint_curvature(t, y, yp, sc, out);
+        self.constraint_curvature(t, y, yp, exact, sc, out);
     }
 
     fn is_differential(&self, i: usize) -> bool {
@@ -464,45 +579,96 @@ mod tests {
         }
     }
 
+    /// [`Moving`] with its constraint's derivatives supplied: `G = (1, 0, 0)`, `dg/dt =
+    /// -cos t`, no curvature (`G` is constant and `dg/dt` does not depend on `y`).
+    struct MovingExact;
+    impl ImplicitDae for MovingExact {
+        fn dimension(&self) -> usize {
+            3
+        }
+        fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            Moving.residual(t, y, yp, out);
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            t: f64,
+            y: &[f64],
+            yp: &[f64],
+            c: f64,
+            out: &mut S,
+        ) {
+            Moving.iteration_matrix(t, y, yp, c, out);
+        }
+        fn constraint_gradient<S: MatrixSink + ?Sized>(
+            &self,
+            _: f64,
+            _: &[f64],
+            out: &mut S,
+        ) -> bool {
+            out.set(2, 0, 1.0);
+            true
+        }
+        fn constraint_time_derivative(&self, t: f64, _: &[f64], out: &mut [f64]) -> bool {
+            out[2] = -t.cos();
+            true
+        }
+        fn constraint_curvature<S: MatrixSink + ?Sized>(
+            &self,
+            _: f64,
+            _: &[f64],
+            _: &[f64],
+            _: &mut S,
+        ) -> bool {
+            true
+        }
+    }
+
     #[test]
     fn moving_constraint_and_scaled_kinematic_row() {
+        moving_constraint_and_scaled_kinematic_row_of(Moving, 1e-9);
+        // Exact derivatives: dg/dt without a difference's truncation error.
+        moving_constraint_and_scaled_kinematic_row_of(MovingExact, 1e-15);
+    }
+
+    fn moving_constraint_and_scaled_kinematic_row_of<D: ImplicitDae>(dae: D, tol: f64) {
         // On the exact solution y0 = sin t, y1 = cos t, y2 = 1 (mu = 0) every residual of the
         // stabilised form vanishes: the hidden constraint is y1 - cos t = 0 (G phi + dg/dt
         // with the kinematic row's coefficient 2 divided out).
-        let s = Stabilised::new(Moving, vec![2], vec![(0, 0)]).unwrap();
+        let s = Stabilised::new(dae, vec![2], vec![(0, 0)]).unwrap();
         let t: f64 = 0.7;
         let y = [t.sin(), t.cos(), 1.0, 0.0];
         let yp = [t.cos(), -t.sin(), 0.0, 0.0];
         let mut r = [1.0; 4];
         s.residual(t, &y, &yp, &mut r);
-        assert!(r.iter().all(|v| v.abs() < 1e-9), "{r:?}");
+        assert!(r.iter().all(|v| v.abs() < tol), "{r:?}");
         // Off the solution, the hidden constraint measures the velocity error.
         let y_off = [t.sin(), t.cos() + 1e-3, 1.0, 0.0];
         s.residual(t, &y_off, &yp, &mut r);
         assert!((r[3] - 1e-3).abs() < 1e-9, "{r:?}");
         // The iteration matrix against central differences of the residual, at mu = 0 (where
         // the left-out term (dG/dq)^T mu vanishes): d/dy + c d/dy'.
-        let c = 3.0;
-        let mut m = DMatrix::zeros(4, 4);
-        s.iteration_matrix(t, &y_off, &yp, c, &mut m);
-        let h = 1e-6;
-        for k in 0..4 {
-            let (mut yk, mut ypk) = (y_off, yp);
-            yk[k] += h;
-            ypk[k] += c * h;
-            let mut plus = [0.0; 4];
-            s.residual(t, &yk, &ypk, &mut plus);
-            yk[k] -= 2.0 * h;
-            ypk[k] -= 2.0 * c * h;
-            let mut minus = [0.0; 4];
-            s.residual(t, &yk, &ypk, &mut minus);
-            for i in 0..4 {
-                let fd = (plus[i] - minus[i]) / (2.0 * h);
-                assert!(
-                    (m[(i, k)] - fd).abs() < 1e-6,
-                    "({i}, {k}): {} vs {fd}",
-                    m[(i, k)]
-                );
+        for c in [3.0, 0.0] {
+            let mut m = nalgebra::DMatrix::zeros(4, 4);
+            s.iteration_matrix(t, &y_off, &yp, c, &mut m);
+            let h = 1e-6;
+            for k in 0..4 {
+                let (mut yk, mut ypk) = (y_off, yp);
+                yk[k] += h;
+                ypk[k] += c * h;
+                let mut plus = [0.0; 4];
+                s.residual(t, &yk, &ypk, &mut plus);
+                yk[k] -= 2.0 * h;
+                ypk[k] -= 2.0 * c * h;
+                let mut minus = [0.0; 4];
+                s.residual(t, &yk, &ypk, &mut minus);
+                for i in 0..4 {
+                    let fd = (plus[i] - minus[i]) / (2.0 * h);
+                    assert!(
+                        (m[(i, k)] - fd).abs() < 1e-6,
+                        "c {c}: ({i}, {k}): {} vs {fd}",
+                        m[(i, k)]
+                    );
+                }
             }
         }
     }

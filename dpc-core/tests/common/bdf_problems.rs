@@ -121,6 +121,27 @@ impl ImplicitDae for Pendulum {
         m.set(4, 0, 2.0 * x);
         m.set(4, 1, 2.0 * y);
     }
+    /// The constraint `x^2 + y^2 - L^2`: gradient `(2x, 2y)`, no time dependence, curvature
+    /// `2 (u, v)` along the velocities `(u, v)`.
+    fn constraint_gradient<S: MatrixSink + ?Sized>(&self, _: f64, s: &[f64], m: &mut S) -> bool {
+        m.set(4, 0, 2.0 * s[0]);
+        m.set(4, 1, 2.0 * s[1]);
+        true
+    }
+    fn constraint_time_derivative(&self, _: f64, _: &[f64], _: &mut [f64]) -> bool {
+        true
+    }
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        _: &[f64],
+        v: &[f64],
+        m: &mut S,
+    ) -> bool {
+        m.set(4, 0, 2.0 * v[0]);
+        m.set(4, 1, 2.0 * v[1]);
+        true
+    }
     fn is_differential(&self, i: usize) -> bool {
         i < 4
     }

@@ -40,6 +40,21 @@ pub fn mescd(y: &[f64], reference: &[f64], components: &[usize], rtol: f64, atol
         .log10()
 }
 
+/// The non-zero entries of `block` into `out`, its row `r` as row `first + r`.
+fn write_rows<S: MatrixSink + ?Sized, const R: usize, const C: usize>(
+    first: usize,
+    block: &[[f64; C]; R],
+    out: &mut S,
+) {
+    for (r, row) in block.iter().enumerate() {
+        for (k, &v) in row.iter().enumerate() {
+            if v != 0.0 {
+                out.set(first + r, k, v);
+            }
+        }
+    }
+}
+
 /// Andrews' squeezing mechanism, index 3 (Test Set `andrews.f`; Hairer & Wanner, *Solving ODEs
 /// II*, Section VII.7): unknowns `y = (q, v, w, lambda)` with `q` the 7 angles
 /// `(beta, Theta, gamma, Phi, delta, Omega, epsilon)`, `v = q'`, `w = q''` and 6 multipliers;
@@ -257,6 +272,41 @@ impl Andrews {
         m
     }
 
+    /// The constraints' curvature along `v`: `d/dq_k sum_j G_rj(q) v_j` (the constraints do not
+    /// depend on `t`), differentiated by hand from [`Self::constraint_jacobian`].
+    fn constraint_curvature(q: &[f64], v: &[f64]) -> [[f64; 7]; 6] {
+        use andrews_constants::*;
+        let (b, t, g, p, d, o, ep) = (q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
+        let (sb, cb, sbt, cbt) = (b.sin(), b.cos(), (b + t).sin(), (b + t).cos());
+        let v01 = v[0] + v[1];
+        // d/d(beta, Theta) of the crank's terms G_r0 v0 + G_r1 v1, shared by the x rows (even)
+        // and the y rows (odd).
+        let x_beta = -RR * cb * v[0] + D * cbt * v01;
+        let x_theta = D * cbt * v01;
+        let y_beta = -RR * sb * v[0] + D * sbt * v01;
+        let y_theta = D * sbt * v01;
+        let mut m = [[0.0; 7]; 6];
+        for r in [0, 2, 4] {
+            m[r][0] = x_beta;
+            m[r][1] = x_theta;
+            m[r + 1][0] = y_beta;
+            m[r + 1][1] = y_theta;
+        }
+        m[0][2] = SS * g.sin() * v[2];
+        m[1][2] = -SS * g.cos() * v[2];
+        let (spd, cpd, v34) = ((p + d).sin(), (p + d).cos(), v[3] + v[4]);
+        m[2][3] = E * spd * v34;
+        m[2][4] = E * spd * v34 + ZT * d.cos() * v[4];
+        m[3][3] = -E * cpd * v34;
+        m[3][4] = -E * cpd * v34 + ZT * d.sin() * v[4];
+        let (soe, coe, v56) = ((o + ep).sin(), (o + ep).cos(), v[5] + v[6]);
+        m[4][5] = ZF * coe * v56;
+        m[4][6] = ZF * coe * v56 + U * ep.sin() * v[6];
+        m[5][5] = ZF * soe * v56;
+        m[5][6] = ZF * soe * v56 - U * ep.cos() * v[6];
+        m
+    }
+
     /// `M(q) w - f(q, v) + G(q)^T lambda`.
     fn dynamics(y: &[f64]) -> [f64; 7] {
         let (q, v, w, la) = (&y[0..7], &y[7..14], &y[14..21], &y[21..27]);
@@ -331,6 +381,25 @@ impl ImplicitDae for Andrews {
                 }
             }
         }
+    }
+    /// The constraint rows `y22..y27` of the iteration matrix, written by hand.
+    fn constraint_gradient<S: MatrixSink + ?Sized>(&self, _: f64, y: &[f64], out: &mut S) -> bool {
+        write_rows(21, &Self::constraint_jacobian(&y[0..7]), out);
+        true
+    }
+    /// Andrews' constraints do not depend on `t`.
+    fn constraint_time_derivative(&self, _: f64, _: &[f64], _: &mut [f64]) -> bool {
+        true
+    }
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        y: &[f64],
+        v: &[f64],
+        out: &mut S,
+    ) -> bool {
+        write_rows(21, &Self::constraint_curvature(&y[0..7], &v[0..7]), out);
+        true
     }
     fn is_differential(&self, i: usize) -> bool {
         i < 14
@@ -414,6 +483,12 @@ impl CarAxis {
         let yb = self.r * (self.w * t).sin();
         ((self.l * self.l - yb * yb).sqrt(), yb)
     }
+    /// The road's time derivative `(xb', yb')` at `t`.
+    fn road_rate(&self, t: f64) -> (f64, f64) {
+        let (xb, yb) = self.road(t);
+        let ybp = self.r * self.w * (self.w * t).cos();
+        (-yb * ybp / xb, ybp)
+    }
     /// Test Set initial values `(y0, y0')`.
     pub fn initial(&self) -> ([f64; 10], [f64; 10]) {
         (
@@ -491,6 +566,43 @@ impl ImplicitDae for CarAxis {
         m.set(9, 2, -2.0 * (xl - xr));
         m.set(9, 1, 2.0 * (yl - yr));
         m.set(9, 3, -2.0 * (yl - yr));
+    }
+    /// The constraint rows `y9`, `y10` of the iteration matrix.
+    fn constraint_gradient<S: MatrixSink + ?Sized>(&self, t: f64, y: &[f64], m: &mut S) -> bool {
+        let (xb, yb) = self.road(t);
+        let (dx, dy) = (y[0] - y[2], y[1] - y[3]);
+        m.set(8, 0, xb);
+        m.set(8, 1, yb);
+        m.set(9, 0, 2.0 * dx);
+        m.set(9, 2, -2.0 * dx);
+        m.set(9, 1, 2.0 * dy);
+        m.set(9, 3, -2.0 * dy);
+        true
+    }
+    /// The first constraint moves with the road: `d/dt (xb xl + yb yl) = xb' xl + yb' yl`.
+    fn constraint_time_derivative(&self, t: f64, y: &[f64], out: &mut [f64]) -> bool {
+        let (xbp, ybp) = self.road_rate(t);
+        out[8] = xbp * y[0] + ybp * y[1];
+        true
+    }
+    /// `d/dq (G v + dg/dt)`: `(xb', yb', 0, 0)` for the first constraint (its gradient does not
+    /// depend on `q`), `2 (v_l - v_r)` with the signs of `G` for the axis' length.
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        _: &[f64],
+        v: &[f64],
+        m: &mut S,
+    ) -> bool {
+        let (xbp, ybp) = self.road_rate(t);
+        let (dvx, dvy) = (v[0] - v[2], v[1] - v[3]);
+        m.set(8, 0, xbp);
+        m.set(8, 1, ybp);
+        m.set(9, 0, 2.0 * dvx);
+        m.set(9, 2, -2.0 * dvx);
+        m.set(9, 1, 2.0 * dvy);
+        m.set(9, 3, -2.0 * dvy);
+        true
     }
     fn is_differential(&self, i: usize) -> bool {
         i < 8
