@@ -9,7 +9,6 @@
 //! ```
 
 #[path = "../tests/common/bdf_problems.rs"]
-#[allow(dead_code)]
 mod problems;
 
 use dpc_core::bdf::{FixedBdf, Options};

@@ -183,23 +183,38 @@ impl Ring {
         }
     }
 
+    /// The storage column of the `j`-th newest value (`j < columns`).
+    #[inline]
+    fn index(&self, j: usize) -> usize {
+        let k = self.front + j;
+        if k >= self.columns {
+            k - self.columns
+        } else {
+            k
+        }
+    }
+
     /// The `j`-th newest value.
     #[inline]
     fn col(&self, j: usize) -> &[f64] {
-        let k = (self.front + j) % self.columns;
+        let k = self.index(j);
         &self.data[k * self.n..(k + 1) * self.n]
     }
 
     #[inline]
     fn col_mut(&mut self, j: usize) -> &mut [f64] {
-        let k = (self.front + j) % self.columns;
+        let k = self.index(j);
         &mut self.data[k * self.n..(k + 1) * self.n]
     }
 
     /// Make room for a newest value (the oldest is dropped) and return its column.
     #[inline]
     fn push_front(&mut self) -> &mut [f64] {
-        self.front = (self.front + self.columns - 1) % self.columns;
+        self.front = if self.front == 0 {
+            self.columns - 1
+        } else {
+            self.front - 1
+        };
         self.col_mut(0)
     }
 }
@@ -447,9 +462,11 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
         for (b, v) in self.base.iter_mut().zip(self.hist.col(0)) {
             *b = a1 * v;
         }
-        for (j, aj) in a.iter().enumerate().take(q + 1).skip(2) {
-            for (b, v) in self.base.iter_mut().zip(self.hist.col(j - 1)) {
-                *b += aj * v;
+        if q > 1 {
+            for (j, aj) in a.iter().enumerate().take(q + 1).skip(2) {
+                for (b, v) in self.base.iter_mut().zip(self.hist.col(j - 1)) {
+                    *b += aj * v;
+                }
             }
         }
         (q, a)
