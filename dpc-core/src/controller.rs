@@ -24,15 +24,21 @@
 //! here), so small updates do not prove a small residual. Newton is warm-started from the
 //! previous sample's solution at the same inner step, shifted to the new measurement.
 //!
-//! Each inner step is solved by the crate's one Newton iteration (the crate-private `newton`
-//! module, which also runs the BDF corrector): the step is a Newton system, the test above
-//! its convergence test. Newton is simplified: the factorised
-//! iteration matrix is kept across iterations, inner steps and samples (for the same `delta`)
-//! while it converges, and evaluated afresh, together with the residual in one pass, when the
-//! scaled residual falls by less than [`MATRIX_REUSE_RATE`] per iteration (going back to the
-//! better iterate if it grew). The stopping test is the same whatever matrix is used, so the
-//! controls agree with those of full Newton to within the tolerance. The tracking inputs `w`
-//! and, under a preliminary feedback, the nominal motion are evaluated once per inner step.
+//! The inner integration runs on the crate's one fixed-step integrator,
+//! [`FixedBdf`](crate::bdf::FixedBdf) of order 1 (implicit Euler) at the step `delta`,
+//! restarted at every sample (and retry) from the measured state without allocating. The
+//! tracking DAE is its implicit system of the unknowns `[X; Z; U]` (under a preliminary
+//! feedback `[X; Z; v]`), with the tracking inputs `w` and the nominal motion evaluated once per
+//! inner step; `X'` is `(X - X_prev) / delta`. The controller gives each step its initial
+//! guess (the warm start above) and its convergence test (the residual tests above) through
+//! [`FixedBdf::step_with`](crate::bdf::FixedBdf::step_with); the integrator solves it with the
+//! crate's one Newton iteration (the crate-private `newton` module, which also runs the
+//! variable-step BDF corrector). Newton is simplified: the factorised iteration matrix is kept
+//! across iterations, inner steps and samples (for the same `delta`) while it converges, and
+//! evaluated afresh, together with the residual in one pass, when the scaled residual falls by
+//! less than [`MATRIX_REUSE_RATE`] per iteration (going back to the better iterate if it grew).
+//! The stopping test is the same whatever matrix is used, so the controls agree with those of
+//! full Newton to within the tolerance.
 //!
 //! All buffers are allocated at construction: with the fixed-size
 //! [`NalgebraLu`](crate::linear_solver::NalgebraLu) back end an update allocates nothing.
@@ -80,13 +86,10 @@
 //! # Ok::<(), dpc::core::controller::DpcError>(())
 //! ```
 
+use crate::bdf::{BdfError, CorrectorTest, CorrectorVerdict, FixedBdf, FixedStepDae, Options};
 use crate::consistent::ConstraintStructure;
 use crate::error::InvalidOption;
-use crate::linear_solver::{FactorError, LinearSolver};
-use crate::newton::{
-    Convergence, Corrected, Iterate, NewtonCounts, NewtonFailure, NewtonSystem, NewtonWorkspace,
-    Verdict,
-};
+use crate::linear_solver::LinearSolver;
 use crate::numeric::{Readable, Time};
 use crate::prefeedback::{FeedbackChain, Prefeedback};
 use crate::reference::{Reference, ReferenceError};
@@ -218,13 +221,14 @@ pub enum DpcError {
         /// Scaled residual Newton reached.
         residual: f64,
     },
-    /// The iteration matrix of the tracking DAE is singular.
-    #[error("singular iteration matrix of the tracking DAE at t = {}: {source}", Time(*t))]
+    /// The iteration matrix of the tracking DAE could not be factorised (singular, or an
+    /// entry outside a sparse solver's pattern).
+    #[error("inner step of the tracking DAE at t = {} failed: {source}", Time(*t))]
     Singular {
         /// Time of the inner step.
         t: f64,
-        /// The factorisation's report.
-        source: FactorError,
+        /// The inner integrator's report, naming the unknown and equation.
+        source: BdfError,
     },
     /// The measured state is not finite.
     #[error("measured state component {index} is {value}")]
@@ -266,9 +270,7 @@ enum Inner {
 /// The DPC controller for a generated tracking DAE `T`, a reference `R` and a linear solver
 /// `L` of the tracking DAE's size (its number of equations).
 pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
-    model: T,
     reference: R,
-    solver: L,
     opts: DpcOptions,
     nu: usize,
     /// Number of states of the model.
@@ -285,22 +287,30 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     /// The previous sample's value at the last inner step done (replaced in `warm`).
     warm_before: Vec<f64>,
     have_warm: bool,
-    /// The Newton workspace: residual, update, the work counters of the update in progress
-    /// and whether the solver holds a valid factorisation.
-    newton: NewtonWorkspace,
-    /// The `delta` the factorised iteration matrix was formed with (meaningful while
-    /// `newton.valid`).
-    factored_delta: f64,
-    x_prev: Vec<f64>,
-    y: Vec<f64>,
-    /// The iterate before the last Newton correction (where a reused matrix that stopped
-    /// converging goes back to).
-    y_last: Vec<f64>,
-    xdot: Vec<f64>,
-    w: Vec<f64>,
-    scratch: Vec<f64>,
+    /// The inner integration: [`FixedBdf`] of order 1 (implicit Euler) at the step `delta`
+    /// on the tracking DAE, restarted at every sample and every retry. It keeps the
+    /// factorised iteration matrix across inner steps and samples while `delta` is unchanged.
+    inner: FixedBdf<TrackingSystem<T>, L>,
+    /// The value the inner integration restarts from: the measured state, then the warm
+    /// start's first algebraic unknowns and controls (zero without one).
+    start: Vec<f64>,
     u_first: Vec<f64>,
     u_second: Vec<f64>,
+}
+
+/// The tracking DAE as the inner integrator sees it: the implicit system `G(X', X, [Z; U],
+/// w(t)) = 0` of the unknowns `Y = [X; Z; U]` (under a preliminary feedback `[X; Z; v]`, the
+/// plant's input being `u = u0 + K_n (X - x0) + v`). The tracking inputs `w` and the nominal
+/// motion are evaluated once per inner step ([`at`](Self::at)), before the step's Newton
+/// iteration; its residual and matrix are evaluated in one pass, and the generated model
+/// writes every structural entry on each call, so the matrix is zeroed once.
+struct TrackingSystem<T> {
+    model: T,
+    nx: usize,
+    /// The tracking inputs at the time of the inner step.
+    w: Vec<f64>,
+    /// The reference's derivatives (work space of `tracking_inputs`).
+    scratch: Vec<f64>,
     prefeedback: Option<PrefeedbackWork>,
 }
 
@@ -315,6 +325,100 @@ struct PrefeedbackWork {
     z_eval: Vec<f64>,
     /// `dG/du K_n` on the model's matrix.
     chain: FeedbackChain,
+}
+
+impl<T: TrackingDae> TrackingSystem<T> {
+    /// What the inner step at `t` evaluates once: the tracking inputs `w(t)` and, under a
+    /// preliminary feedback, the nominal `x0(t)`, `u0(t)`.
+    fn at<R: Reference>(&mut self, reference: &R, t: f64) -> Result<(), ReferenceError> {
+        self.model
+            .tracking_inputs(reference, t, &mut self.scratch, &mut self.w)?;
+        if let Some(pf) = self.prefeedback.as_mut() {
+            pf.law.nominal.state(t, &mut pf.x0);
+            pf.law.nominal.input(t, &mut pf.u0);
+        }
+        Ok(())
+    }
+}
+
+impl PrefeedbackWork {
+    /// The algebraic unknowns `[Z; u]` the plant sees at `[X; Z; v]` (about the nominal of
+    /// this inner step), into `z_eval`.
+    #[inline]
+    fn plant_algebraic(&mut self, xs: &[f64], zs: &[f64]) {
+        let nz = self.z_eval.len() - self.u0.len();
+        if nz > 0 {
+            // (A call of `memcpy` even when empty, as for the wheel.)
+            self.z_eval[..nz].copy_from_slice(&zs[..nz]);
+        }
+        self.law
+            .input_about(xs, &zs[nz..], &self.x0, &self.u0, &mut self.z_eval[nz..]);
+    }
+}
+
+impl<T: TrackingDae> FixedStepDae for TrackingSystem<T> {
+    fn size(&self) -> usize {
+        self.model.structure().n_equations()
+    }
+
+    fn eval_residual(&mut self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        let (xs, zs) = y.split_at(self.nx);
+        let xdot = &yp[..self.nx];
+        match self.prefeedback.as_mut() {
+            None => self.model.residual(t, xs, xdot, zs, &self.w, out),
+            Some(pf) => {
+                pf.plant_algebraic(xs, zs);
+                self.model.residual(t, xs, xdot, &pf.z_eval, &self.w, out);
+            }
+        }
+    }
+
+    /// The residual and the Newton matrix `dG/dY + c dG/dX'` (`c = 1/delta`) in one pass;
+    /// under a preliminary feedback `dG/dX` gains `dG/du K_n`.
+    fn eval_residual_and_matrix<S: MatrixSink + ?Sized>(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        c: f64,
+        residual: &mut [f64],
+        matrix: &mut S,
+    ) {
+        let (xs, zs) = y.split_at(self.nx);
+        let xdot = &yp[..self.nx];
+        match self.prefeedback.as_mut() {
+            None => self
+                .model
+                .residual_and_iteration_matrix(t, xs, xdot, zs, &self.w, c, residual, matrix),
+            Some(pf) => {
+                pf.plant_algebraic(xs, zs);
+                let mut capture = pf.chain.capture(&mut *matrix);
+                self.model.residual_and_iteration_matrix(
+                    t,
+                    xs,
+                    xdot,
+                    &pf.z_eval,
+                    &self.w,
+                    c,
+                    residual,
+                    &mut capture,
+                );
+                pf.chain.apply(matrix);
+            }
+        }
+    }
+
+    fn overwrites_matrix(&self) -> bool {
+        true
+    }
+
+    fn name_of_unknown(&self, i: usize) -> String {
+        self.model.structure().unknown_name(i)
+    }
+
+    fn name_of_equation(&self, i: usize) -> String {
+        self.model.structure().equation_name(i)
+    }
 }
 
 impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
@@ -364,10 +468,6 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 found: reference.dimension(),
             });
         }
-        // Generated models write every structural entry of their matrix (zeros included) and
-        // nothing else, so the solver's matrix is zeroed here once.
-        let mut solver = solver;
-        solver.matrix_mut().fill_zero();
         let mut dynamic_row = vec![false; n];
         for &(i, _) in model.structure().pattern_f_xdot.iter() {
             dynamic_row[i] = true;
@@ -388,10 +488,25 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             structure.n_inputs(),
             structure.n_outputs(),
         );
-        Ok(Self {
+        let system = TrackingSystem {
             model,
-            reference,
+            nx,
+            w: vec![0.0; nw],
+            scratch: vec![0.0; (order + 1) * ny],
+            prefeedback: None,
+        };
+        let inner = FixedBdf::new(
+            system,
             solver,
+            Options::default(),
+            1,
+            opts.delta,
+            0.0,
+            &vec![0.0; n],
+        )
+        .map_err(setup_error)?;
+        Ok(Self {
+            reference,
             opts,
             nu,
             nx,
@@ -400,17 +515,10 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             warm: vec![vec![0.0; n]; steps],
             warm_before: vec![0.0; n],
             have_warm: false,
-            newton: NewtonWorkspace::new(n),
-            factored_delta: f64::NAN,
-            x_prev: vec![0.0; nx],
-            y: vec![0.0; n],
-            y_last: vec![0.0; n],
-            xdot: vec![0.0; nx],
-            w: vec![0.0; nw],
-            scratch: vec![0.0; (order + 1) * ny],
+            inner,
+            start: vec![0.0; n],
             u_first: vec![0.0; n_inputs],
             u_second: vec![0.0; n_inputs],
-            prefeedback: None,
         })
     }
 
@@ -423,12 +531,12 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// appears, beyond the generated pattern of `dG/dX`: use a dense solver
     /// ([`NalgebraLu`](crate::linear_solver::NalgebraLu), [`FaerDenseLu`](crate::linear_solver::FaerDenseLu));
     /// a sparse one built on the generated pattern reports the first such entry as
-    /// [`FactorError::OutsidePattern`] through [`DpcError::Singular`] instead of dropping it.
+    /// [`BdfError::OutsidePattern`] through [`DpcError::Singular`] instead of dropping it.
     ///
     /// # Errors
     /// [`DpcError::Dimension`] when `K_n` is not `inputs x states`.
     pub fn with_prefeedback(mut self, law: Prefeedback) -> Result<Self, DpcError> {
-        let (m, n) = (self.u_first.len(), self.model.structure().n_states());
+        let (m, n) = (self.u_first.len(), self.nx);
         if law.k_n.nrows() != m || law.k_n.ncols() != n {
             return Err(DpcError::Dimension {
                 what: "K_n (inputs x states), entries",
@@ -436,7 +544,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 found: law.k_n.len(),
             });
         }
-        let structure = self.model.structure();
+        let structure = self.model().structure();
         let (ne, nz_all) = (structure.n_equations(), structure.n_algebraic());
         // The model's matrix: [F_x + c F_x' | F_z], with u the last m columns of F_z.
         let u_start = n + nz_all - m;
@@ -452,7 +560,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             .filter(|&&(_, k)| n + k >= u_start)
             .map(|&(i, k)| (i, n + k - u_start));
         let chain = FeedbackChain::new(&law, ne, u_start, pattern_u, &own);
-        self.prefeedback = Some(PrefeedbackWork {
+        self.inner.dae_mut().prefeedback = Some(PrefeedbackWork {
             law: std::sync::Arc::new(law),
             x0: vec![0.0; n],
             u0: vec![0.0; m],
@@ -460,19 +568,19 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             chain,
         });
         self.have_warm = false;
-        self.newton.valid = false;
+        self.inner.refresh_matrix();
         Ok(self)
     }
 
     /// The preliminary feedback in use, if any.
     pub fn prefeedback(&self) -> Option<&Prefeedback> {
-        self.prefeedback.as_ref().map(|p| &*p.law)
+        self.inner.dae().prefeedback.as_ref().map(|p| &*p.law)
     }
 
     /// The preliminary feedback in use, shared (for a closed loop that keeps it for a run
     /// while the controller keeps updating).
     pub(crate) fn shared_prefeedback(&self) -> Option<std::sync::Arc<Prefeedback>> {
-        self.prefeedback.as_ref().map(|p| p.law.clone())
+        self.inner.dae().prefeedback.as_ref().map(|p| p.law.clone())
     }
 
     /// The `nu` in use.
@@ -487,7 +595,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
 
     /// The tracking DAE.
     pub fn model(&self) -> &T {
-        &self.model
+        &self.inner.dae().model
     }
 
     /// The reference being tracked.
@@ -499,7 +607,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// reference).
     pub fn reset(&mut self) {
         self.have_warm = false;
-        self.newton.valid = false;
+        self.inner.refresh_matrix();
     }
 
     /// Compute the control `u` (length = the plant's inputs) at sample time `t` from the
@@ -509,10 +617,10 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// [`DpcError::NoSolution`] when every `delta` tried failed, and the errors of
     /// [`DpcError`] for singular matrices, a failing reference and wrong lengths.
     pub fn control(&mut self, t: f64, x: &[f64], u: &mut [f64]) -> Result<UpdateReport, DpcError> {
-        if x.len() != self.model.structure().n_states() {
+        if x.len() != self.nx {
             return Err(DpcError::Dimension {
                 what: "measured state",
-                expected: self.model.structure().n_states(),
+                expected: self.nx,
                 found: x.len(),
             });
         }
@@ -528,11 +636,10 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         }
         let mut report = UpdateReport::default();
         let mut delta = self.opts.delta;
-        self.newton.counts = NewtonCounts::default();
+        let matrices_before = self.inner.stats().jacobian_evaluations;
         for attempt in 0..=self.opts.max_retries {
-            let inner = self.integrate(t, x, delta);
-            report.newton_iterations = self.newton.counts.passes;
-            report.iteration_matrices = self.newton.counts.matrices;
+            let inner = self.integrate(t, x, delta, &mut report.newton_iterations);
+            report.iteration_matrices = self.inner.stats().jacobian_evaluations - matrices_before;
             match inner? {
                 Inner::Converged { residual } => {
                     report.retries = attempt;
@@ -573,206 +680,107 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     }
 
     /// Integrate the tracking DAE from `x` at `t` for `nu + 1` (or `nu + 2`) implicit-Euler
-    /// steps of size `delta`, storing the controls of steps `nu + 1` and `nu + 2`.
-    fn integrate(&mut self, t: f64, x: &[f64], delta: f64) -> Result<Inner, DpcError> {
-        let nx = self.model.structure().n_states();
-        let n = self.model.structure().n_equations();
+    /// steps of size `delta`, storing the controls of steps `nu + 1` and `nu + 2`; the Newton
+    /// iterations (residual tests) are added to `passes`.
+    fn integrate(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        delta: f64,
+        passes: &mut usize,
+    ) -> Result<Inner, DpcError> {
+        let nx = self.nx;
+        let n = self.start.len();
         let n_u = self.u_first.len();
         let steps = match self.opts.extraction {
             Extraction::FirstUsable => self.nu + 1,
             Extraction::Extrapolated => self.nu + 2,
         };
-        self.x_prev.copy_from_slice(x);
+        // Initial guesses: the previous sample's trajectory shifted to start from this
+        // sample's values: at the first step, the measured state with the previous sample's
+        // first algebraic unknowns and controls (the restart value); later, this sample's
+        // previous step plus the previous sample's increment over the same step (all
+        // unknowns: the controls' large early moves repeat from sample to sample). Without a
+        // previous sample, the previous step (from zero algebraic unknowns and controls).
+        self.start[..nx].copy_from_slice(x);
+        if self.have_warm {
+            self.start[nx..].copy_from_slice(&self.warm[0][nx..]);
+        } else {
+            self.start[nx..].fill(0.0);
+        }
+        self.inner.set_step(delta).map_err(setup_error)?;
+        self.inner.restart(t, &self.start).map_err(setup_error)?;
         let mut worst = 0.0_f64;
         for j in 1..=steps {
-            let tj = t + j as f64 * delta;
-            self.model
-                .tracking_inputs(&self.reference, tj, &mut self.scratch, &mut self.w)?;
-            if let Some(pf) = self.prefeedback.as_mut() {
-                pf.law.nominal.state(tj, &mut pf.x0);
-                pf.law.nominal.input(tj, &mut pf.u0);
-            }
-            // Initial guess: the previous sample's trajectory shifted to start from this
-            // sample's values: at the first step, the measured state with the previous
-            // sample's first algebraic unknowns and controls; later, this sample's previous
-            // step plus the previous sample's increment over the same step (all unknowns:
-            // the controls' large early moves repeat from sample to sample). Without a
-            // previous sample, the previous step.
-            if self.have_warm {
-                if j == 1 {
-                    self.y[..nx].copy_from_slice(&self.x_prev);
-                    self.y[nx..].copy_from_slice(&self.warm[0][nx..]);
-                } else {
-                    // warm[j - 2] holds this sample's step by now; the previous sample's was
-                    // kept in warm_before.
-                    let (before, after) = (&self.warm_before, &self.warm[j - 1]);
-                    for ((y, a), b) in self.y.iter_mut().zip(after).zip(before) {
-                        *y += a - b;
+            let tj = self.inner.next_t();
+            self.inner.dae_mut().at(&self.reference, tj)?;
+            let mut test = ResidualTest {
+                opts: &self.opts,
+                delta,
+                nx,
+                dynamic_row: &self.dynamic_row,
+                constraint_rows: &self.constraint_rows,
+                residual: f64::INFINITY,
+                last: f64::INFINITY,
+                last_control: f64::INFINITY,
+                passes: 0,
+            };
+            // warm[j - 2] holds this sample's step by now; the previous sample's was kept in
+            // warm_before.
+            let shift = (self.have_warm && j > 1).then(|| (&self.warm[j - 1], &self.warm_before));
+            let guess = |previous: &[f64], y: &mut [f64]| match shift {
+                Some((after, before)) => {
+                    for ((y, p), (a, b)) in y.iter_mut().zip(previous).zip(after.iter().zip(before))
+                    {
+                        *y = p + (a - b);
                     }
                 }
-            } else {
-                self.y[..nx].copy_from_slice(&self.x_prev);
-                if j == 1 {
-                    self.y[nx..].fill(0.0);
+                None => y.copy_from_slice(previous),
+            };
+            let outcome = self.inner.step_with(guess, &mut test);
+            *passes += test.passes;
+            match outcome {
+                Ok(_) => worst = worst.max(test.residual),
+                Err(BdfError::NewtonFailed { .. }) => {
+                    return Ok(Inner::Failed {
+                        step: j,
+                        residual: test.residual,
+                    })
                 }
-            }
-            match self.inner_step(tj, delta) {
-                Ok(residual) => worst = worst.max(residual),
-                Err(InnerFailure::Converge { residual }) => {
-                    return Ok(Inner::Failed { step: j, residual })
-                }
-                Err(InnerFailure::Factor(source)) => {
-                    return Err(DpcError::Singular { t: tj, source })
-                }
+                Err(source) => return Err(DpcError::Singular { t: tj, source }),
             }
             std::mem::swap(&mut self.warm[j - 1], &mut self.warm_before);
-            self.warm[j - 1].copy_from_slice(&self.y);
-            let u_now = &self.y[n - n_u..];
+            let y = self.inner.y();
+            self.warm[j - 1].copy_from_slice(y);
+            let u_now = &y[n - n_u..];
             if j == self.nu + 1 {
                 self.u_first.copy_from_slice(u_now);
             } else if j == self.nu + 2 {
                 self.u_second.copy_from_slice(u_now);
             }
-            self.x_prev.copy_from_slice(&self.y[..nx]);
         }
         Ok(Inner::Converged { residual: worst })
     }
-
-    /// One inner implicit-Euler step at `tj` from the guess in `y`, solved by the crate's
-    /// Newton ([`crate::newton`]) with the matrix kept from the last step if it was formed
-    /// with the same `delta`: the scaled residual reached, or why it failed.
-    fn inner_step(&mut self, tj: f64, delta: f64) -> Result<f64, InnerFailure> {
-        let fresh = self.factored_delta != delta;
-        let mut system = InnerStep {
-            model: &self.model,
-            t: tj,
-            delta,
-            nx: self.nx,
-            x_prev: &self.x_prev,
-            w: &self.w,
-            y: &mut self.y,
-            y_last: &mut self.y_last,
-            xdot: &mut self.xdot,
-            prefeedback: self.prefeedback.as_mut(),
-            factored_delta: &mut self.factored_delta,
-        };
-        let mut test = ResidualTest {
-            opts: &self.opts,
-            delta,
-            dynamic_row: &self.dynamic_row,
-            constraint_rows: &self.constraint_rows,
-            residual: f64::INFINITY,
-            last: f64::INFINITY,
-            last_control: f64::INFINITY,
-        };
-        match self
-            .newton
-            .solve(&mut self.solver, &mut system, &mut test, fresh)
-        {
-            Ok(_) => Ok(test.residual),
-            Err(failure) => Err(match failure.factor_error() {
-                Some(source) => InnerFailure::Factor(source),
-                None => InnerFailure::Converge {
-                    residual: test.residual,
-                },
-            }),
-        }
-    }
 }
 
-/// Why an inner step failed.
-enum InnerFailure {
-    /// Newton did not converge (or met a NaN residual): the last scaled residual.
-    Converge { residual: f64 },
-    /// The iteration matrix could not be factorised.
-    Factor(FactorError),
-}
-
-/// One inner implicit-Euler step as the system Newton solves: the unknowns `Y = [X; Z; U]`
-/// (under a preliminary feedback `[X; Z; v]`) with `X' = (X - X_prev) / delta`.
-struct InnerStep<'a, T> {
-    model: &'a T,
-    t: f64,
-    delta: f64,
-    nx: usize,
-    /// `X` at the previous inner step.
-    x_prev: &'a [f64],
-    /// The tracking inputs at `t`.
-    w: &'a [f64],
-    y: &'a mut [f64],
-    y_last: &'a mut [f64],
-    xdot: &'a mut [f64],
-    prefeedback: Option<&'a mut PrefeedbackWork>,
-    /// Set to `delta` when a matrix is formed.
-    factored_delta: &'a mut f64,
-}
-
-impl<T: TrackingDae, M: MatrixSink + ?Sized> NewtonSystem<M> for InnerStep<'_, T> {
-    /// The residual (and with `matrix` the Newton matrix `dG/dY + c dG/dX'`, `c = 1/delta`,
-    /// in the same pass; under a preliminary feedback with `dG/dX` gaining `dG/du K_n`). The
-    /// solver's matrix was zeroed once: the model writes every structural entry.
-    fn evaluate(&mut self, res: &mut [f64], _residual: bool, matrix: Option<&mut M>) {
-        let (nx, delta) = (self.nx, self.delta);
-        for ((d, y), x) in self.xdot.iter_mut().zip(self.y.iter()).zip(self.x_prev) {
-            *d = (y - x) / delta;
-        }
-        let (xs, zs) = self.y.split_at(nx);
-        // With a preliminary feedback: the algebraic unknowns `[Z; u]` the plant sees (about
-        // the nominal of this inner step).
-        if let Some(pf) = self.prefeedback.as_mut() {
-            let nz = pf.z_eval.len() - pf.u0.len();
-            if nz > 0 {
-                // (A call of `memcpy` even when empty, as for the wheel.)
-                pf.z_eval[..nz].copy_from_slice(&zs[..nz]);
-            }
-            pf.law
-                .input_about(xs, &zs[nz..], &pf.x0, &pf.u0, &mut pf.z_eval[nz..]);
-        }
-        let z_eval = match &self.prefeedback {
-            Some(pf) => &pf.z_eval[..],
-            None => zs,
-        };
-        let Some(out) = matrix else {
-            self.model
-                .residual(self.t, xs, self.xdot, z_eval, self.w, res);
-            return;
-        };
-        let c = 1.0 / delta;
-        match self.prefeedback.as_mut() {
-            None => self
-                .model
-                .residual_and_iteration_matrix(self.t, xs, self.xdot, zs, self.w, c, res, out),
-            Some(pf) => {
-                let mut capture = pf.chain.capture(&mut *out);
-                self.model.residual_and_iteration_matrix(
-                    self.t,
-                    xs,
-                    self.xdot,
-                    &pf.z_eval,
-                    self.w,
-                    c,
-                    res,
-                    &mut capture,
-                );
-                pf.chain.apply(out);
-            }
-        }
-        *self.factored_delta = delta;
-    }
-
-    fn keep(&mut self) {
-        self.y_last.copy_from_slice(self.y);
-    }
-
-    fn back(&mut self) {
-        self.y.copy_from_slice(self.y_last);
-    }
-
-    fn correct(&mut self, delta: &mut [f64], _res: &mut [f64]) -> Result<Corrected, NewtonFailure> {
-        for (yi, d) in self.y.iter_mut().zip(delta.iter()) {
-            *yi -= d;
-        }
-        Ok(Corrected::FULL)
+/// A failure to set up or restart the inner integrator, which the controller's own checks
+/// exclude.
+fn setup_error(e: BdfError) -> DpcError {
+    match e {
+        BdfError::InvalidOption(o) => DpcError::InvalidOption(o),
+        BdfError::DimensionMismatch {
+            what,
+            expected,
+            found,
+        } => DpcError::Dimension {
+            what,
+            expected,
+            found,
+        },
+        source => DpcError::Singular {
+            t: f64::NAN,
+            source,
+        },
     }
 }
 
@@ -785,6 +793,8 @@ impl<T: TrackingDae, M: MatrixSink + ?Sized> NewtonSystem<M> for InnerStep<'_, T
 struct ResidualTest<'a> {
     opts: &'a DpcOptions,
     delta: f64,
+    /// Number of states: `X` is the first `nx` unknowns.
+    nx: usize,
     dynamic_row: &'a [bool],
     constraint_rows: &'a [(usize, i32)],
     /// The scaled residual last evaluated.
@@ -793,6 +803,8 @@ struct ResidualTest<'a> {
     last: f64,
     /// The control residual of the last iterate that passed the scaled test but not this one.
     last_control: f64,
+    /// Residual tests (Newton iterations) so far.
+    passes: usize,
 }
 
 impl ResidualTest<'_> {
@@ -831,48 +843,49 @@ impl ResidualTest<'_> {
     }
 
     /// Go on from the scaled residual just evaluated, unless it is NaN.
-    fn go_on(&mut self) -> Verdict {
+    fn go_on(&mut self) -> CorrectorVerdict {
         if self.residual.is_nan() {
-            return Verdict::Fail(NewtonFailure::Convergence);
+            return CorrectorVerdict::Fail;
         }
         self.last = self.residual;
-        Verdict::Continue
+        CorrectorVerdict::Continue
     }
 }
 
-impl<T, L> Convergence<InnerStep<'_, T>, L> for ResidualTest<'_> {
-    fn after_residual(&mut self, sys: &mut InnerStep<'_, T>, it: Iterate<'_, L>) -> Verdict {
-        let x = &sys.y[..sys.nx];
-        self.residual = self.scaled(it.res, x);
+impl CorrectorTest for ResidualTest<'_> {
+    fn after_residual(&mut self, y: &[f64], res: &[f64], fresh: bool) -> CorrectorVerdict {
+        self.passes += 1;
+        let x = &y[..self.nx];
+        self.residual = self.scaled(res, x);
         if self.residual <= self.opts.residual_tolerance {
-            let control = self.at_control(it.res, x);
+            let control = self.at_control(res, x);
             if control <= self.opts.control_tolerance || control >= 0.5 * self.last_control {
-                return Verdict::Converged;
+                return CorrectorVerdict::Converged;
             }
             self.last_control = control;
         }
         // A NaN residual counts as no progress.
         let falls_by = |factor: f64| self.residual <= factor * self.last;
-        if !it.fresh && !falls_by(MATRIX_REUSE_RATE) {
+        if !fresh && !falls_by(MATRIX_REUSE_RATE) {
             // The reused matrix converges too slowly or diverges: a fresh one, here or, if
             // this iterate is worse, at the previous one.
-            return Verdict::Refresh {
+            return CorrectorVerdict::Refresh {
                 back: !falls_by(1.0),
             };
         }
         self.go_on()
     }
 
-    fn after_refresh(&mut self, sys: &mut InnerStep<'_, T>, it: Iterate<'_, L>) -> Verdict {
-        self.residual = self.scaled(it.res, &sys.y[..sys.nx]);
+    fn after_refresh(&mut self, y: &[f64], res: &[f64]) -> CorrectorVerdict {
+        self.residual = self.scaled(res, &y[..self.nx]);
         self.go_on()
     }
 
-    fn after_update(&mut self, _sys: &mut InnerStep<'_, T>, it: Iterate<'_, L>) -> Verdict {
-        if it.solves >= self.opts.max_newton_iterations {
-            Verdict::Fail(NewtonFailure::Convergence)
+    fn after_update(&mut self, _y: &[f64], _update: &[f64], solves: usize) -> CorrectorVerdict {
+        if solves >= self.opts.max_newton_iterations {
+            CorrectorVerdict::Fail
         } else {
-            Verdict::Continue
+            CorrectorVerdict::Continue
         }
     }
 }

@@ -1,20 +1,23 @@
 //! The crate's one Newton iteration, for every implicit system it solves: the corrector of
-//! [`crate::bdf::Bdf`] and [`crate::bdf::FixedBdf`], the consistent initialisation
-//! ([`crate::bdf::consistent_initial_values`]) and the controller's inner implicit-Euler steps
-//! ([`crate::controller::Dpc`]).
+//! [`crate::bdf::Bdf`], the corrector of the fixed-step [`crate::bdf::FixedBdf`] (which also
+//! runs the controller's inner implicit-Euler steps, [`crate::controller::Dpc`]) and the
+//! consistent initialisation ([`crate::bdf::consistent_initial_values`]).
 //!
 //! [`NewtonWorkspace::solve`] owns the iteration: evaluate the residual (and, when the
 //! factorised matrix is stale, the iteration matrix at the same point), factorise, solve for the
 //! update, correct the iterate, stop. What differs between the callers is in two types the
 //! caller chooses:
 //!
-//! * the [`NewtonSystem`]: the unknowns and how an update corrects them (the BDF's `y` with
-//!   `y' = y'_pred + cj (y - y_pred)`, the initialisation's `(y'_d, y_a)` with backtracking,
-//!   the controller's `[X; Z; U]` with `X' = (X - X_prev) / delta`);
-//! * the [`Convergence`] test: IDA's rate test `s |delta| <= epcon` (the BDF), the
-//!   weighted update test with a residual contraction rule for matrix reuse (the
-//!   initialisation), the scaled-residual and control test with matrix reuse by the
-//!   residual's fall rate (the controller).
+//! * the [`NewtonSystem`]: the unknowns and how an update corrects them (the variable-step
+//!   BDF's `y` with `y' = y'_pred + cj (y - y_pred)`, the fixed-step BDF's `y` with
+//!   `y' = (a_0 y + sum_{j>=1} a_j y_{n+1-j}) / h` formed at every evaluation, for the
+//!   controller's `[X; Z; U]` exactly `X' = (X - X_prev) / delta`, the initialisation's
+//!   `(y'_d, y_a)` with backtracking);
+//! * the [`Convergence`] test: IDA's rate test `s |delta| <= epcon` (the BDF, fixed-step by
+//!   default), the weighted update test with a residual contraction rule for matrix reuse (the
+//!   initialisation), a caller's [`crate::bdf::CorrectorTest`] of the fixed-step BDF (the
+//!   controller's scaled-residual and control test with matrix reuse by the residual's fall
+//!   rate).
 //!
 //! The workspace keeps its factorisation between solves; the caller says when it is stale.
 //! Failures are typed ([`NewtonFailure`]) and mapped to each caller's error type.
@@ -48,15 +51,6 @@ impl NewtonFailure {
         match e {
             FactorError::Singular { column, row } => Self::Singular(column, row),
             FactorError::OutsidePattern { row, col } => Self::OutsidePattern(row, col),
-        }
-    }
-
-    /// The linear solver's report back, when this failure is a failed factorisation.
-    pub fn factor_error(self) -> Option<FactorError> {
-        match self {
-            Self::Singular(column, row) => Some(FactorError::Singular { column, row }),
-            Self::OutsidePattern(row, col) => Some(FactorError::OutsidePattern { row, col }),
-            Self::Convergence | Self::NonFinite(_) | Self::Weight { .. } => None,
         }
     }
 }
@@ -169,8 +163,6 @@ pub(crate) trait Convergence<S, L> {
 /// Work counters of the Newton solves in a workspace (cumulative; the caller resets them).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct NewtonCounts {
-    /// Passes: residual tests.
-    pub passes: usize,
     /// Residual evaluations by the iteration (not those a damped correction makes).
     pub residuals: usize,
     /// Iteration matrices formed (each factorised once).
@@ -236,7 +228,6 @@ impl NewtonWorkspace {
 
         sys.keep();
         loop {
-            self.counts.passes += 1;
             if need_matrix || !residual_current {
                 self.evaluate(ls, sys, test, !residual_current, need_matrix)?;
             }

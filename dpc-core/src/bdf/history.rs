@@ -43,12 +43,4 @@ impl History {
     pub fn scale(&mut self, j: usize, s: f64) {
         self.col_mut(j).iter_mut().for_each(|v| *v *= s);
     }
-
-    /// Move every column one place up (column `j` becomes `j + 1`, the last is dropped) and
-    /// return column 0 for the new entry.
-    pub fn push_front(&mut self) -> &mut [f64] {
-        let n = self.n;
-        self.data.rotate_right(n);
-        &mut self.data[..n]
-    }
 }

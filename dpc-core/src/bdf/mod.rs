@@ -8,8 +8,10 @@
 //!   modified Newton on `dF/dy + (alpha/h) dF/dy'` with reuse of the factorisation across
 //!   steps, convergence-rate test, local error test in a weighted RMS norm with relative and
 //!   absolute tolerances, rejection and retry, IDA's order selection, dense output.
-//! * [`FixedBdf`]: constant step and order, starting from possibly inconsistent values (the
-//!   DPC controller's inner integration does not use it; it runs its own implicit-Euler Newton).
+//! * [`FixedBdf`]: constant step and order, starting from possibly inconsistent values; the
+//!   caller may give each step its initial guess and its convergence test ([`CorrectorTest`]),
+//!   and integrate a [`FixedStepDae`] that evaluates with work space of its own. The DPC
+//!   controller's inner integration runs on it (order 1, implicit Euler at the step `delta`).
 //! * [`consistent_initial_values`]: given the differential components, compute the algebraic
 //!   components and `y'` (the idea of IDA's `IDACalcIC` with `IDA_YA_YDP_INIT`).
 //!
@@ -88,7 +90,7 @@ mod stats;
 mod variable;
 
 pub use error::BdfError;
-pub use fixed::FixedBdf;
+pub use fixed::{CorrectorTest, CorrectorVerdict, FixedBdf, FixedStepDae};
 pub use init::{consistent_initial_values, InitWorkspace};
 pub use options::{HigherIndexControl, Options, Tolerance};
 pub use stats::Stats;

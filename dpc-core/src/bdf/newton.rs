@@ -1,6 +1,8 @@
-//! The BDF corrector, shared by the variable-step and fixed-step integrators: the system
+//! The corrector of the variable-step BDF: the system
 //! `G(y) = F(t, y, y'_pred + cj (y - y_pred)) = 0` and IDA's convergence-rate test, solved by
-//! the crate's one Newton ([`crate::newton`]).
+//! the crate's one Newton ([`crate::newton`]). The fixed-step integrator ([`super::FixedBdf`])
+//! has a system of its own (`y'` formed from the values) and shares the rate test, its default,
+//! and the error weights.
 //!
 //! The iteration matrix `dF/dy + cj dF/dy'` is kept across steps and refactorised only when
 //! Newton fails with a stale matrix or `cj` drifts beyond the window `[0.6, 1.67]` of the value
@@ -41,20 +43,32 @@ impl Default for JacState {
 impl NewtonFailure {
     /// The typed error to report when this failure of a step at `t` with step `h` is final.
     pub fn into_error<D: ImplicitDae>(self, dae: &D, t: f64, h: f64) -> BdfError {
+        self.into_error_named(t, h, |i| dae.unknown_name(i), |i| dae.equation_name(i))
+    }
+
+    /// [`into_error`](Self::into_error) with the names of the unknowns and equations given
+    /// by `unknown` and `equation`.
+    pub fn into_error_named(
+        self,
+        t: f64,
+        h: f64,
+        unknown: impl Fn(usize) -> String,
+        equation: impl Fn(usize) -> String,
+    ) -> BdfError {
         match self {
             Self::Convergence => BdfError::NewtonFailed { t, h },
             Self::Singular(col, row) => BdfError::SingularMatrix {
                 t,
-                unknown: col.map(|c| dae.unknown_name(c)),
-                equation: row.map(|r| dae.equation_name(r)),
+                unknown: col.map(&unknown),
+                equation: row.map(&equation),
             },
             Self::NonFinite(i) => BdfError::NonFiniteResidual {
                 t,
-                equation: dae.equation_name(i),
+                equation: equation(i),
             },
             Self::OutsidePattern(r, c) => BdfError::OutsidePattern {
-                equation: dae.equation_name(r),
-                unknown: dae.unknown_name(c),
+                equation: equation(r),
+                unknown: unknown(c),
             },
             Self::Weight { component, value } => BdfError::InvalidTolerance {
                 which: "error weight",
@@ -157,15 +171,30 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
 
 /// IDA's convergence-rate test, with the optional scaled-residual test of the fixed-step
 /// integrator.
-struct RateTest {
+pub(crate) struct RateTest {
     /// The rate factor `s`, carried between solves by [`JacState::ss`].
-    ss: f64,
+    pub ss: f64,
     epcon: f64,
     max_iterations: usize,
     residual_tolerance: f64,
     oldnrm: f64,
     /// The rate test passed; the residual test at the next evaluation decides.
     residual_pending: bool,
+}
+
+impl RateTest {
+    /// The test with the carried rate factor `ss`, the tolerance `epcon` of the weighted
+    /// update, at most `max_iterations` solves and, when finite, the scaled-residual bound.
+    pub fn new(ss: f64, epcon: f64, max_iterations: usize, residual_tolerance: f64) -> Self {
+        Self {
+            ss,
+            epcon,
+            max_iterations,
+            residual_tolerance,
+            oldnrm: 0.0,
+            residual_pending: false,
+        }
+    }
 }
 
 impl<S, L: LinearSolver> Convergence<S, L> for RateTest {
@@ -293,14 +322,8 @@ impl<L: LinearSolver> Corrector<L> {
                 yp: &mut self.yp,
                 ee: &mut self.ee,
             };
-            let mut test = RateTest {
-                ss: self.jac.ss,
-                epcon: p.epcon,
-                max_iterations: p.max_iterations,
-                residual_tolerance: p.residual_tolerance,
-                oldnrm: 0.0,
-                residual_pending: false,
-            };
+            let mut test =
+                RateTest::new(self.jac.ss, p.epcon, p.max_iterations, p.residual_tolerance);
             let outcome = self
                 .newton
                 .solve(&mut self.ls, &mut system, &mut test, fresh);
