@@ -33,7 +33,7 @@
 //! [`FixedBdf::set_step`] changes the step size and [`FixedBdf::restart`] starts again from new,
 //! possibly inconsistent, values without allocating.
 
-use super::newton::{error_weights, JacState, RateTest};
+use super::newton::{error_weights, retry_with_fresh_matrix, JacState, RateTest};
 use super::{BdfError, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
@@ -509,11 +509,7 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
                 *w *= hs.powi(i32::from(m) - 1);
             }
         }
-        // A changed cj makes the carried rate estimate unreliable: start pessimistic (IDA).
-        if cj != self.jac.cj_last {
-            self.jac.ss = 100.0;
-            self.jac.cj_last = cj;
-        }
+        self.jac.start_solve(cj);
         let mut fresh = cj != self.jac.cj_factored;
         let before = self.newton.counts;
         let outcome = loop {
@@ -526,14 +522,10 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
             );
             let outcome = self.solve(t_new, a[0], fresh, false, &mut test);
             self.jac.ss = test.ss;
-            match outcome {
-                Err(NewtonFailure::Convergence | NewtonFailure::NonFinite(_))
-                    if !fresh && !self.newton.formed =>
-                {
-                    fresh = true;
-                }
-                outcome => break outcome,
+            if !retry_with_fresh_matrix(&outcome, fresh, self.newton.formed) {
+                break outcome;
             }
+            fresh = true;
         };
         self.finish(outcome, before, t_new)
     }
@@ -600,11 +592,7 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
         before: crate::newton::NewtonCounts,
         t_new: f64,
     ) -> Result<f64, BdfError> {
-        let after = self.newton.counts;
-        self.stats.residual_evaluations += after.residuals - before.residuals;
-        self.stats.jacobian_evaluations += after.matrices - before.matrices;
-        self.stats.factorisations += after.matrices - before.matrices;
-        self.stats.newton_iterations += after.solves - before.solves;
+        self.stats.add_newton(before, self.newton.counts);
         if let Err(f) = outcome {
             self.stats.newton_failures += 1;
             let dae = &self.dae;

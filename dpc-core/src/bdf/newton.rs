@@ -40,6 +40,31 @@ impl Default for JacState {
     }
 }
 
+impl JacState {
+    /// Before a corrector solve with `cj`: a `cj` other than the last solve's makes the
+    /// carried rate factor unreliable, so it starts pessimistic (IDA).
+    pub fn start_solve(&mut self, cj: f64) {
+        if cj != self.cj_last {
+            self.ss = 100.0;
+            self.cj_last = cj;
+        }
+    }
+}
+
+/// Whether IDA's corrector tries again with a fresh matrix: Newton failed to converge (or met
+/// a non-finite residual) with a matrix that was neither asked fresh nor formed in the attempt.
+pub(crate) fn retry_with_fresh_matrix(
+    outcome: &Result<usize, NewtonFailure>,
+    fresh: bool,
+    formed: bool,
+) -> bool {
+    matches!(
+        outcome,
+        Err(NewtonFailure::Convergence | NewtonFailure::NonFinite(_))
+    ) && !fresh
+        && !formed
+}
+
 impl NewtonFailure {
     /// The typed error to report when this failure of a step at `t` with step `h` is final.
     pub fn into_error<D: ImplicitDae>(self, dae: &D, t: f64, h: f64) -> BdfError {
@@ -299,11 +324,7 @@ impl<L: LinearSolver> Corrector<L> {
         stats: &mut Stats,
         p: &NewtonProblem,
     ) -> Result<usize, NewtonFailure> {
-        // A changed cj makes the carried rate estimate unreliable: start pessimistic (IDA).
-        if p.cj != self.jac.cj_last {
-            self.jac.ss = 100.0;
-            self.jac.cj_last = p.cj;
-        }
+        self.jac.start_solve(p.cj);
         let mut fresh = p.force_setup || {
             let r = p.cj / self.jac.cj_factored;
             !(0.6..=1.0 / 0.6).contains(&r)
@@ -328,20 +349,12 @@ impl<L: LinearSolver> Corrector<L> {
                 .newton
                 .solve(&mut self.ls, &mut system, &mut test, fresh);
             self.jac.ss = test.ss;
-            match outcome {
-                Err(NewtonFailure::Convergence | NewtonFailure::NonFinite(_))
-                    if !fresh && !self.newton.formed =>
-                {
-                    fresh = true;
-                }
-                outcome => break outcome,
+            if !retry_with_fresh_matrix(&outcome, fresh, self.newton.formed) {
+                break outcome;
             }
+            fresh = true;
         };
-        let after = self.newton.counts;
-        stats.residual_evaluations += after.residuals - before.residuals;
-        stats.jacobian_evaluations += after.matrices - before.matrices;
-        stats.factorisations += after.matrices - before.matrices;
-        stats.newton_iterations += after.solves - before.solves;
+        stats.add_newton(before, self.newton.counts);
         outcome
     }
 }

@@ -19,3 +19,19 @@ pub struct Stats {
     /// LU factorisations.
     pub factorisations: usize,
 }
+
+impl Stats {
+    /// Add the work of corrector solves: the Newton counters before and after them (each
+    /// iteration matrix formed is factorised once).
+    pub(crate) fn add_newton(
+        &mut self,
+        before: crate::newton::NewtonCounts,
+        after: crate::newton::NewtonCounts,
+    ) {
+        let matrices = after.matrices - before.matrices;
+        self.residual_evaluations += after.residuals - before.residuals;
+        self.jacobian_evaluations += matrices;
+        self.factorisations += matrices;
+        self.newton_iterations += after.solves - before.solves;
+    }
+}
