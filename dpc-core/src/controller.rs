@@ -25,7 +25,7 @@
 //! previous sample's solution at the same inner step, shifted to the new measurement.
 //!
 //! The inner integration runs on the crate's one fixed-step integrator,
-//! [`FixedBdf`](crate::bdf::FixedBdf) of order 1 (implicit Euler) at the step `delta`,
+//! [`FixedBdf`] of order 1 (implicit Euler) at the step `delta`,
 //! restarted at every sample (and retry) from the measured state without allocating. The
 //! tracking DAE is its implicit system of the unknowns `[X; Z; U]` (under a preliminary
 //! feedback `[X; Z; v]`), with the tracking inputs `w` and the nominal motion evaluated once per
