@@ -291,9 +291,6 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     /// on the tracking DAE, restarted at every sample and every retry. It keeps the
     /// factorised iteration matrix across inner steps and samples while `delta` is unchanged.
     inner: FixedBdf<TrackingSystem<T>, L>,
-    /// The value the inner integration restarts from: the measured state, then the warm
-    /// start's first algebraic unknowns and controls (zero without one).
-    start: Vec<f64>,
     u_first: Vec<f64>,
     u_second: Vec<f64>,
 }
@@ -412,6 +409,11 @@ impl<T: TrackingDae> FixedStepDae for TrackingSystem<T> {
         true
     }
 
+    /// Only the states' derivatives `X'` enter.
+    fn differential_unknowns(&self) -> usize {
+        self.nx
+    }
+
     fn name_of_unknown(&self, i: usize) -> String {
         self.model.structure().unknown_name(i)
     }
@@ -516,7 +518,6 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             warm_before: vec![0.0; n],
             have_warm: false,
             inner,
-            start: vec![0.0; n],
             u_first: vec![0.0; n_inputs],
             u_second: vec![0.0; n_inputs],
         })
@@ -690,7 +691,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         passes: &mut usize,
     ) -> Result<Inner, DpcError> {
         let nx = self.nx;
-        let n = self.start.len();
+        let n = self.warm_before.len();
         let n_u = self.u_first.len();
         let steps = match self.opts.extraction {
             Extraction::FirstUsable => self.nu + 1,
@@ -702,14 +703,15 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
         // previous step plus the previous sample's increment over the same step (all
         // unknowns: the controls' large early moves repeat from sample to sample). Without a
         // previous sample, the previous step (from zero algebraic unknowns and controls).
-        self.start[..nx].copy_from_slice(x);
-        if self.have_warm {
-            self.start[nx..].copy_from_slice(&self.warm[0][nx..]);
-        } else {
-            self.start[nx..].fill(0.0);
-        }
         self.inner.set_step(delta).map_err(setup_error)?;
-        self.inner.restart(t, &self.start).map_err(setup_error)?;
+        let warm = self.have_warm.then_some(&self.warm[0][nx..]);
+        self.inner.restart_with(t, |start| {
+            start[..nx].copy_from_slice(x);
+            match warm {
+                Some(w) => start[nx..].copy_from_slice(w),
+                None => start[nx..].fill(0.0),
+            }
+        });
         let mut worst = 0.0_f64;
         for j in 1..=steps {
             let tj = self.inner.next_t();
@@ -811,7 +813,12 @@ impl ResidualTest<'_> {
     /// The residual `res` scaled for the convergence test: dynamic rows times `delta`,
     /// relative to `1 + |X|_inf`; NaN if either holds a NaN.
     fn scaled(&self, res: &[f64], x: &[f64]) -> f64 {
-        let (x_max, x_nan) = largest(x.iter().map(|v| v.abs()));
+        self.scaled_at(res, largest_abs(x))
+    }
+
+    /// [`scaled`](Self::scaled) with `|X|_inf` and whether `X` holds a NaN known.
+    #[inline]
+    fn scaled_at(&self, res: &[f64], (x_max, x_nan): (f64, bool)) -> f64 {
         let (r_max, r_nan) = largest(res.iter().zip(self.dynamic_row).map(|(r, &dynamic)| {
             let factor = if dynamic { self.delta } else { 1.0 };
             (r * factor).abs()
@@ -827,8 +834,8 @@ impl ResidualTest<'_> {
     /// rows unscaled, the plant's constraint rows amplified by `delta^-k` (`k = 2` for
     /// position, 1 for velocity constraints), the other rows as they are (see
     /// [`DpcOptions::control_tolerance`]).
-    fn at_control(&self, res: &[f64], x: &[f64]) -> f64 {
-        let (x_max, x_nan) = largest(x.iter().map(|v| v.abs()));
+    /// `|X|_inf` and whether `X` holds a NaN are given (as the scaled test found them).
+    fn at_control(&self, res: &[f64], (x_max, x_nan): (f64, bool)) -> f64 {
         let (rows, rows_nan) = largest(res.iter().map(|r| r.abs()));
         let (constraints, constraints_nan) = largest(
             self.constraint_rows
@@ -853,10 +860,13 @@ impl ResidualTest<'_> {
 }
 
 impl CorrectorTest for ResidualTest<'_> {
+    // Inlined into the integrator's Newton loop (it runs at every iteration).
+    #[inline(always)]
     fn after_residual(&mut self, y: &[f64], res: &[f64], fresh: bool) -> CorrectorVerdict {
         self.passes += 1;
-        let x = &y[..self.nx];
-        self.residual = self.scaled(res, x);
+        // |X|_inf once, for both tests.
+        let x = largest_abs(&y[..self.nx]);
+        self.residual = self.scaled_at(res, x);
         if self.residual <= self.opts.residual_tolerance {
             let control = self.at_control(res, x);
             if control <= self.opts.control_tolerance || control >= 0.5 * self.last_control {
@@ -888,6 +898,12 @@ impl CorrectorTest for ResidualTest<'_> {
             CorrectorVerdict::Continue
         }
     }
+}
+
+/// The largest `|x_i|` and whether `x` holds a NaN.
+#[inline]
+fn largest_abs(x: &[f64]) -> (f64, bool) {
+    largest(x.iter().map(|v| v.abs()))
 }
 
 /// The largest of `values` (non-negative) and whether one of them is NaN: what

@@ -85,6 +85,14 @@ pub trait FixedStepDae {
         false
     }
 
+    /// How many leading unknowns have their derivative read by the DAE (the differential
+    /// unknowns, for example the states of `[X; Z; U]`): `y'` is formed only for these, and
+    /// the later entries of the `y'` the DAE is given are left as they are. All unknowns by
+    /// default.
+    fn differential_unknowns(&self) -> usize {
+        self.size()
+    }
+
     /// A name for unknown `i`, for error messages.
     fn name_of_unknown(&self, i: usize) -> String {
         format!("y[{i}]")
@@ -207,15 +215,34 @@ impl Ring {
         &mut self.data[k * self.n..(k + 1) * self.n]
     }
 
-    /// Make room for a newest value (the oldest is dropped) and return its column.
+    /// The column behind the oldest one (the next step's iterate, which
+    /// [`push_front`](Self::push_front) makes the newest value) and the newest value.
+    #[inline(always)]
+    fn next_and_newest(&mut self) -> (&mut [f64], &[f64]) {
+        let n = self.n;
+        let newest = self.front;
+        let next = if newest == 0 {
+            self.columns - 1
+        } else {
+            newest - 1
+        };
+        if next < newest {
+            let (a, b) = self.data.split_at_mut(newest * n);
+            (&mut a[next * n..(next + 1) * n], &b[..n])
+        } else {
+            let (a, b) = self.data.split_at_mut(next * n);
+            (&mut b[..n], &a[newest * n..(newest + 1) * n])
+        }
+    }
+
+    /// Make the column behind the oldest one (the next step's iterate) the newest value.
     #[inline]
-    fn push_front(&mut self) -> &mut [f64] {
+    fn push_front(&mut self) {
         self.front = if self.front == 0 {
             self.columns - 1
         } else {
             self.front - 1
         };
-        self.col_mut(0)
     }
 }
 
@@ -235,7 +262,8 @@ pub struct FixedBdf<D: FixedStepDae, L: LinearSolver> {
     /// Time of the (re)start; the `k`-th step after it reaches `t0 + k h`.
     t0: f64,
     k: usize,
-    /// The last `order + 1` values, newest first.
+    /// The last `order + 1` values, newest first, and behind them the iterate of the step
+    /// (which becomes the newest value when the step is accepted, without a copy).
     hist: Ring,
     /// Values available in `hist` (at most `order + 1`).
     navail: usize,
@@ -247,10 +275,12 @@ pub struct FixedBdf<D: FixedStepDae, L: LinearSolver> {
     zero_matrix: bool,
     /// The predictor of [`step`](Self::step) (the start of each attempt).
     y_pred: Vec<f64>,
-    /// `sum_{j>=1} a_j y_{n+1-j}`: `y' = (a_0 y + base) / h`.
+    /// `sum_{j>=1} a_j y_{n+1-j}`: `y' = (a_0 y + base) / h` (above order 1; implicit Euler
+    /// reads `y_n` itself).
     base: Vec<f64>,
-    /// The iterate and its `y'`.
-    y: Vec<f64>,
+    /// Number of leading unknowns whose `y'` is formed ([`FixedStepDae::differential_unknowns`]).
+    nd: usize,
+    /// The `y'` of the iterate.
     yp: Vec<f64>,
     /// The iterate before the last correction (for [`CorrectorVerdict::Refresh`] `back`).
     y_last: Vec<f64>,
@@ -323,7 +353,8 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
             }
         }
         opts.validate(n)?;
-        let mut hist = Ring::new(order + 1, n);
+        let nd = dae.differential_unknowns().min(n);
+        let mut hist = Ring::new(order + 2, n);
         for (j, src) in history.iter().enumerate() {
             hist.col_mut(j).copy_from_slice(src);
         }
@@ -347,7 +378,7 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
             zero_matrix,
             y_pred: vec![0.0; n],
             base: vec![0.0; n],
-            y: history[0].to_vec(),
+            nd,
             yp: vec![0.0; n],
             y_last: vec![0.0; n],
             stats: Stats::default(),
@@ -374,18 +405,25 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
     /// # Errors
     /// [`BdfError::DimensionMismatch`] if `y0` has the wrong length.
     pub fn restart(&mut self, t0: f64, y0: &[f64]) -> Result<(), BdfError> {
-        if y0.len() != self.y.len() {
+        if y0.len() != self.hist.n {
             return Err(BdfError::DimensionMismatch {
                 what: "y0",
-                expected: self.y.len(),
+                expected: self.hist.n,
                 found: y0.len(),
             });
         }
+        self.restart_with(t0, |y| y.copy_from_slice(y0));
+        Ok(())
+    }
+
+    /// [`restart`](Self::restart) at `t0` from the value `init` writes (into storage that
+    /// holds an older value), without an intermediate copy.
+    #[inline]
+    pub fn restart_with(&mut self, t0: f64, init: impl FnOnce(&mut [f64])) {
         self.t0 = t0;
         self.k = 0;
-        self.hist.col_mut(0).copy_from_slice(y0);
+        init(self.hist.col_mut(0));
         self.navail = 1;
-        Ok(())
     }
 
     /// Take the following steps with size `h` from the current point: the values at the old
@@ -433,7 +471,8 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
     }
 
     /// The BDF derivative approximation at [`t`](Self::t) (zero before the first step; after
-    /// a [`restart`](Self::restart), the last step's until the next).
+    /// a [`restart`](Self::restart), the last step's until the next); formed only for the
+    /// [`FixedStepDae::differential_unknowns`], the later entries stay zero.
     pub fn yp(&self) -> &[f64] {
         &self.yp
     }
@@ -454,17 +493,20 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
         &mut self.dae
     }
 
-    /// The order of the next step and its coefficients; `base` set from the past values.
+    /// The order of the next step and its coefficients; above order 1, `base` set from the
+    /// past values (for the unknowns whose `y'` is formed).
     fn prepare(&mut self) -> (usize, &'static [f64; 6]) {
         let q = self.order.min(self.navail);
         let a = &COEFFS[q - 1];
-        let a1 = a[1];
-        for (b, v) in self.base.iter_mut().zip(self.hist.col(0)) {
-            *b = a1 * v;
-        }
         if q > 1 {
+            let a1 = a[1];
+            let base = &mut self.base[..self.nd];
+            for (b, v) in base.iter_mut().zip(self.hist.col(0)) {
+                *b = a1 * v;
+            }
             for (j, aj) in a.iter().enumerate().take(q + 1).skip(2) {
-                for (b, v) in self.base.iter_mut().zip(self.hist.col(j - 1)) {
+                let base = &mut self.base[..self.nd];
+                for (b, v) in base.iter_mut().zip(self.hist.col(j - 1)) {
                     *b += aj * v;
                 }
             }
@@ -513,14 +555,14 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
         let mut fresh = cj != self.jac.cj_factored;
         let before = self.newton.counts;
         let outcome = loop {
-            self.y.copy_from_slice(&self.y_pred);
+            self.hist.next_and_newest().0.copy_from_slice(&self.y_pred);
             let mut test = RateTest::new(
                 self.jac.ss,
                 self.opts.newton_tolerance,
                 self.opts.max_newton_iterations.max(4),
                 self.opts.residual_tolerance,
             );
-            let outcome = self.solve(t_new, a[0], fresh, false, &mut test);
+            let outcome = self.solve(t_new, q, a[0], fresh, false, &mut test);
             self.jac.ss = test.ss;
             if !retry_with_fresh_matrix(&outcome, fresh, self.newton.formed) {
                 break outcome;
@@ -542,19 +584,22 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
         guess: impl FnOnce(&[f64], &mut [f64]),
         test: &mut T,
     ) -> Result<f64, BdfError> {
-        let (_, a) = self.prepare();
+        let (q, a) = self.prepare();
         let t_new = self.next_t();
-        guess(self.hist.col(0), &mut self.y);
+        let (y, y_n) = self.hist.next_and_newest();
+        guess(y_n, y);
         let fresh = a[0] / self.h != self.jac.cj_factored;
         let before = self.newton.counts;
-        let outcome = self.solve(t_new, a[0], fresh, true, &mut CallerTest(test));
+        let outcome = self.solve(t_new, q, a[0], fresh, true, &mut CallerTest(test));
         self.finish(outcome, before, t_new)
     }
 
-    /// Newton on the step from the iterate in `y`.
+    /// Newton on the step of order `q` from the iterate (the column behind the history).
+    #[allow(clippy::too_many_arguments)]
     fn solve<C>(
         &mut self,
         t: f64,
+        q: usize,
         a0: f64,
         fresh: bool,
         keep_last: bool,
@@ -563,16 +608,20 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
     where
         C: for<'a> Convergence<StepSystem<'a, D>, L>,
     {
+        let nd = self.nd;
+        let (y, y_n) = self.hist.next_and_newest();
         let mut system = StepSystem {
             dae: &mut self.dae,
             t,
             h: self.h,
             a0,
-            base: &self.base,
-            y: &mut self.y,
+            euler: q == 1,
+            base: if q == 1 { &y_n[..nd] } else { &self.base[..nd] },
+            y,
             yp: &mut self.yp,
             y_last: &mut self.y_last,
             keep_last,
+            has_last: false,
             zero_matrix: self.zero_matrix,
             cj_factored: &mut self.jac.cj_factored,
             yp_current: false,
@@ -603,7 +652,7 @@ impl<D: FixedStepDae, L: LinearSolver> FixedBdf<D, L> {
                 |i| dae.name_of_equation(i),
             ));
         }
-        self.hist.push_front().copy_from_slice(&self.y);
+        self.hist.push_front();
         self.navail = (self.navail + 1).min(self.order + 1);
         self.k += 1;
         self.stats.steps += 1;
@@ -659,7 +708,6 @@ impl<D: ImplicitDae, L: LinearSolver> FixedBdf<D, L> {
         for (j, p) in points.iter().rev().enumerate() {
             f.hist.col_mut(j).copy_from_slice(p);
         }
-        f.y.copy_from_slice(&points[order - 1]);
         f.navail = order;
         f.k = order - 1;
         f.stats = startup;
@@ -675,12 +723,19 @@ struct StepSystem<'a, D> {
     t: f64,
     h: f64,
     a0: f64,
+    /// Implicit Euler: `base` is `y_n` and `y' = (y - y_n) / h`.
+    euler: bool,
+    /// `y_n` (implicit Euler) or `sum_{j>=1} a_j y_{n+1-j}`, for the unknowns whose `y'` is
+    /// formed.
     base: &'a [f64],
     y: &'a mut [f64],
     yp: &'a mut [f64],
     y_last: &'a mut [f64],
-    /// Remember the iterate before each correction.
+    /// Remember the iterate before each correction (in the pass of the correction).
     keep_last: bool,
+    /// `y_last` holds the iterate before the last correction (none yet: `y` is the first
+    /// iterate, where going back stays).
+    has_last: bool,
     zero_matrix: bool,
     /// `cj` of the factorised matrix (set when the system forms one).
     cj_factored: &'a mut f64,
@@ -693,10 +748,10 @@ impl<D> StepSystem<'_, D> {
     fn update_yp(&mut self) {
         let (a0, h) = (self.a0, self.h);
         let values = self.yp.iter_mut().zip(self.y.iter()).zip(self.base);
-        if a0 == 1.0 {
-            // Implicit Euler: `(y - y_n) / h` (`base` is `-y_n`), without the product by 1.
+        if self.euler {
+            // Implicit Euler: `(y - y_n) / h`.
             for ((d, y), b) in values {
-                *d = (y + b) / h;
+                *d = (y - b) / h;
             }
         } else {
             for ((d, y), b) in values {
@@ -725,19 +780,28 @@ impl<D: FixedStepDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_,
     }
 
     fn keep(&mut self) {
-        if self.keep_last {
-            self.y_last.copy_from_slice(self.y);
-        }
+        // The iterate is remembered by `correct`, in the pass that changes it.
     }
 
     fn back(&mut self) {
-        self.y.copy_from_slice(self.y_last);
-        self.yp_current = false;
+        if self.has_last {
+            self.y.copy_from_slice(self.y_last);
+            self.yp_current = false;
+        }
     }
 
     fn correct(&mut self, delta: &mut [f64], _res: &mut [f64]) -> Result<Corrected, NewtonFailure> {
-        for (y, d) in self.y.iter_mut().zip(delta.iter()) {
-            *y -= d;
+        if self.keep_last {
+            let values = self.y.iter_mut().zip(self.y_last.iter_mut());
+            for ((y, last), d) in values.zip(delta.iter()) {
+                *last = *y;
+                *y -= d;
+            }
+            self.has_last = true;
+        } else {
+            for (y, d) in self.y.iter_mut().zip(delta.iter()) {
+                *y -= d;
+            }
         }
         self.yp_current = false;
         Ok(Corrected::FULL)
