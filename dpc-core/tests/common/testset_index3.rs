@@ -560,12 +560,7 @@ impl ImplicitDae for CarAxis {
         m.set(7, 3, -(l0 * dx * dx / lr3 - 1.0) - 2.0 * l2);
         m.set(7, 1, 2.0 * l2);
         m.set(7, 9, 2.0 * (yl - yr));
-        m.set(8, 0, xb);
-        m.set(8, 1, yb);
-        m.set(9, 0, 2.0 * (xl - xr));
-        m.set(9, 2, -2.0 * (xl - xr));
-        m.set(9, 1, 2.0 * (yl - yr));
-        m.set(9, 3, -2.0 * (yl - yr));
+        self.constraint_gradient(t, y, m);
     }
     /// The constraint rows `y9`, `y10` of the iteration matrix.
     fn constraint_gradient<S: MatrixSink + ?Sized>(&self, t: f64, y: &[f64], m: &mut S) -> bool {
