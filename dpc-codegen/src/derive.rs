@@ -7,13 +7,15 @@
 //!   `dF/dx'`, `dF/dx`, `dF/dz`, `dF/du` and the iteration matrix `[dF/dx + c dF/dx' | dF/dz]`
 //!   (each with its structural non-zeros), outputs and their Jacobians `dh/dx`, `dh/dz`,
 //!   `dh/du`, the equation texts and the listing;
+//! * the plant's position constraints' exact gradient, time derivative and second derivatives
+//!   ([`ConstraintDerivatives`]), for the closed loop's index reduction;
 //! * the relative degrees of the outputs, and per output the compiled coefficients of `W_i`;
 //! * the references `xi_i(t)` with their exact time derivatives.
 //!
 //! It differentiates and nothing else: [`crate::emit`] turns the result into tokens and a
 //! run-time model (the `dpc-runtime` crate) evaluates the same roots from the same graph, so
 //! both evaluate identical expressions. Derivatives are created in a fixed order (plant,
-//! relative degrees, tracking DAE, references) so that node ids, and with them the emitted
+//! relative degrees, tracking DAE, references, the plant's constraint derivatives) so that node ids, and with them the emitted
 //! code, are deterministic.
 
 use crate::hirschorn::{TrackingRow, TrackingSystem};
@@ -180,6 +182,9 @@ pub struct DaeDerivatives {
     /// The iteration matrix `[dF/dx + c dF/dx' | dF/dz]`, assembled symbolically so the sum
     /// of the two blocks is one expression per entry; in row-major order.
     pub iteration: Block,
+    /// The exact derivatives of the position-constraint rows (the plant's; empty for a
+    /// tracking DAE, which is not index-reduced by `Stabilised`).
+    pub constraints: ConstraintDerivatives,
 }
 
 impl DaeDerivatives {
@@ -213,6 +218,78 @@ impl DaeDerivatives {
             .iter()
             .flat_map(|b| b.exprs())
             .collect()
+    }
+}
+
+/// The exact derivatives of a plant's *position-constraint rows*: the equations `0 = g(t, x)`
+/// of states, time and parameters only (no `x'`, no algebraic unknown, no input: no entry in
+/// `dF/dx'`, `dF/dz` or `dF/du`, the classification dpc-core's consistent initialisation makes
+/// at run time from the same patterns). The closed loop's index reduction (`Stabilised`)
+/// needs their gradients `G = dg/dx`, `dg/dt` and the curvature
+/// `d/dx_k (G v + dg/dt) = sum_j H_jk v_j + H_tk` along the velocities `v`; the second
+/// derivatives `H_jk = d^2 g/(dx_j dx_k)` and `H_tk = d^2 g/(dt dx_k)` are derived here, the
+/// sum over `j` is formed at run time (only over the structural non-zeros).
+#[derive(Clone, Debug, Default)]
+pub struct ConstraintDerivatives {
+    /// The position-constraint rows, ascending.
+    pub rows: Vec<usize>,
+    /// `dg/dx`: the rows' entries of `dF/dx`, in row-major order.
+    pub gradient: Block,
+    /// `dg/dt` of the rows that depend on time explicitly, `(row, expr)`, ascending.
+    pub time_derivative: Vec<(usize, ExprId)>,
+    /// `H_jk = d^2 g/(dx_j dx_k)` as `(row, j, k, expr)`, structural non-zeros, ordered by
+    /// row, then `j`, then `k`.
+    pub hessian: Vec<(usize, usize, usize, ExprId)>,
+    /// `H_tk = d^2 g/(dt dx_k)`: `(row, k, expr)`, structural non-zeros, row-major.
+    pub time_hessian: Block,
+}
+
+/// One structural entry `(row, col)` of the curvature `sum_j H_jk v_j + H_tk`, with where its
+/// terms' values are in [`ConstraintDerivatives::curvature_roots`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CurvatureEntry {
+    /// The constraint row `g`.
+    pub row: usize,
+    /// The state `k` (the column).
+    pub col: usize,
+    /// Per term `H_jk v_j`: the index of `H_jk` among the roots, and `j`.
+    pub terms: Vec<(usize, usize)>,
+    /// The index of `H_tk` among the roots, if it is not structurally zero.
+    pub time_term: Option<usize>,
+}
+
+impl ConstraintDerivatives {
+    /// Whether the type has no position-constraint rows (nothing to emit).
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// The roots of the curvature routine: the entries of `H_jk`, then those of `H_tk`.
+    pub fn curvature_roots(&self) -> Vec<ExprId> {
+        let mut roots: Vec<ExprId> = self.hessian.iter().map(|h| h.3).collect();
+        roots.extend(self.time_hessian.exprs());
+        roots
+    }
+
+    /// The curvature's structural entries in row-major order, each with its terms.
+    pub fn curvature_entries(&self) -> Vec<CurvatureEntry> {
+        let mut entries: BTreeMap<(usize, usize), CurvatureEntry> = BTreeMap::new();
+        let empty = |row: usize, col: usize| CurvatureEntry {
+            row,
+            col,
+            terms: Vec::new(),
+            time_term: None,
+        };
+        for (r, &(row, j, k, _)) in self.hessian.iter().enumerate() {
+            let e = entries.entry((row, k)).or_insert_with(|| empty(row, k));
+            e.terms.push((r, j));
+        }
+        let offset = self.hessian.len();
+        for (r, &(row, k, _)) in self.time_hessian.entries.iter().enumerate() {
+            let e = entries.entry((row, k)).or_insert_with(|| empty(row, k));
+            e.time_term = Some(offset + r);
+        }
+        entries.into_values().collect()
     }
 }
 
@@ -319,6 +396,9 @@ pub fn derive(model: &mut Model, system: Option<&TrackingSystem>) -> Derived {
     let relative_degrees = crate::hirschorn::relative_degrees(model);
     let tracking = system.and_then(|system| derive_tracking(model, system, plant_outputs));
     let references = derive_references(model, system.map(|s| &s.rows[..]));
+    // Last, so the nodes of everything above (and the code emitted from them) do not move.
+    let mut plant = plant;
+    plant.constraints = derive_constraints(model, &plant);
     Derived {
         plant,
         relative_degrees,
@@ -381,6 +461,63 @@ fn derive_dae(
         h_u,
         iteration: Block {
             entries: iteration.into_iter().map(|((i, j), e)| (i, j, e)).collect(),
+        },
+        constraints: ConstraintDerivatives::default(),
+    }
+}
+
+/// The exact derivatives of the position-constraint rows of `ty` (see
+/// [`ConstraintDerivatives`]).
+fn derive_constraints(model: &mut Model, ty: &DaeDerivatives) -> ConstraintDerivatives {
+    let in_row = |b: &Block, i: usize| b.entries.iter().any(|e| e.0 == i);
+    let rows: Vec<usize> = (0..ty.residuals.len())
+        .filter(|&i| !(in_row(&ty.f_xdot, i) || in_row(&ty.f_z, i) || in_row(&ty.f_u, i)))
+        .collect();
+    if rows.is_empty() {
+        return ConstraintDerivatives::default();
+    }
+    let states: Vec<Var> = ty.layout.states.iter().map(|s| model.var(*s)).collect();
+    let gradient = Block {
+        entries: ty
+            .f_x
+            .entries
+            .iter()
+            .filter(|e| rows.contains(&e.0))
+            .copied()
+            .collect(),
+    };
+    let mut hessian = Vec::new();
+    for &(g, j, e) in &gradient.entries {
+        for (k, &v) in states.iter().enumerate() {
+            let h = model.graph.diff(e, v);
+            if !model.graph.is_zero(h) {
+                hessian.push((g, j, k, h));
+            }
+        }
+    }
+    let time = model.var(Symbol::Time);
+    let mut time_derivative = Vec::new();
+    let mut time_hessian = Vec::new();
+    for &g in &rows {
+        let d = model.graph.diff(ty.residuals[g], time);
+        if model.graph.is_zero(d) {
+            continue;
+        }
+        time_derivative.push((g, d));
+        for (k, &v) in states.iter().enumerate() {
+            let h = model.graph.diff(d, v);
+            if !model.graph.is_zero(h) {
+                time_hessian.push((g, k, h));
+            }
+        }
+    }
+    ConstraintDerivatives {
+        rows,
+        gradient,
+        time_derivative,
+        hessian,
+        time_hessian: Block {
+            entries: time_hessian,
         },
     }
 }

@@ -5,6 +5,14 @@
 //! Generated code writes Jacobian blocks into [`MatrixSink`]s; all of its methods take
 //! slices so that the same routine serves fixed-size and dynamic storage.
 //!
+//! A plant with *position constraints* (equations `0 = g(t, x)` of states, time and
+//! parameters only) may also supply their exact derivatives:
+//! [`DaeModel::constraint_gradient`], [`DaeModel::constraint_time_derivative`] and
+//! [`DaeModel::constraint_curvature`] (provided methods, default "not supplied"). Generated
+//! plants do (the second derivatives compiled, combined with the velocities at run time); the
+//! closed loop's index reduction ([`Stabilised`](crate::stabilised::Stabilised)) uses them
+//! instead of differences.
+//!
 //! # Example
 //! A plant declared with `dpc::model!` implements [`DaeModel`]: its names and dimensions, its
 //! residual, and exact Jacobians (here the iteration matrix `dF/dx + c dF/dx'` against central
@@ -406,6 +414,69 @@ pub trait DaeModel {
         A: MatrixSink + ?Sized,
         B: MatrixSink + ?Sized,
         C: MatrixSink + ?Sized;
+
+    /// The gradients of the position constraints, when the model supplies them exactly
+    /// (generated models do): for every *position-constraint row* `g` (an equation
+    /// `0 = g(t, x)` of states, time and parameters only: no `x'`, no algebraic unknown, no
+    /// input) and every state `x_j` the row depends on, write `(g, j, dF_g/dx_j)` into `out`
+    /// and return `true`.
+    ///
+    /// Rows are numbered as the equations, columns as the unknowns `[x; z]` of the
+    /// integrator (a state's column is its index); `out` (equations x unknowns, zeroed by the
+    /// caller) receives nothing else. `z` and `u` have the lengths of
+    /// [`Structure`]; the constraint rows do not read them (a row with an input is not a
+    /// position constraint). The closed loop's index reduction
+    /// ([`Stabilised`](crate::stabilised::Stabilised), through
+    /// [`ImplicitDae::constraint_gradient`](crate::ImplicitDae::constraint_gradient)) uses them
+    /// instead of differences. The default supplies nothing and returns `false`.
+    fn constraint_gradient<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        x: &[f64],
+        z: &[f64],
+        u: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let _ = (t, x, z, u, out);
+        false
+    }
+
+    /// The explicit time derivatives `dF_g/dt` of the position-constraint rows `g` (see
+    /// [`constraint_gradient`](Self::constraint_gradient)), when supplied exactly: write them
+    /// into `out[g]` (one entry per equation, zeroed by the caller; rows that do not depend on
+    /// `t` are not written) and return `true`. The default returns `false`.
+    fn constraint_time_derivative(
+        &self,
+        t: f64,
+        x: &[f64],
+        z: &[f64],
+        u: &[f64],
+        out: &mut [f64],
+    ) -> bool {
+        let _ = (t, x, z, u, out);
+        false
+    }
+
+    /// The curvature of the position-constraint rows `g` (see
+    /// [`constraint_gradient`](Self::constraint_gradient)) along the state velocities `v` (one
+    /// entry per state), when supplied exactly: the derivative in `x_k` of
+    /// `sum_j dF_g/dx_j v_j + dF_g/dt` at fixed `v`, that is
+    /// `sum_j d^2 F_g/(dx_j dx_k) v_j + d^2 F_g/(dt dx_k)`, written as `(g, k, value)` into
+    /// `out` (equations x unknowns `[x; z]`, zeroed by the caller) for every structurally
+    /// non-zero entry; return `true`. The default returns `false`.
+    #[allow(clippy::too_many_arguments)]
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        x: &[f64],
+        z: &[f64],
+        u: &[f64],
+        v: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let _ = (t, x, z, u, v, out);
+        false
+    }
 }
 
 /// A parameter name that a model does not declare.

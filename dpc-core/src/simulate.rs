@@ -917,6 +917,35 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
             .residual_and_iteration_matrix(t, x, &yp[..nx], z, &s.u, c, residual, out);
     }
 
+    // The position constraints' exact derivatives, when the model supplies them (generated
+    // models do). The constraint rows do not contain the input, so it is handed over as last
+    // evaluated, not evaluated again at (t, x).
+    fn constraint_gradient<S: MatrixSink + ?Sized>(&self, t: f64, y: &[f64], out: &mut S) -> bool {
+        let (x, z) = y.split_at(self.model.structure().n_states());
+        let s = self.scratch.borrow();
+        self.model.constraint_gradient(t, x, z, &s.u, out)
+    }
+
+    fn constraint_time_derivative(&self, t: f64, y: &[f64], out: &mut [f64]) -> bool {
+        let (x, z) = y.split_at(self.model.structure().n_states());
+        let s = self.scratch.borrow();
+        self.model.constraint_time_derivative(t, x, z, &s.u, out)
+    }
+
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        v: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let nx = self.model.structure().n_states();
+        let (x, z) = y.split_at(nx);
+        let s = self.scratch.borrow();
+        self.model
+            .constraint_curvature(t, x, z, &s.u, &v[..nx], out)
+    }
+
     fn is_differential(&self, i: usize) -> bool {
         i < self.model.structure().n_states()
     }

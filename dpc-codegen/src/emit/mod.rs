@@ -9,7 +9,11 @@
 //!   `SMatrix`) and an implementation of `dpc::core::DaeModel` whose routines take slices
 //!   and write Jacobian entries into `MatrixSink`s, and parameter access by index as
 //!   `match`es (`emit/model_type.rs`; its documentation carries the listing,
-//!   `emit/listing.rs`);
+//!   `emit/listing.rs`); for a plant with position-constraint rows also their exact gradient,
+//!   time derivative and curvature (`DaeModel::constraint_gradient` and the like, from
+//!   [`crate::derive::ConstraintDerivatives`]: the curvature's second derivatives are
+//!   computed by a routine like the others, their sum along the velocities in the generic
+//!   method, one expression per structural entry);
 //! * with a `tracking` section, the tracking DAE type, which also holds the coefficients of
 //!   `W` in use in a fixed-size array (read in the routines' preludes, so nothing allocates)
 //!   and implements `dpc::core::TrackingDae` (`emit/tracking.rs`);

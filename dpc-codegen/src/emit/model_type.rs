@@ -121,6 +121,131 @@ pub fn emit_dae_type(
         &ty.output_jacobian_roots(),
         &[out(quote!(__values), output_jac_count, false)],
     );
+    // The position constraints' exact derivatives (plants with such rows only).
+    let c = &ty.constraints;
+    let (constraint_values, constraint_methods) = if c.is_empty() {
+        (TokenStream::new(), TokenStream::new())
+    } else {
+        let (gradient_forward, gradient_count) = sink_forwarding(&[(quote!(__out), &c.gradient)]);
+        let gradient_values = code(
+            "constraint_gradient",
+            &c.gradient.exprs().collect::<Vec<_>>(),
+            &[out(quote!(__values), gradient_count, false)],
+        );
+        let time_count = c.time_derivative.len();
+        let (time_values, time_body) = if time_count == 0 {
+            (TokenStream::new(), TokenStream::new())
+        } else {
+            let roots: Vec<ExprId> = c.time_derivative.iter().map(|d| d.1).collect();
+            let values = code(
+                "constraint_time_derivative",
+                &roots,
+                &[out(quote!(__values), time_count, false)],
+            );
+            let rows = c.time_derivative.iter().map(|d| d.0);
+            (
+                quote! {
+                    #[inline(never)]
+                    fn __constraint_time_derivative_values(&self, __t: f64, __x: &[f64], __values: &mut [f64; #time_count]) {
+                        #values
+                    }
+                },
+                quote! {
+                    let mut __values = [0.0_f64; #time_count];
+                    self.__constraint_time_derivative_values(__t, __x, &mut __values);
+                    const __ROWS: &[usize] = &[#(#rows),*];
+                    for (&__g, &__v) in __ROWS.iter().zip(&__values) {
+                        __out[__g] = __v;
+                    }
+                },
+            )
+        };
+        let curvature_roots = c.curvature_roots();
+        let curvature_count = curvature_roots.len();
+        let (curvature_values, curvature_body) = if curvature_count == 0 {
+            (TokenStream::new(), TokenStream::new())
+        } else {
+            let values = code(
+                "constraint_curvature",
+                &curvature_roots,
+                &[out(quote!(__values), curvature_count, false)],
+            );
+            // Per structural entry, sum_j H_jk v_j + H_tk over the non-zero terms.
+            let sets = c.curvature_entries().into_iter().map(|e| {
+                let (g, k) = (e.row, e.col);
+                let terms = e.terms.iter().map(|&(r, j)| quote!(__values[#r] * __v[#j]));
+                let time = e.time_term.map(|r| quote!(__values[#r]));
+                let sum = terms.chain(time);
+                quote!(__out.set(#g, #k, #(#sum)+*);)
+            });
+            (
+                quote! {
+                    #[inline(never)]
+                    fn __constraint_curvature_values(&self, __t: f64, __x: &[f64], __values: &mut [f64; #curvature_count]) {
+                        #values
+                    }
+                },
+                quote! {
+                    let __v = &__v[..#nx];
+                    let mut __values = [0.0_f64; #curvature_count];
+                    self.__constraint_curvature_values(__t, __x, &mut __values);
+                    #(#sets)*
+                },
+            )
+        };
+        (
+            quote! {
+                // The position constraints' exact derivatives (`DaeModel::constraint_gradient`
+                // and the like), computed once per model here.
+                #[inline(never)]
+                fn __constraint_gradient_values(&self, __t: f64, __x: &[f64], __values: &mut [f64; #gradient_count]) {
+                    #gradient_values
+                }
+                #time_values
+                #curvature_values
+            },
+            quote! {
+                fn constraint_gradient<__S: ::dpc::core::MatrixSink + ?Sized>(
+                    &self,
+                    __t: f64,
+                    __x: &[f64],
+                    __z: &[f64],
+                    __u: &[f64],
+                    __out: &mut __S,
+                ) -> bool {
+                    let mut __values = [0.0_f64; #gradient_count];
+                    self.__constraint_gradient_values(__t, __x, &mut __values);
+                    #gradient_forward
+                    true
+                }
+
+                fn constraint_time_derivative(
+                    &self,
+                    __t: f64,
+                    __x: &[f64],
+                    __z: &[f64],
+                    __u: &[f64],
+                    __out: &mut [f64],
+                ) -> bool {
+                    #time_body
+                    true
+                }
+
+                fn constraint_curvature<__S: ::dpc::core::MatrixSink + ?Sized>(
+                    &self,
+                    __t: f64,
+                    __x: &[f64],
+                    __z: &[f64],
+                    __u: &[f64],
+                    __v: &[f64],
+                    __out: &mut __S,
+                ) -> bool {
+                    #curvature_body
+                    true
+                }
+            },
+        )
+    };
     // Constants.
     let sym_names = |list: &[Symbol]| str_list(list.iter().map(|s| model.symbol_name(*s)));
     let state_names = sym_names(&layout.states);
@@ -244,6 +369,8 @@ pub fn emit_dae_type(
             fn __output_jacobian_values(&self, __t: f64, __x: &[f64], __z: &[f64], __u: &[f64], __values: &mut [f64; #output_jac_count]) {
                 #output_jac_values
             }
+
+            #constraint_values
 
             /// Residual `F(t, x, x', z, u)` in fixed-size types.
             pub fn residual_fixed(
@@ -444,6 +571,8 @@ pub fn emit_dae_type(
                 self.__output_jacobian_values(__t, __x, __z, __u, &mut __values);
                 #output_jac_forward
             }
+
+            #constraint_methods
         }
     }
 }
