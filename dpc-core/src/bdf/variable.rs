@@ -470,6 +470,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     fn update_weights(&mut self) -> Result<(), BdfError> {
         error_weights(&self.opts, self.state.phi.col(0), &mut self.state.ewt)?;
         let hs = self.state.hh.abs().min(1.0);
+        // The scale h^(m - 1) of index m, for the usual 2 and 3 once per step (the same
+        // values `powi` gives per component).
+        let (hs2, hs3) = (hs.powi(1), hs.powi(2));
         for i in 0..self.n {
             let m = self.opts.index_of(i);
             let w = self.state.ewt[i];
@@ -478,7 +481,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 self.state.w_err[i] = w;
                 continue;
             }
-            let s = w * hs.powi(i32::from(m) - 1);
+            let s = w * match m {
+                2 => hs2,
+                3 => hs3,
+                _ => hs.powi(i32::from(m) - 1),
+            };
             (self.corrector.newton.w[i], self.state.w_err[i]) = match self.opts.higher_index {
                 // IDA's suppressalg: Newton keeps the plain weight. On the pendulum this gives
                 // fewer steps and more digits than scaling Newton's weights as well.

@@ -1,0 +1,86 @@
+//! The variable-step BDF on the GGL-stabilised index-2 forms of the car axis and Andrews'
+//! squeezing mechanism (the rows `dpc BDF` of `work_precision`), solved `reps` times without
+//! timing or printing in between: a workload for an instruction counter such as callgrind,
+//! and wall time per solve for comparisons on a quiet machine.
+//!
+//! ```sh
+//! cargo run --release -p dpc-core --example bdf_stabilised -- car 6 1    # problem, k in rtol = 1e-k, reps
+//! valgrind --tool=callgrind target/release/examples/bdf_stabilised car 6 1
+//! ```
+
+#[path = "../tests/common/testset_index3.rs"]
+mod testset_index3;
+
+use std::time::Instant;
+
+use dpc_core::bdf::{self, Bdf};
+use dpc_core::linear_solver::NalgebraLu;
+use dpc_core::stabilised::Stabilised;
+use dpc_core::ImplicitDae;
+use testset_index3::*;
+
+/// One solve of the stabilised form `s` from the declared form's `(y0, yp0)` to `t_end` with
+/// the table's options (`rtol = atol = tol`, the first `differential` unknowns of index 1, the
+/// rest 2): (steps, residuals, matrices, end state).
+fn solve<const N: usize, D: ImplicitDae>(
+    s: Stabilised<D>,
+    (y0, yp0): (&[f64], &[f64]),
+    differential: usize,
+    tol: f64,
+    t_end: f64,
+) -> (usize, usize, usize, Vec<f64>) {
+    let (y0, yp0) = s.extend(y0, yp0);
+    let opts = bdf::Options {
+        index: (0..N)
+            .map(|i| if i < differential { 1 } else { 2 })
+            .collect(),
+        ..bdf::Options::with_tolerances(tol, tol)
+    };
+    let mut b = Bdf::new(s, NalgebraLu::<N>::new(), opts, 0.0, &y0, &yp0).expect("set-up");
+    b.set_stop_time(t_end).expect("stop time");
+    let mut y = vec![0.0; N];
+    b.solve_to(t_end, &mut y, None).expect("solve");
+    let st = b.stats();
+    (
+        st.steps,
+        st.residual_evaluations,
+        st.jacobian_evaluations,
+        y,
+    )
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let problem = args.get(1).map_or("car", String::as_str);
+    let k: i32 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(6);
+    let reps: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
+    let tol = 10f64.powi(-k);
+    let start = Instant::now();
+    let mut last = None;
+    for _ in 0..reps {
+        last = Some(match problem {
+            "andrews" => {
+                let (y0, yp0) = Andrews::initial();
+                solve::<33, _>(Andrews::stabilised(), (&y0, &yp0), 14, tol, ANDREWS_T_END)
+            }
+            _ => {
+                let car = CarAxis::default();
+                let (y0, yp0) = car.initial();
+                solve::<12, _>(
+                    car.stabilised(),
+                    (&y0, &yp0),
+                    CarAxis::STABILISED_DIFFERENTIAL,
+                    tol,
+                    CAR_AXIS_T_END,
+                )
+            }
+        });
+    }
+    let ms = start.elapsed().as_secs_f64() * 1e3 / reps.max(1) as f64;
+    if let Some((steps, residuals, matrices, y)) = last {
+        println!(
+            "{problem} 1e-{k}: {steps} steps, {residuals} residuals, {matrices} matrices, \
+             {ms:.3} ms per solve\ny = {y:?}"
+        );
+    }
+}
