@@ -193,15 +193,19 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
             let scale = 2.0 / (1.0 + cjratio);
             delta.iter_mut().for_each(|d| *d *= scale);
         }
-        let iterate = self
-            .y
-            .iter_mut()
-            .zip(self.ee.iter_mut())
-            .zip(self.yp.iter_mut());
-        for (((y, ee), yp), d) in iterate.zip(delta.iter()) {
-            *y -= d;
-            *ee -= d;
-            *yp -= self.cj * d;
+        // Indexed over equal lengths (no bounds checks): a vectorised loop.
+        let n = delta.len();
+        let (y, ee, yp, d) = (
+            &mut self.y[..n],
+            &mut self.ee[..n],
+            &mut self.yp[..n],
+            &*delta,
+        );
+        let cj = self.cj;
+        for i in 0..n {
+            y[i] -= d[i];
+            ee[i] -= d[i];
+            yp[i] -= cj * d[i];
         }
         Ok(Corrected::FULL)
     }
