@@ -151,6 +151,15 @@ impl Selection {
         self.slot(row, col).map_or(0.0, |s| self.values[s])
     }
 
+    /// The captured entries row by row: selected row `r` and column `k` (their positions in
+    /// the lists given to [`Selection::new`], repeats and indices out of range dropped) at
+    /// `r * width + k`, with `width` the number of selected columns. For a caller that reads
+    /// the same entries at every evaluation without the look-ups of [`Selection::get`].
+    #[inline]
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
     #[inline]
     fn slot(&self, row: usize, col: usize) -> Option<usize> {
         let r = *self.row_slot.get(row)?;

@@ -148,6 +148,8 @@ struct Scratch {
     grad_c1: Selection,
     /// `c_j = dF_i/dq_j'` per kinematic pair.
     coef: Vec<f64>,
+    /// `phi_j` per kinematic pair (the residual's copy, in pair order).
+    pair_phi: Vec<f64>,
     /// The velocities `phi_j` the kinematic rows give, per unknown (zero off the positions).
     phi: Vec<f64>,
     /// The kinematic rows of `dF/dy + c dF/dy'`, every column.
@@ -224,6 +226,7 @@ impl<D: ImplicitDae> Stabilised<D> {
             grad: Selection::new(n, n, &both, Some(&positions)),
             grad_c1: Selection::new(n, n, &both, Some(&positions)),
             coef: vec![0.0; kinematic.len()],
+            pair_phi: vec![0.0; kinematic.len()],
             phi: vec![0.0; n],
             kin_c: Selection::new(n, n, &kin_rows, None),
             curv: constraint_block(),
@@ -409,7 +412,10 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         self.coefficients(t, y, yp, exact, sc);
         out[..n].copy_from_slice(&sc.res);
         out[n..].fill(0.0);
-        sc.dgdt.fill(0.0);
+        // Only the constraint rows of `dgdt` are read: only they need zeroing.
+        for &g in &self.rows {
+            sc.dgdt[g] = 0.0;
+        }
         if self.dae.constraint_time_derivative(t, y, &mut sc.dgdt) {
             for (a, &g) in self.rows.iter().enumerate() {
                 out[n + a] = sc.dgdt[g];
@@ -432,10 +438,25 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
                 }
             }
         }
-        for (a, i, j, gj, cj) in self.terms(sc) {
-            // q_j' - F_i / c_j is the velocity phi_j the kinematic row gives (F_i = c_j (q_j' - phi_j)).
-            out[n + a] += gj * (yp[j] - sc.res[i] / cj);
-            out[i] += cj * gj * mu[a];
+        // q_j' - F_i / c_j is the velocity phi_j the kinematic row gives (F_i = c_j (q_j' -
+        // phi_j)), once per pair; then per constraint its hidden row and its multiplier's terms
+        // in the kinematic rows (plain loops: this runs at every residual).
+        for ((v, &(j, i)), &cj) in sc.pair_phi.iter_mut().zip(&self.kinematic).zip(&sc.coef) {
+            *v = yp[j] - sc.res[i] / cj;
+        }
+        // `G` in `sc.grad`: constraint `a`'s row is its `a`-th selected row, position `q_j`
+        // of pair `p` its `p`-th column (rows and unknowns are distinct, checked in `new`).
+        let width = self.kinematic.len().max(1);
+        let grad = sc.grad.values().chunks_exact(width);
+        let (wrapped, hidden_rows) = out.split_at_mut(n);
+        for ((&m, hidden), g_row) in mu.iter().zip(hidden_rows).zip(grad) {
+            let pairs = g_row.iter().zip(&self.kinematic).zip(&sc.pair_phi);
+            for (((&gj, &(_, i)), &v), &cj) in pairs.zip(&sc.coef) {
+                if gj != 0.0 {
+                    *hidden += gj * v;
+                    wrapped[i] += cj * gj * m;
+                }
+            }
         }
     }
 

@@ -11,7 +11,7 @@
 //! Convergence is declared from the rate estimate `s = rho / (1 - rho)`:
 //! `s |delta| <= epcon` in the weighted RMS norm (IDA's `IDANewtonIter`).
 
-use super::{BdfError, Options, Stats};
+use super::{BdfError, Options, Stats, Tolerance};
 use crate::linear_solver::LinearSolver;
 use crate::newton::{
     first_non_finite, wrms, Convergence, Corrected, Iterate, NewtonFailure, NewtonSystem,
@@ -106,6 +106,19 @@ impl NewtonFailure {
 
 /// Error weights `1 / (rtol_i |y_i| + atol_i)`.
 pub(crate) fn error_weights(opts: &Options, y: &[f64], w: &mut [f64]) -> Result<(), BdfError> {
+    if let (Tolerance::Scalar(rtol), Tolerance::Scalar(atol)) = (&opts.rtol, &opts.atol) {
+        // Scalar tolerances (the common case, at every step): no per-component look-up, and
+        // the validity of all weights checked at once; an invalid one is reported below.
+        let mut valid = true;
+        for (wi, yi) in w.iter_mut().zip(y) {
+            let d = rtol * yi.abs() + atol;
+            valid &= d > 0.0 && d < f64::INFINITY;
+            *wi = 1.0 / d;
+        }
+        if valid {
+            return Ok(());
+        }
+    }
     for (i, (wi, yi)) in w.iter_mut().zip(y).enumerate() {
         let d = opts.rtol.get(i) * yi.abs() + opts.atol.get(i);
         if !(d > 0.0 && d.is_finite()) {
@@ -180,15 +193,19 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
             let scale = 2.0 / (1.0 + cjratio);
             delta.iter_mut().for_each(|d| *d *= scale);
         }
-        let iterate = self
-            .y
-            .iter_mut()
-            .zip(self.ee.iter_mut())
-            .zip(self.yp.iter_mut());
-        for (((y, ee), yp), d) in iterate.zip(delta.iter()) {
-            *y -= d;
-            *ee -= d;
-            *yp -= self.cj * d;
+        // Indexed over equal lengths (no bounds checks): a vectorised loop.
+        let n = delta.len();
+        let (y, ee, yp, d) = (
+            &mut self.y[..n],
+            &mut self.ee[..n],
+            &mut self.yp[..n],
+            &*delta,
+        );
+        let cj = self.cj;
+        for i in 0..n {
+            y[i] -= d[i];
+            ee[i] -= d[i];
+            yp[i] -= cj * d[i];
         }
         Ok(Corrected::FULL)
     }
