@@ -322,6 +322,8 @@ struct PrefeedbackWork {
     z_eval: Vec<f64>,
     /// `dG/du K_n` on the model's matrix.
     chain: FeedbackChain,
+    /// `K_n` row by row (`inputs x states`), for the law at every Newton iteration.
+    k_rows: Vec<f64>,
 }
 
 impl<T: TrackingDae> TrackingSystem<T> {
@@ -348,8 +350,20 @@ impl PrefeedbackWork {
             // (A call of `memcpy` even when empty, as for the wheel.)
             self.z_eval[..nz].copy_from_slice(&zs[..nz]);
         }
-        self.law
-            .input_about(xs, &zs[nz..], &self.x0, &self.u0, &mut self.z_eval[nz..]);
+        // `u = u0 + K_n (x - x0) + v`, the arithmetic of [`Prefeedback::input_about`] in the
+        // same order, with `K_n`'s rows contiguous (about 60 instead of 160 instructions for
+        // the wheel's 2 x 5, a `memcpy` call fewer).
+        let n = self.x0.len();
+        let (xs, x0) = (&xs[..n], &self.x0[..n]);
+        let u = &mut self.z_eval[nz..];
+        let rows = self.k_rows.chunks_exact(n);
+        for (((ui, k), vi), u0i) in u.iter_mut().zip(rows).zip(&zs[nz..]).zip(&self.u0) {
+            let mut s = *vi;
+            for ((kij, xj), x0j) in k.iter().zip(xs).zip(x0) {
+                s += kij * (xj - x0j);
+            }
+            *ui = u0i + s;
+        }
     }
 }
 
@@ -561,12 +575,17 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             .filter(|&&(_, k)| n + k >= u_start)
             .map(|&(i, k)| (i, n + k - u_start));
         let chain = FeedbackChain::new(&law, ne, u_start, pattern_u, &own);
+        let k_rows = (0..m)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| law.k_n[(i, j)])
+            .collect();
         self.inner.dae_mut().prefeedback = Some(PrefeedbackWork {
             law: std::sync::Arc::new(law),
             x0: vec![0.0; n],
             u0: vec![0.0; m],
             z_eval: vec![0.0; nz_all],
             chain,
+            k_rows,
         });
         self.have_warm = false;
         self.inner.refresh_matrix();
