@@ -460,7 +460,8 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     }
 
     /// Evaluate the collocation polynomial of the last step at `t` in `[t - h_last, t]` (the
-    /// initial values before the first step).
+    /// initial values before the first step; at the step's end, its values [`y`](Self::y) and
+    /// [`yp`](Self::yp)).
     ///
     /// # Errors
     /// [`RadauError::TimeOutOfRange`] if `t` is outside the last step (with a round-off
@@ -492,7 +493,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 to: self.t,
             });
         }
-        if self.nst() == 0 {
+        // At the end of the last step (an output on a stop time, as at every sample of a
+        // closed loop) its values serve: the polynomial's `y` there is `y_n + Z_3` (bit for
+        // bit when the step was cut to `t`), its `y'` the last stage derivative, each up to
+        // round-off.
+        if self.nst() == 0 || t == self.t {
             y_out.copy_from_slice(&self.y);
             if let Some(yp) = yp_out {
                 yp.copy_from_slice(&self.yp);
