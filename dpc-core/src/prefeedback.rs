@@ -260,30 +260,55 @@ pub struct Prefeedback {
     pub nominal: Box<dyn Nominal + Send + Sync>,
 }
 
+/// The law `u = u0 + K (x - x0) + v`, with `K` given row by row: `inputs` yields each
+/// input's slot with its `u0`. The one place the law's arithmetic is written: each input's
+/// sum is formed in a local, `v_i` first, then the states in order.
+pub(crate) fn feedback_law<'u, R: Iterator<Item = f64>>(
+    rows: impl Iterator<Item = R>,
+    x: &[f64],
+    v: &[f64],
+    x0: &[f64],
+    inputs: impl Iterator<Item = (&'u mut f64, f64)>,
+) {
+    for (((ui, u0i), k), vi) in inputs.zip(rows).zip(v) {
+        let mut s = *vi;
+        for (kij, (xj, x0j)) in k.zip(x.iter().zip(x0)) {
+            s += kij * (xj - x0j);
+        }
+        *ui = u0i + s;
+    }
+}
+
 impl Prefeedback {
     /// `u = u0(t) + K_n (x - x0(t)) + v`, using the scratch buffers `x0` and `u0`.
     pub fn input(&self, t: f64, x: &[f64], v: &[f64], x0: &mut [f64], u: &mut [f64]) {
         self.nominal.state(t, x0);
         self.nominal.input(t, u);
-        self.add_feedback(x, v, x0, u);
+        // `u` holds `u0(t)`.
+        let inputs = u.iter_mut().map(|ui| {
+            let u0i = *ui;
+            (ui, u0i)
+        });
+        feedback_law(self.gain_by_rows(), x, v, x0, inputs);
     }
 
     /// [`input`](Self::input) with the nominal `x0(t)`, `u0(t)` already evaluated (once per
     /// time, where several iterates share it): `u = u0 + K_n (x - x0) + v`.
     pub fn input_about(&self, x: &[f64], v: &[f64], x0: &[f64], u0: &[f64], u: &mut [f64]) {
-        u.copy_from_slice(u0);
-        self.add_feedback(x, v, x0, u);
+        let inputs = u.iter_mut().zip(u0.iter().copied());
+        feedback_law(self.gain_by_rows(), x, v, x0, inputs);
     }
 
-    /// `u += K_n (x - x0) + v`.
-    fn add_feedback(&self, x: &[f64], v: &[f64], x0: &[f64], u: &mut [f64]) {
-        for (i, ui) in u.iter_mut().enumerate() {
-            let mut s = v[i];
-            for (j, (xj, x0j)) in x.iter().zip(x0).enumerate() {
-                s += self.k_n[(i, j)] * (xj - x0j);
-            }
-            *ui += s;
-        }
+    /// `K_n`'s rows as iterators over their entries.
+    fn gain_by_rows(&self) -> impl Iterator<Item = impl Iterator<Item = f64> + '_> + '_ {
+        let k = &self.k_n;
+        (0..k.nrows()).map(move |i| (0..k.ncols()).map(move |j| k[(i, j)]))
+    }
+
+    /// `K_n` row by row in one contiguous buffer (`inputs x states`), for a caller that
+    /// applies the law at every Newton iteration ([`feedback_law`] over its chunks).
+    pub(crate) fn gain_rows(&self) -> Vec<f64> {
+        self.gain_by_rows().flatten().collect()
     }
 
     /// The iteration matrix `[F_x + c F_x' + F_u K_n | F_z]` of a DAE whose input `u` is
