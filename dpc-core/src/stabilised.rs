@@ -18,7 +18,10 @@
 //! velocities' and multipliers' error weights must be relaxed by the step size (`h` and `h^2`,
 //! as RADAU5 does), which leaves them far less accurate at the same tolerance.
 //!
-//! [`Stabilised`] wraps any [`ImplicitDae`], so the user writes the model once. It needs, at
+//! [`Stabilised`] wraps any [`ImplicitDae`], so the user writes the model once, and
+//! [`Stabilised::detect`] finds its position constraints and kinematic rows from its iteration
+//! matrices (or [`Stabilised::new`] takes them as given); with Radau this is the documented
+//! default for DAEs of index 3 (docs/integrators.md measures both forms). It needs, at
 //! every residual, `G` (the constraint rows' gradients at the positions), `dg/dt` and the
 //! kinematic rows' coefficients `c_j = dF_i/dq_j'`, and for Newton's iteration matrix also the
 //! constraints' curvature `d/dq (G(t, q) phi + dg/dt)` at fixed `phi` (the term `(dG/dq)^T mu`
@@ -126,6 +129,25 @@ pub enum StabilisedError {
         /// The index given twice.
         index: usize,
     },
+    /// [`Stabilised::detect`]: the iteration matrix at the given point has a non-finite
+    /// entry, so its structure cannot be read there.
+    #[error("the iteration matrix is not finite at the given point: d({equation})/d({unknown}) is NaN or infinite")]
+    NonFinite {
+        /// The equation's name ([`ImplicitDae::equation_name`]).
+        equation: String,
+        /// The unknown's name ([`ImplicitDae::unknown_name`]).
+        unknown: String,
+    },
+    /// [`Stabilised::detect`]: the given point's lengths differ from the DAE's dimension.
+    #[error("the point has {y} values and {yp} derivatives, the DAE {dimension} unknowns")]
+    Dimension {
+        /// Length of `y`.
+        y: usize,
+        /// Length of `y'`.
+        yp: usize,
+        /// The DAE's dimension.
+        dimension: usize,
+    },
 }
 
 /// Work of one evaluation: the wrapped DAE's residual and the few entries of its Jacobians
@@ -172,6 +194,10 @@ pub struct Stabilised<D> {
     rows: Vec<usize>,
     /// `(q_j, row)`: the position unknowns with their kinematic rows.
     kinematic: Vec<(usize, usize)>,
+    /// Per unknown of the wrapped DAE, whether it appears differentiated.
+    differential: Vec<bool>,
+    /// The error-control index of the algebraic unknowns and `mu` ([`Self::index`]).
+    algebraic_index: u8,
     scratch: RefCell<Scratch>,
 }
 
@@ -180,6 +206,10 @@ impl<D: ImplicitDae> Stabilised<D> {
     /// only), with, per position unknown `q_j` that they involve, its kinematic row:
     /// `kinematic = [(j, row), ...]`, the row whose only derivative is `q_j'`, linear in it.
     ///
+    /// Which unknowns are differential (for [`Self::index`]) is read from
+    /// [`ImplicitDae::is_differential`]; [`Self::detect`] finds rows, pairs and differential
+    /// unknowns by itself.
+    ///
     /// # Errors
     /// [`StabilisedError`] for an index out of range or a repeated row or unknown. Without
     /// constraints the stabilised form is the DAE itself.
@@ -187,6 +217,105 @@ impl<D: ImplicitDae> Stabilised<D> {
         dae: D,
         rows: Vec<usize>,
         kinematic: Vec<(usize, usize)>,
+    ) -> Result<Self, StabilisedError> {
+        let differential = (0..dae.dimension())
+            .map(|i| dae.is_differential(i))
+            .collect();
+        let algebraic_index = if rows.is_empty() { 1 } else { 2 };
+        Self::with_differential(dae, rows, kinematic, differential, algebraic_index)
+    }
+
+    /// Stabilise the position constraints of `dae` found from its structure, read at the
+    /// consistent point `(t, y, y')` (or any point where the iteration matrix is finite) and at
+    /// two points near it (so that an entry that happens to vanish at the given point, such as
+    /// `yb(0) = 0` in the car axis' constraint, is still seen):
+    ///
+    /// * an unknown is *differential* when its derivative appears in some equation
+    ///   (`dF/dy'` has an entry in its column), else *algebraic* (the multipliers);
+    /// * a *kinematic row* of a differential unknown `q_j` is an equation whose only
+    ///   derivative is `q_j'` and which has no algebraic unknown (`q_j' = v_j`, `c q_j' = ...`);
+    /// * a *position constraint* is an equation without derivatives and without algebraic
+    ///   unknowns all of whose unknowns have kinematic rows (`0 = g(t, q)`); a constraint on
+    ///   unknowns without kinematic rows (a velocity constraint, of index 2) is left as
+    ///   declared.
+    ///
+    /// The same classification as the closed loop applies to generated plants
+    /// ([`crate::consistent::ConstraintStructure`]), here from the values of the iteration
+    /// matrices at `c = 0` and `c = 2^20` (their difference is `2^20 dF/dy'`). With the result
+    /// integrate with [`crate::radau::Radau`] and [`Self::index`] as its
+    /// [`index`](crate::radau::Options::index): the documented default for a DAE of index 3
+    /// (docs/integrators.md gives the accuracy of both forms); the DAE as declared, with the
+    /// index-3 error scaling, is the alternative.
+    ///
+    /// ```
+    /// use dpc_core::stabilised::Stabilised;
+    /// use dpc_core::{ImplicitDae, MatrixSink};
+    ///
+    /// /// The pendulum of length 1: x' = u, y' = v, u' = -x l, v' = -y l - 1, 0 = x^2 + y^2 - 1.
+    /// struct Pendulum;
+    /// impl ImplicitDae for Pendulum {
+    ///     fn dimension(&self) -> usize { 5 }
+    ///     fn residual(&self, _t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+    ///         out[0] = yp[0] - y[2];
+    ///         out[1] = yp[1] - y[3];
+    ///         out[2] = yp[2] + y[0] * y[4];
+    ///         out[3] = yp[3] + y[1] * y[4] + 1.0;
+    ///         out[4] = y[0] * y[0] + y[1] * y[1] - 1.0;
+    ///     }
+    ///     fn iteration_matrix<S: MatrixSink + ?Sized>(
+    ///         &self, _t: f64, y: &[f64], _yp: &[f64], c: f64, out: &mut S,
+    ///     ) {
+    ///         for i in 0..4 { out.set(i, i, c); }
+    ///         out.set(0, 2, -1.0);
+    ///         out.set(1, 3, -1.0);
+    ///         out.set(2, 0, y[4]);
+    ///         out.set(2, 4, y[0]);
+    ///         out.set(3, 1, y[4]);
+    ///         out.set(3, 4, y[1]);
+    ///         out.set(4, 0, 2.0 * y[0]);
+    ///         out.set(4, 1, 2.0 * y[1]);
+    ///     }
+    /// }
+    ///
+    /// // Hanging at rest: x = 0 (an entry 2 x of the constraint's gradient is zero here).
+    /// let (y, yp) = ([0.0, -1.0, 0.0, 0.0, 1.0], [0.0; 5]);
+    /// let s = Stabilised::detect(Pendulum, 0.0, &y, &yp).unwrap();
+    /// assert_eq!(s.constraint_rows(), &[4]);
+    /// assert_eq!(s.kinematic_pairs(), &[(0, 0), (1, 1)]);
+    /// // x, y, u, v of index 1; the multiplier l and the stabilising mu of index 2.
+    /// assert_eq!(s.index(), vec![1, 1, 1, 1, 2, 2]);
+    /// ```
+    ///
+    /// # Errors
+    /// [`StabilisedError::Dimension`] for a point of the wrong length,
+    /// [`StabilisedError::NonFinite`] when the iteration matrix is not finite at the given
+    /// point.
+    pub fn detect(dae: D, t: f64, y: &[f64], yp: &[f64]) -> Result<Self, StabilisedError> {
+        let n = dae.dimension();
+        if y.len() != n || yp.len() != n {
+            return Err(StabilisedError::Dimension {
+                y: y.len(),
+                yp: yp.len(),
+                dimension: n,
+            });
+        }
+        let found = detect::structure(&dae, t, y, yp)?;
+        let algebraic_index = if found.constrained { 2 } else { 1 };
+        Self::with_differential(
+            dae,
+            found.rows,
+            found.kinematic,
+            found.differential,
+            algebraic_index,
+        )
+    }
+
+    fn with_differential(
+        dae: D,
+        rows: Vec<usize>,
+        kinematic: Vec<(usize, usize)>,
+        differential: Vec<bool>,
+        algebraic_index: u8,
     ) -> Result<Self, StabilisedError> {
         let n = dae.dimension();
         let mut seen_rows = vec![false; n];
@@ -238,6 +367,8 @@ impl<D: ImplicitDae> Stabilised<D> {
             dae,
             rows,
             kinematic,
+            differential,
+            algebraic_index,
             scratch,
         })
     }
@@ -245,6 +376,30 @@ impl<D: ImplicitDae> Stabilised<D> {
     /// The wrapped DAE.
     pub fn inner(&self) -> &D {
         &self.dae
+    }
+
+    /// The position-constraint rows, in the order of their multipliers `mu`.
+    pub fn constraint_rows(&self) -> &[usize] {
+        &self.rows
+    }
+
+    /// The position unknowns with their kinematic rows, `(q_j, row)`.
+    pub fn kinematic_pairs(&self) -> &[(usize, usize)] {
+        &self.kinematic
+    }
+
+    /// The differentiation index of every unknown of the stabilised form as the integrator's
+    /// error control needs it ([`crate::radau::Options::index`]): 1 for the wrapped DAE's
+    /// differential unknowns (positions and velocities), 2 for its algebraic unknowns and the
+    /// multipliers `mu` when the DAE has constraints (stabilised position constraints, or
+    /// velocity constraints [`Self::detect`] found), else 1 (an index-1 DAE).
+    pub fn index(&self) -> Vec<u8> {
+        let z = self.algebraic_index;
+        self.differential
+            .iter()
+            .map(|&d| if d { 1 } else { z })
+            .chain(std::iter::repeat_n(z, self.rows.len()))
+            .collect()
     }
 
     /// Number of position constraints (and of multipliers `mu`).
@@ -528,6 +683,169 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
                 self.dae.equation_name(self.rows[i - n])
             )
         }
+    }
+}
+
+/// The structure [`Stabilised::detect`] reads from sampled iteration matrices, classified by
+/// the one classification of constraint structures ([`ConstraintStructure`]).
+mod detect {
+    use std::borrow::Cow;
+
+    use nalgebra::DMatrix;
+
+    use super::StabilisedError;
+    use crate::consistent::ConstraintStructure;
+    use crate::model::{Names, Structure, Units};
+    use crate::ImplicitDae;
+
+    /// `c` of the second iteration matrix: `M(c) - M(0) = c dF/dy'` stays non-zero where
+    /// `dF/dy'` is, even beside a large `dF/dy` (a power of two, so `c dF/dy'` is exact).
+    const C: f64 = 1_048_576.0;
+
+    /// The rows, pairs and differential unknowns [`Stabilised::detect`](super::Stabilised::detect) found.
+    pub(super) struct Found {
+        pub(super) rows: Vec<usize>,
+        pub(super) kinematic: Vec<(usize, usize)>,
+        pub(super) differential: Vec<bool>,
+        /// Whether the DAE has constraints of either type.
+        pub(super) constrained: bool,
+    }
+
+    /// A small deterministic generator (xorshift64*) for the sampling points: the structure
+    /// found must not depend on a seed the user does not see.
+    struct Jitter(u64);
+
+    impl Jitter {
+        /// A value in `[-1, 1)`.
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            let bits = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
+            bits as f64 / (1u64 << 52) as f64 - 1.0
+        }
+    }
+
+    /// The iteration matrices at `c = 0` and `c = C` at one point, or the first non-finite
+    /// entry `(row, column)`.
+    fn matrices<D: ImplicitDae>(
+        dae: &D,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), (usize, usize)> {
+        let n = dae.dimension();
+        let (mut m0, mut m1) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+        dae.iteration_matrix(t, y, yp, 0.0, &mut m0);
+        dae.iteration_matrix(t, y, yp, C, &mut m1);
+        for m in [&m0, &m1] {
+            if let Some(k) = m.iter().position(|v| !v.is_finite()) {
+                return Err((k % n, k / n));
+            }
+        }
+        Ok((m0, m1))
+    }
+
+    /// Entries of `dF/dy` and `dF/dy'` that are non-zero at `(t, y, y')` or at one of two
+    /// points near it (moved by up to 10 % of `1 + |value|` in every coordinate and in time;
+    /// a point where the matrix is not finite is moved less, four times, then skipped).
+    fn sampled_pattern<D: ImplicitDae>(
+        dae: &D,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<(DMatrix<bool>, DMatrix<bool>), StabilisedError> {
+        let n = dae.dimension();
+        let (mut f_y, mut f_yp) = (
+            DMatrix::from_element(n, n, false),
+            DMatrix::from_element(n, n, false),
+        );
+        let mut mark = |m0: &DMatrix<f64>, m1: &DMatrix<f64>| {
+            for ((a, b), (p, q)) in m0
+                .iter()
+                .zip(m1.iter())
+                .zip(f_y.iter_mut().zip(f_yp.iter_mut()))
+            {
+                *p |= *a != 0.0;
+                *q |= *b != *a;
+            }
+        };
+        let (m0, m1) = matrices(dae, t, y, yp).map_err(|(i, j)| StabilisedError::NonFinite {
+            equation: dae.equation_name(i),
+            unknown: dae.unknown_name(j),
+        })?;
+        mark(&m0, &m1);
+        let mut jitter = Jitter(0x9e37_79b9_7f4a_7c15);
+        let (mut y_moved, mut yp_moved) = (vec![0.0; n], vec![0.0; n]);
+        for _ in 0..2 {
+            let mut scale = 0.1;
+            for _ in 0..4 {
+                let mut moved = |v: f64| v + scale * (1.0 + v.abs()) * jitter.next();
+                for (m, &v) in y_moved.iter_mut().zip(y).chain(yp_moved.iter_mut().zip(yp)) {
+                    *m = moved(v);
+                }
+                let t_moved = moved(t);
+                if let Ok((m0, m1)) = matrices(dae, t_moved, &y_moved, &yp_moved) {
+                    mark(&m0, &m1);
+                    break;
+                }
+                scale *= 0.1;
+            }
+        }
+        Ok((f_y, f_yp))
+    }
+
+    /// Classify `dae`'s rows from its sampled pattern (see [`Stabilised::detect`](super::Stabilised::detect)).
+    pub(super) fn structure<D: ImplicitDae>(
+        dae: &D,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<Found, StabilisedError> {
+        let n = dae.dimension();
+        let (f_y, f_yp) = sampled_pattern(dae, t, y, yp)?;
+        let differential: Vec<bool> = (0..n).map(|j| f_yp.column(j).iter().any(|&e| e)).collect();
+        // The unknowns as a model's states (the differential ones) and algebraic unknowns, in
+        // the DAE's order within each group.
+        let (states, algebraic): (Vec<usize>, Vec<usize>) = (0..n).partition(|&j| differential[j]);
+        let pattern = |m: &DMatrix<bool>, cols: &[usize]| -> Cow<'static, [(usize, usize)]> {
+            let entries =
+                (0..n).flat_map(|i| cols.iter().enumerate().map(move |(k, &j)| (i, k, j)));
+            Cow::Owned(
+                entries
+                    .filter(|&(i, _, j)| m[(i, j)])
+                    .map(|(i, k, _)| (i, k))
+                    .collect(),
+            )
+        };
+        let names = |v: &[usize]| Names::Owned(v.iter().map(|&j| dae.unknown_name(j)).collect());
+        let structure = Structure {
+            name: Cow::Borrowed("the DAE"),
+            states: names(&states),
+            algebraic: names(&algebraic),
+            inputs: Names::Static(&[]),
+            outputs: Names::Static(&[]),
+            params: Names::Static(&[]),
+            equations: Names::Owned((0..n).map(|i| dae.equation_name(i)).collect()),
+            units: Units::Static(&[]),
+            pattern_f_xdot: pattern(&f_yp, &states),
+            pattern_f_x: pattern(&f_y, &states),
+            pattern_f_z: pattern(&f_y, &algebraic),
+            pattern_f_u: Cow::Borrowed(&[]),
+            pattern_h_x: Cow::Borrowed(&[]),
+        };
+        let classified = ConstraintStructure::from_structure(&structure);
+        let kinematic = classified
+            .position_states
+            .iter()
+            .filter_map(|&s| classified.kinematic[s].map(|row| (states[s], row)))
+            .collect();
+        Ok(Found {
+            constrained: classified.is_constrained(),
+            rows: classified.position_constraints,
+            kinematic,
+            differential,
+        })
     }
 }
 

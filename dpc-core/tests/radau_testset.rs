@@ -589,3 +589,96 @@ fn exact_and_differenced_stabilised_forms_agree() {
     let (y, yp) = pendulum.initial(THETA0);
     compare_exact_and_differenced(pendulum, vec![4], vec![(0, 0), (1, 1)], 0.5, &off(&y), &yp);
 }
+
+/// `Stabilised::detect` finds, from the iteration matrices alone, the constraints and
+/// kinematic rows written by hand for the Test Set problems and the pendulum (the car axis'
+/// first constraint `xb xl + yb yl` has `yb(0) = 0`: its `yl` entry vanishes at the starting
+/// point), and the index vector the hand-written runs use; the detected car axis then
+/// integrates to the same values as the declared one.
+#[test]
+fn detect_finds_the_declared_constraints() {
+    fn same<D: ImplicitDae>(found: &Stabilised<D>, declared: &Stabilised<D>, differential: usize) {
+        assert_eq!(found.constraint_rows(), declared.constraint_rows());
+        assert_eq!(found.kinematic_pairs(), declared.kinematic_pairs());
+        let m = declared.dimension();
+        let index: Vec<u8> = (0..m)
+            .map(|i| if i < differential { 1 } else { 2 })
+            .collect();
+        assert_eq!(found.index(), index);
+    }
+    let (y0, yp0) = Andrews::initial();
+    let andrews = Stabilised::detect(Andrews, 0.0, &y0, &yp0).unwrap();
+    same(
+        &andrews,
+        &Andrews::stabilised(),
+        Andrews::STABILISED_DIFFERENTIAL,
+    );
+
+    let car = CarAxis::default();
+    let (y0, yp0) = car.initial();
+    let found = Stabilised::detect(CarAxis::default(), 0.0, &y0, &yp0).unwrap();
+    same(&found, &car.stabilised(), CarAxis::STABILISED_DIFFERENTIAL);
+    let (declared_y, _, declared_stats) = car_axis_stabilised(1e-6);
+    let (found_y, _, found_stats) = stabilised(
+        found,
+        CarAxis::STABILISED_DIFFERENTIAL,
+        (&y0, &yp0),
+        CAR_AXIS_T_END,
+        1e-6,
+    );
+    assert_eq!(found_y, declared_y);
+    assert_eq!(found_stats, declared_stats);
+
+    let p = Pendulum::default();
+    let (y0, yp0) = p.initial(THETA0);
+    let found = Stabilised::detect(Pendulum::default(), 0.0, &y0, &yp0).unwrap();
+    let declared = Stabilised::new(Pendulum::default(), vec![4], vec![(0, 0), (1, 1)]).unwrap();
+    same(&found, &declared, 4);
+}
+
+/// A constraint on unknowns without kinematic rows (a velocity constraint, index 2) is left as
+/// declared: without position constraints the stabilised form is the DAE itself.
+#[test]
+fn detect_leaves_other_constraints_alone() {
+    /// `x' = v, v' = -x + l, 0 = v - sin t` (a velocity constraint with multiplier `l`).
+    struct Guided;
+    impl ImplicitDae for Guided {
+        fn dimension(&self) -> usize {
+            3
+        }
+        fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            out[0] = yp[0] - y[1];
+            out[1] = yp[1] + y[0] - y[2];
+            out[2] = y[1] - t.sin();
+        }
+        fn iteration_matrix<S: dpc_core::MatrixSink + ?Sized>(
+            &self,
+            _t: f64,
+            _y: &[f64],
+            _yp: &[f64],
+            c: f64,
+            out: &mut S,
+        ) {
+            out.set(0, 0, c);
+            out.set(0, 1, -1.0);
+            out.set(1, 1, c);
+            out.set(1, 0, 1.0);
+            out.set(1, 2, -1.0);
+            out.set(2, 1, 1.0);
+        }
+    }
+    let s = Stabilised::detect(Guided, 0.0, &[0.0, 0.0, 0.0], &[0.0, 0.0, 1.0]).unwrap();
+    assert!(s.constraint_rows().is_empty());
+    assert_eq!(s.dimension(), 3);
+    // The multiplier of the velocity constraint is of index 2.
+    assert_eq!(s.index(), vec![1, 1, 2]);
+    let wrong = Stabilised::detect(Guided, 0.0, &[0.0; 2], &[0.0; 3]);
+    assert!(matches!(
+        wrong,
+        Err(dpc_core::stabilised::StabilisedError::Dimension {
+            y: 2,
+            yp: 3,
+            dimension: 3
+        })
+    ));
+}
