@@ -1,9 +1,9 @@
 //! A plant file and the compiled model of the same text agree: every `model! { ... }` of
 //! `models/src/*.rs` is cut out of its source at test time and read as a plant file, and at
 //! random points and random parameters its residual, all Jacobian blocks, iteration matrix,
-//! outputs and output Jacobians, its tracking DAE (also after changing `W`) and its
-//! references must equal those of the generated types to 1e-14 relative to the size of each
-//! evaluated block.
+//! outputs and output Jacobians, its position constraints' exact derivatives, its tracking DAE
+//! (also after changing `W`) and its references must equal those of the generated types to
+//! 1e-14 relative to the size of each evaluated block.
 
 mod common;
 
@@ -240,6 +240,46 @@ fn same_values<A: DaeModel, B: DaeModel>(a: &A, b: &B, p: &Point) {
     agree(&format!("{name} dh/dx"), hx1.as_slice(), hx2.as_slice());
     agree(&format!("{name} dh/dz"), hz1.as_slice(), hz2.as_slice());
     agree(&format!("{name} dh/du"), hu1.as_slice(), hu2.as_slice());
+
+    // The position constraints' exact derivatives: supplied by both or by neither, equal
+    // (the velocities of the curvature are the point's x').
+    let mut g1 = DMatrix::<f64>::zeros(ne, nx + nz);
+    let mut g2 = DMatrix::<f64>::zeros(ne, nx + nz);
+    let supplied = a.constraint_gradient(p.t, &p.x, &p.z, &p.u, &mut g1);
+    assert_eq!(
+        supplied,
+        b.constraint_gradient(p.t, &p.x, &p.z, &p.u, &mut g2),
+        "{name} constraint gradient supplied"
+    );
+    agree(
+        &format!("{name} constraint gradient"),
+        g1.as_slice(),
+        g2.as_slice(),
+    );
+    let mut t1 = vec![0.0; ne];
+    let mut t2 = vec![0.0; ne];
+    assert_eq!(
+        a.constraint_time_derivative(p.t, &p.x, &p.z, &p.u, &mut t1),
+        b.constraint_time_derivative(p.t, &p.x, &p.z, &p.u, &mut t2),
+        "{name} constraint time derivative supplied"
+    );
+    agree(&format!("{name} constraint time derivative"), &t1, &t2);
+    let mut k1 = DMatrix::<f64>::zeros(ne, nx + nz);
+    let mut k2 = DMatrix::<f64>::zeros(ne, nx + nz);
+    assert_eq!(
+        a.constraint_curvature(p.t, &p.x, &p.z, &p.u, &p.xdot, &mut k1),
+        b.constraint_curvature(p.t, &p.x, &p.z, &p.u, &p.xdot, &mut k2),
+        "{name} constraint curvature supplied"
+    );
+    agree(
+        &format!("{name} constraint curvature"),
+        k1.as_slice(),
+        k2.as_slice(),
+    );
+    // The plants with position constraints supply them (their tracking DAEs do not).
+    if ["CartPendulum", "SliderCrank", "Pendulum"].contains(&name.as_str()) {
+        assert!(supplied, "{name} supplies its constraint derivatives");
+    }
 }
 
 /// Parameters `i` of both set to `values[i]` (values near the defaults, so that the models

@@ -23,11 +23,15 @@
 //! 3. *derivatives and multipliers*: at the fixed `x`, Gauss-Newton (column-pivoted QR,
 //!    least squares) for `(x', z)` on `F = 0` stacked with the acceleration-level constraints
 //!    `G phi_x x' + kappa = 0` of position constraints and `G x' = 0` of velocity
-//!    constraints. The curvature `kappa = (d/ds) g_x(x + s p) p` at `s = 0`, `p = phi(x)`, is the
-//!    one second derivative the generated code does not provide; it is a central difference of
+//!    constraints. The curvature `kappa = (d/ds) g_x(x + s p) p` at `s = 0`, `p = phi(x)`, is
+//!    `sum_k C_k(p) p_k` with the model's exact curvature `C(v)` of the position constraints
+//!    ([`DaeModel::constraint_curvature`], which `dpc::model!` and plant files supply; its
+//!    part `d^2 g/(dt dx)` is taken out, `C(p) - C(0)`, so the term is the same whether the
+//!    model supplies it or not). A model that does not supply it gets a central difference of
 //!    the *analytic* Jacobian along `p` (exact for quadratic constraints such as rods of fixed
-//!    length), and its error is estimated from the same difference at twice the step and
-//!    reported. It is zero, with no difference taken, at rest.
+//!    length, up to rounding), with the error estimated from the same difference at twice the
+//!    step, Richardson-extrapolated; the estimate is reported ([`ConsistentState::curvature_error`],
+//!    zero when exact). It is zero, with nothing evaluated, at rest.
 //!
 //! The constraints must not depend explicitly on time or on the input (the model provides no
 //! `dF/dt`, and a constraint driven by the input is a prescribed motion): such a plant is
@@ -130,7 +134,17 @@ pub struct ConsistentState {
     pub velocity_constraints: Vec<usize>,
     /// Gauss-Newton steps of the three stages.
     pub iterations: [usize; 3],
-    /// Estimated absolute error of the curvature term `kappa` (largest entry), zero at rest.
+    /// The curvature term `kappa` of the acceleration-level constraint of each position
+    /// constraint (in the order of [`Self::position_constraints`]; see the module doc).
+    pub curvature: Vec<f64>,
+    /// Whether [`Self::curvature`] was taken from the model's exact curvature
+    /// ([`DaeModel::constraint_curvature`]); `false` when it was differenced, and at rest,
+    /// where it is zero with nothing evaluated.
+    pub curvature_exact: bool,
+    /// Estimated absolute error of the differenced curvature term `kappa` (largest entry):
+    /// the Richardson estimate of the central difference's error at its step (an upper
+    /// estimate for the extrapolated value used). Zero at rest and when the model supplies
+    /// the curvature exactly ([`Self::curvature_exact`]; then only rounding remains).
     pub curvature_error: f64,
     /// Largest residual of `F` at the result, relative to the size of its terms.
     pub residual: f64,
@@ -356,7 +370,15 @@ pub fn consistent_state<M: DaeModel>(
 ) -> Result<ConsistentState, ConsistentError> {
     let eval =
         |t: f64, x: &[f64], xdot: &[f64], z: &[f64], u: &[f64]| evaluate(model, t, x, xdot, z, u);
-    solve(model.structure(), &eval, t, x_given, u, opts)
+    let s = model.structure();
+    let (ne, nx, nz) = (s.n_equations(), s.n_states(), s.n_algebraic());
+    let curvature = |t: f64, x: &[f64], z: &[f64], u: &[f64], v: &[f64]| {
+        let mut c = DMatrix::zeros(ne, nx + nz);
+        model
+            .constraint_curvature(t, x, z, u, v, &mut c)
+            .then_some(c)
+    };
+    solve(s, &eval, &curvature, t, x_given, u, opts)
 }
 
 /// A model's residual with every Jacobian block at a point `(t, x, x', z, u)`, behind a
@@ -364,10 +386,15 @@ pub fn consistent_state<M: DaeModel>(
 /// crate instead of once per model in every crate that uses it (only [`evaluate`] is).
 type Evaluate<'a> = &'a dyn Fn(f64, &[f64], &[f64], &[f64], &[f64]) -> Result<Jac, ConsistentError>;
 
+/// A model's exact constraint curvature `C(v)` at `(t, x, z, u)` along `v` (equations x
+/// unknowns, [`DaeModel::constraint_curvature`]), `None` when the model does not supply it.
+type Curvature<'a> = &'a dyn Fn(f64, &[f64], &[f64], &[f64], &[f64]) -> Option<DMatrix<f64>>;
+
 /// [`consistent_state`] for the model with structure `s` evaluated by `eval`.
 fn solve(
     s: &Structure,
     eval: Evaluate<'_>,
+    exact_curvature: Curvature<'_>,
     t: f64,
     x_given: &[f64],
     u: &[f64],
@@ -514,10 +541,10 @@ fn solve(
 
     // 3. Derivatives and multipliers at fixed x.
     let n = nx + nz;
-    let (kappa, curvature_error) = {
+    let (kappa, curvature_error, curvature_exact) = {
         let j = eval(t, &x, &xdot, &z, u)?;
         let (p, _) = velocities(&j, &xdot);
-        curvature(eval, t, &x, &xdot, &z, u, &position, &p)?
+        curvature(eval, exact_curvature, t, &x, &xdot, &z, u, &position, &p)?
     };
     let mut it = 0;
     loop {
@@ -652,17 +679,21 @@ fn solve(
         position_constraints: position,
         velocity_constraints: velocity,
         iterations,
+        curvature: kappa,
+        curvature_exact,
         curvature_error,
         residual,
     })
 }
 
-/// `kappa_a = d/ds [g_x(x + s p) p]_a` at `s = 0` for the position constraints, by a central
-/// difference of the analytic Jacobian, and the Richardson estimate of its error from the
-/// difference at twice the step.
+/// `kappa_a = d/ds [g_x(x + s p) p]_a` at `s = 0` for the position constraints, from the
+/// model's exact curvature if it supplies it (error estimate zero), else by a central
+/// difference of the analytic Jacobian with the Richardson estimate of its error from the
+/// difference at twice the step; and whether it is exact.
 #[allow(clippy::too_many_arguments)]
 fn curvature(
     eval: Evaluate<'_>,
+    exact: Curvature<'_>,
     t: f64,
     x: &[f64],
     xdot: &[f64],
@@ -670,10 +701,30 @@ fn curvature(
     u: &[f64],
     rows: &[usize],
     p: &DVector<f64>,
-) -> Result<(Vec<f64>, f64), ConsistentError> {
+) -> Result<(Vec<f64>, f64, bool), ConsistentError> {
     let pn = p.amax();
     if rows.is_empty() || pn == 0.0 {
-        return Ok((vec![0.0; rows.len()], 0.0));
+        return Ok((vec![0.0; rows.len()], 0.0, false));
+    }
+    // C(p) - C(0): the second derivatives in x along p, without the part d^2 g/(dt dx) that
+    // a time-dependent constraint adds (which the difference below does not see either).
+    if let Some(c_p) = exact(t, x, z, u, p.as_slice()) {
+        let c_0 = exact(t, x, z, u, &vec![0.0; p.len()])
+            .unwrap_or_else(|| DMatrix::zeros(c_p.nrows(), c_p.ncols()));
+        let k: Vec<f64> = rows
+            .iter()
+            .map(|&i| {
+                (0..p.len())
+                    .map(|k| (c_p[(i, k)] - c_0[(i, k)]) * p[k])
+                    .sum::<f64>()
+            })
+            .collect();
+        if k.iter().any(|v| !v.is_finite()) {
+            return Err(ConsistentError::NonFinite {
+                what: "constraint curvature",
+            });
+        }
+        return Ok((k, 0.0, true));
     }
     let xn = x.iter().fold(1.0f64, |m, v| m.max(v.abs()));
     let h = f64::EPSILON.cbrt() * xn / pn;
@@ -703,5 +754,5 @@ fn curvature(
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs() / 3.0));
     // Richardson extrapolation removes the O(h^2) term.
     let k: Vec<f64> = k1.iter().zip(&k2).map(|(a, b)| a + (a - b) / 3.0).collect();
-    Ok((k, err))
+    Ok((k, err, false))
 }

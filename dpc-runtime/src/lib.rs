@@ -8,7 +8,11 @@
 //! needs no Rust toolchain at run time:
 //!
 //! * [`RuntimePlant`] implements [`dpc_core::DaeModel`] (residual, Jacobian blocks with their
-//!   structural sparsity, iteration matrix, outputs and output Jacobians);
+//!   structural sparsity, iteration matrix, outputs and output Jacobians) and, for a plant
+//!   with position-constraint rows, their exact derivatives as the macro emits them
+//!   (`constraint_gradient`, `constraint_time_derivative`, `constraint_curvature`, from tapes
+//!   of the derive pass's second derivatives), so the closed loop's index reduction differences
+//!   nothing for a plant file either;
 //! * [`RuntimeTracking`] implements [`dpc_core::TrackingDae`] for the `tracking` section
 //!   (the Hirschorn rows, `W` changeable at run time, relative degrees);
 //! * [`RuntimeReference`] implements [`dpc_core::Reference`] for the `references` section,

@@ -4,9 +4,10 @@ use std::borrow::Cow;
 use std::fmt;
 use std::sync::Arc;
 
-use dpc_codegen::derive::{Block, DaeDerivatives, Derived, Layout};
+use dpc_codegen::derive::{Block, ConstraintDerivatives, DaeDerivatives, Derived, Layout};
 use dpc_codegen::hirschorn::RelativeDegree;
 use dpc_codegen::ir::{Model, Symbol};
+use dpc_codegen::symbolic::ExprId;
 use dpc_core::model::{Names, Structure, Units};
 use dpc_core::reference::{check_buffer, Reference, ReferenceError};
 use dpc_core::tracking::{check_w_coefficients, TrackingError};
@@ -30,6 +31,111 @@ struct DaeTapes {
     output_jacobians: Tape,
     pattern_h_z: Vec<(usize, usize)>,
     pattern_h_u: Vec<(usize, usize)>,
+    /// The position constraints' exact derivatives; `None` for a type without
+    /// position-constraint rows (and for a tracking DAE, whose derive pass gives none).
+    constraints: Option<ConstraintTapes>,
+}
+
+/// The tapes of the position-constraint rows' exact derivatives (the derive pass's
+/// [`ConstraintDerivatives`], as `dpc::model!` emits them).
+#[derive(Debug)]
+struct ConstraintTapes {
+    /// The entries of `dg/dx`.
+    gradient: Tape,
+    gradient_pattern: Vec<(usize, usize)>,
+    /// `dg/dt` of the rows that depend on time explicitly (`time_rows`).
+    time_derivative: Tape,
+    time_rows: Vec<usize>,
+    /// The entries of `H_jk = d^2 g/(dx_j dx_k)`, then those of `H_tk = d^2 g/(dt dx_k)`.
+    curvature: Tape,
+    /// The curvature's structural entries, row-major.
+    curvature_entries: Vec<CurvatureSum>,
+    /// The terms `H_jk v_j` of all entries, each entry's contiguous: `(root of H_jk, j)`.
+    curvature_terms: Vec<(usize, usize)>,
+}
+
+/// One structural entry `(row, col)` of the curvature `sum_j H_jk v_j + H_tk`.
+#[derive(Debug)]
+struct CurvatureSum {
+    row: usize,
+    col: usize,
+    /// Its terms in [`ConstraintTapes::curvature_terms`].
+    terms: std::ops::Range<usize>,
+    /// The root of `H_tk`, if it is not structurally zero.
+    time: Option<usize>,
+}
+
+impl ConstraintTapes {
+    /// The tapes of `c`, compiled by `tape`; `None` without position-constraint rows.
+    fn compile<E>(
+        c: &ConstraintDerivatives,
+        tape: impl Fn(&[ExprId]) -> Result<Tape, E>,
+    ) -> Result<Option<Self>, E> {
+        if c.is_empty() {
+            return Ok(None);
+        }
+        let time_roots: Vec<ExprId> = c.time_derivative.iter().map(|d| d.1).collect();
+        let mut curvature_terms = Vec::new();
+        let curvature_entries = c
+            .curvature_entries()
+            .into_iter()
+            .map(|e| {
+                let start = curvature_terms.len();
+                curvature_terms.extend(e.terms.iter().copied());
+                CurvatureSum {
+                    row: e.row,
+                    col: e.col,
+                    terms: start..curvature_terms.len(),
+                    time: e.time_term,
+                }
+            })
+            .collect();
+        Ok(Some(ConstraintTapes {
+            gradient: tape(&c.gradient.exprs().collect::<Vec<_>>())?,
+            gradient_pattern: c.gradient.pattern(),
+            time_derivative: tape(&time_roots)?,
+            time_rows: c.time_derivative.iter().map(|d| d.0).collect(),
+            curvature: tape(&c.curvature_roots())?,
+            curvature_entries,
+            curvature_terms,
+        }))
+    }
+
+    fn gradient<S: MatrixSink + ?Sized>(&self, args: &Args<'_>, out: &mut S) {
+        self.gradient
+            .eval(args, |v| write(v, 0, &self.gradient_pattern, out));
+    }
+
+    fn time_derivative(&self, args: &Args<'_>, out: &mut [f64]) {
+        if self.time_rows.is_empty() {
+            return;
+        }
+        self.time_derivative.eval(args, |v| {
+            for (k, &g) in self.time_rows.iter().enumerate() {
+                out[g] = v.get(k);
+            }
+        });
+    }
+
+    /// Per structural entry, `sum_j H_jk v_j + H_tk` over its terms, summed in the order
+    /// the macro's code sums them.
+    fn curvature<S: MatrixSink + ?Sized>(&self, args: &Args<'_>, v: &[f64], out: &mut S) {
+        if self.curvature_entries.is_empty() {
+            return;
+        }
+        self.curvature.eval(args, |h| {
+            for e in &self.curvature_entries {
+                let terms = self.curvature_terms[e.terms.clone()]
+                    .iter()
+                    .map(|&(r, j)| h.get(r) * v[j]);
+                let sum = terms
+                    .chain(e.time.map(|r| h.get(r)))
+                    .reduce(|a, b| a + b)
+                    .unwrap_or(0.0);
+                out.set(e.row, e.col, sum);
+            }
+        });
+    }
 }
 
 impl DaeTapes {
@@ -39,7 +145,7 @@ impl DaeTapes {
         w_degrees: &[usize],
         origin: &str,
     ) -> Result<Self, PlantFileError> {
-        let tape = |roots: &[dpc_codegen::symbolic::ExprId]| {
+        let tape = |roots: &[ExprId]| {
             Tape::compile(model, &d.layout, w_degrees, roots).map_err(|u| {
                 PlantFileError::Unplaced {
                     path: origin.to_string(),
@@ -76,6 +182,7 @@ impl DaeTapes {
             output_jacobians: tape(&d.output_jacobian_roots())?,
             pattern_h_z: d.h_z.pattern(),
             pattern_h_u: d.h_u.pattern(),
+            constraints: ConstraintTapes::compile(&d.constraints, tape)?,
         })
     }
 
@@ -109,6 +216,7 @@ impl DaeTapes {
             output_jacobians: tape,
             pattern_h_z: Vec::new(),
             pattern_h_u: Vec::new(),
+            constraints: None,
         }
     }
 
@@ -163,6 +271,38 @@ impl DaeTapes {
             let k = write(v, k, &self.pattern_h_z, h_z);
             write(v, k, &self.pattern_h_u, h_u);
         });
+    }
+
+    /// `DaeModel::constraint_gradient`: `false` without position-constraint rows.
+    fn constraint_gradient<S: MatrixSink + ?Sized>(&self, args: &Args<'_>, out: &mut S) -> bool {
+        let Some(c) = &self.constraints else {
+            return false;
+        };
+        c.gradient(args, out);
+        true
+    }
+
+    /// `DaeModel::constraint_time_derivative`: `false` without position-constraint rows.
+    fn constraint_time_derivative(&self, args: &Args<'_>, out: &mut [f64]) -> bool {
+        let Some(c) = &self.constraints else {
+            return false;
+        };
+        c.time_derivative(args, out);
+        true
+    }
+
+    /// `DaeModel::constraint_curvature`: `false` without position-constraint rows.
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        args: &Args<'_>,
+        v: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let Some(c) = &self.constraints else {
+            return false;
+        };
+        c.curvature(args, v, out);
+        true
     }
 }
 
@@ -551,6 +691,70 @@ macro_rules! dae_model_methods {
                 c: 0.0,
             };
             self.tapes().output_jacobians(&a, h_x, h_z, h_u);
+        }
+
+        fn constraint_gradient<S: MatrixSink + ?Sized>(
+            &self,
+            t: f64,
+            x: &[f64],
+            z: &[f64],
+            u: &[f64],
+            out: &mut S,
+        ) -> bool {
+            let a = Args {
+                t,
+                x,
+                xdot: &[],
+                z,
+                u,
+                params: &self.params.values,
+                w: self.w(),
+                c: 0.0,
+            };
+            self.tapes().constraint_gradient(&a, out)
+        }
+
+        fn constraint_time_derivative(
+            &self,
+            t: f64,
+            x: &[f64],
+            z: &[f64],
+            u: &[f64],
+            out: &mut [f64],
+        ) -> bool {
+            let a = Args {
+                t,
+                x,
+                xdot: &[],
+                z,
+                u,
+                params: &self.params.values,
+                w: self.w(),
+                c: 0.0,
+            };
+            self.tapes().constraint_time_derivative(&a, out)
+        }
+
+        fn constraint_curvature<S: MatrixSink + ?Sized>(
+            &self,
+            t: f64,
+            x: &[f64],
+            z: &[f64],
+            u: &[f64],
+            v: &[f64],
+            out: &mut S,
+        ) -> bool {
+            let a = Args {
+                t,
+                x,
+                xdot: &[],
+                z,
+                u,
+                params: &self.params.values,
+                w: self.w(),
+                c: 0.0,
+            };
+            self.tapes().constraint_curvature(&a, v, out)
         }
     };
 }
