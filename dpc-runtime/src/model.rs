@@ -591,9 +591,7 @@ macro_rules! dae_model_methods {
                 xdot,
                 z,
                 u,
-                params: &self.params.values,
-                w: self.w(),
-                c: 0.0,
+                ..Args::model(&self.params.values, self.w())
             };
             self.tapes().residual(&a, out);
         }
@@ -622,9 +620,7 @@ macro_rules! dae_model_methods {
                 xdot,
                 z,
                 u,
-                params: &self.params.values,
-                w: self.w(),
-                c: 0.0,
+                ..Args::model(&self.params.values, self.w())
             };
             self.tapes().evaluate(&a, residual, f_xdot, f_x, f_z, f_u);
         }
@@ -645,9 +641,8 @@ macro_rules! dae_model_methods {
                 xdot,
                 z,
                 u,
-                params: &self.params.values,
-                w: self.w(),
                 c,
+                ..Args::model(&self.params.values, self.w())
             };
             self.tapes().iteration_matrix(&a, out);
         }
@@ -656,12 +651,9 @@ macro_rules! dae_model_methods {
             let a = Args {
                 t,
                 x,
-                xdot: &[],
                 z,
                 u,
-                params: &self.params.values,
-                w: self.w(),
-                c: 0.0,
+                ..Args::model(&self.params.values, self.w())
             };
             self.tapes().outputs(&a, out);
         }
@@ -683,12 +675,9 @@ macro_rules! dae_model_methods {
             let a = Args {
                 t,
                 x,
-                xdot: &[],
                 z,
                 u,
-                params: &self.params.values,
-                w: self.w(),
-                c: 0.0,
+                ..Args::model(&self.params.values, self.w())
             };
             self.tapes().output_jacobians(&a, h_x, h_z, h_u);
         }
@@ -704,12 +693,9 @@ macro_rules! dae_model_methods {
             let a = Args {
                 t,
                 x,
-                xdot: &[],
                 z,
                 u,
-                params: &self.params.values,
-                w: self.w(),
-                c: 0.0,
+                ..Args::model(&self.params.values, self.w())
             };
             self.tapes().constraint_gradient(&a, out)
         }
@@ -725,12 +711,9 @@ macro_rules! dae_model_methods {
             let a = Args {
                 t,
                 x,
-                xdot: &[],
                 z,
                 u,
-                params: &self.params.values,
-                w: self.w(),
-                c: 0.0,
+                ..Args::model(&self.params.values, self.w())
             };
             self.tapes().constraint_time_derivative(&a, out)
         }
@@ -747,12 +730,9 @@ macro_rules! dae_model_methods {
             let a = Args {
                 t,
                 x,
-                xdot: &[],
                 z,
                 u,
-                params: &self.params.values,
-                w: self.w(),
-                c: 0.0,
+                ..Args::model(&self.params.values, self.w())
             };
             self.tapes().constraint_curvature(&a, v, out)
         }

@@ -50,6 +50,16 @@ pub(crate) struct Args<'a> {
 }
 
 impl<'a> Args<'a> {
+    /// A model's arguments with its parameters and `W` coefficients, at `t = 0` with no
+    /// unknowns, inputs or `c`: the base the evaluations at a point complete with struct
+    /// update syntax (`Args { t, x, z, u, ..Args::model(params, w) }`).
+    pub fn model(params: &'a [f64], w: &'a [f64]) -> Self {
+        Args {
+            w,
+            ..Args::time(0.0, params)
+        }
+    }
+
     /// Arguments of time and parameters only.
     pub fn time(t: f64, params: &'a [f64]) -> Self {
         Args {
