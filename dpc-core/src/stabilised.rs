@@ -881,6 +881,47 @@ mod tests {
         }
     }
 
+    /// A DAE whose iteration matrix has `d(equation 1)/d(y[0]) = NaN` everywhere.
+    struct NotFinite;
+    impl ImplicitDae for NotFinite {
+        fn dimension(&self) -> usize {
+            2
+        }
+        fn residual(&self, _t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            out[0] = yp[0] - y[1];
+            out[1] = y[0].sqrt() - y[1];
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            _t: f64,
+            _y: &[f64],
+            _yp: &[f64],
+            c: f64,
+            out: &mut S,
+        ) {
+            out.set(0, 0, c);
+            out.set(0, 1, -1.0);
+            out.set(1, 0, f64::NAN);
+            out.set(1, 1, -1.0);
+        }
+    }
+
+    #[test]
+    fn detect_reports_a_matrix_it_cannot_read() {
+        let e = Stabilised::detect(NotFinite, 0.0, &[0.0, 0.0], &[0.0, 0.0]).err();
+        assert_eq!(
+            e,
+            Some(StabilisedError::NonFinite {
+                equation: "equation 1".into(),
+                unknown: "y[0]".into(),
+            })
+        );
+        assert_eq!(
+            e.map(|e| e.to_string()).unwrap_or_default(),
+            "the iteration matrix is not finite at the given point: d(equation 1)/d(y[0]) is NaN or infinite"
+        );
+    }
+
     #[test]
     fn malformed_constraints_are_refused() {
         let e = |rows: Vec<usize>, kin: Vec<(usize, usize)>| {
