@@ -571,14 +571,16 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         let n = self.dae.dimension();
         let (y, yp, mu) = (&y[..n], &yp[..n], &y[n..]);
         let sc = &mut *self.scratch.borrow_mut();
-        self.dae.residual(t, y, yp, &mut sc.res);
+        // The wrapped DAE's residual straight into its rows (the multipliers' terms are added
+        // below).
+        self.dae.residual(t, y, yp, &mut out[..n]);
         let exact = self.gradient(t, y, yp, sc);
         // `c_j` as of the last iteration matrix (see the module documentation); only before
         // the first one evaluated here.
         if !sc.coef_held {
+            sc.res.copy_from_slice(&out[..n]);
             self.coefficients(t, y, yp, exact, sc);
         }
-        out[..n].copy_from_slice(&sc.res);
         out[n..].fill(0.0);
         // Only the constraint rows of `dgdt` are read: only they need zeroing.
         for &g in &self.rows {
@@ -610,7 +612,7 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         // phi_j)), once per pair; then per constraint its hidden row and its multiplier's terms
         // in the kinematic rows (plain loops: this runs at every residual).
         for ((v, &(j, i)), &cj) in sc.pair_phi.iter_mut().zip(&self.kinematic).zip(&sc.coef) {
-            *v = yp[j] - sc.res[i] / cj;
+            *v = yp[j] - out[i] / cj;
         }
         // `G` in `sc.grad`: constraint `a`'s row is its `a`-th selected row, position `q_j`
         // of pair `p` its `p`-th column (rows and unknowns are distinct, checked in `new`).
