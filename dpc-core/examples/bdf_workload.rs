@@ -2,11 +2,14 @@
 //! forms of the car axis (`car`) and Andrews' squeezing mechanism (`andrews`), and the index-1
 //! transistor amplifier (`amplifier`) and Robertson (`robertson`), each solved `reps` times
 //! without timing or printing in between: a workload for an instruction counter such as
-//! callgrind, and wall time per solve for comparisons on a quiet machine. Prints the work and
-//! the end state (for checking that a change left the results bit-identical).
+//! callgrind, and wall time per solve for comparisons on a quiet machine. Prints the work, the
+//! end state (for checking that a change left the results bit-identical) and, for the
+//! stabilised forms, the significant correct digits. A fractional `k` (`7.95`) jitters the
+//! tolerance: the car axis' step sequence is chaotic in rounding, so a change that moves it is
+//! judged over several nearby tolerances (docs/integrators.md).
 //!
 //! ```sh
-//! cargo run --release -p dpc-core --example bdf_workload -- car 6 1    # problem, k in rtol = 1e-k, reps
+//! cargo run --release -p dpc-core --example bdf_workload -- car 6 1    # problem, k in rtol = 10^-k (6.1: jittered), reps
 //! valgrind --tool=callgrind target/release/examples/bdf_workload car 6 1
 //! ```
 
@@ -71,9 +74,9 @@ fn solve<const N: usize, D: ImplicitDae>(
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let problem = args.get(1).map_or("car", String::as_str);
-    let k: i32 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(6);
+    let k: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(6.0);
     let reps: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
-    let tol = 10f64.powi(-k);
+    let tol = 10f64.powf(-k);
     let start = Instant::now();
     let mut last = None;
     for _ in 0..reps {
@@ -119,8 +122,17 @@ fn main() {
     }
     let ms = start.elapsed().as_secs_f64() * 1e3 / reps.max(1) as f64;
     if let Some((steps, residuals, matrices, y)) = last {
+        // Significant correct digits of the stabilised forms, scored as in `work_precision`.
+        let digits = match problem {
+            "andrews" => format!(", scd {:.2}", scd(&y, &ANDREWS_REF, &ANDREWS_SCORED)),
+            "car" => format!(
+                ", scd {:.2}",
+                scd(&y, &CAR_AXIS_REF, &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9])
+            ),
+            _ => String::new(),
+        };
         println!(
-            "{problem} 1e-{k}: {steps} steps, {residuals} residuals, {matrices} matrices, \
+            "{problem} 1e-{k}: {steps} steps, {residuals} residuals, {matrices} matrices{digits}, \
              {ms:.3} ms per solve\ny = {y:?}"
         );
     }

@@ -33,14 +33,20 @@
 //!
 //! * `G` from the wrapped DAE's iteration matrix at `c = 0`, and `c_j` from it at `c = 1`
 //!   (with exact gradients, `c_j` from one residual with `q'` moved: the kinematic rows are
-//!   linear in `q_j'`); only the entries needed are kept (a [`Selection`]);
+//!   linear in `q_j'`); only the entries needed are kept (a [`Selection`]). `c_j` is evaluated
+//!   with each iteration matrix and held by the residuals until the next one (the first
+//!   residual before any matrix evaluates its own): any non-zero `c_j` gives the same
+//!   solutions (`mu = 0`, `F = 0`), only the scaling of the multipliers' terms and the
+//!   velocities `phi_j` read off away from them, and the integrator holds its iteration
+//!   matrix through steps just the same;
 //! * `dg/dt` (for a constraint that moves with time) as a central difference of the residual
 //!   in `t` with a step of `cbrt(eps)` wherever `t` lies (truncation error
 //!   `6e-12 |d^3 g/dt^3|`, exactly zero for a constraint without `t`);
 //! * the curvature as one central difference of `G` along the motion `(1, phi)`.
 //!
 //! Per residual the stabilised form costs one residual of the wrapped DAE and its exact
-//! derivatives, or three residuals and two iteration matrices without them; per iteration
+//! derivatives, or three residuals and an iteration matrix without them (a residual before the
+//! first iteration matrix: one more residual, or one more matrix, for `c_j`); per iteration
 //! matrix, the wrapped DAE's iteration matrix, two residuals and the exact derivatives, or
 //! four iteration matrices and a residual without them.
 //!
@@ -170,6 +176,8 @@ struct Scratch {
     grad_c1: Selection,
     /// `c_j = dF_i/dq_j'` per kinematic pair.
     coef: Vec<f64>,
+    /// `coef` was evaluated with the last iteration matrix and is held by the residual.
+    coef_held: bool,
     /// `phi_j` per kinematic pair (the residual's copy, in pair order).
     pair_phi: Vec<f64>,
     /// The velocities `phi_j` the kinematic rows give, per unknown (zero off the positions).
@@ -355,6 +363,7 @@ impl<D: ImplicitDae> Stabilised<D> {
             grad: Selection::new(n, n, &both, Some(&positions)),
             grad_c1: Selection::new(n, n, &both, Some(&positions)),
             coef: vec![0.0; kinematic.len()],
+            coef_held: false,
             pair_phi: vec![0.0; kinematic.len()],
             phi: vec![0.0; n],
             kin_c: Selection::new(n, n, &kin_rows, None),
@@ -562,10 +571,16 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         let n = self.dae.dimension();
         let (y, yp, mu) = (&y[..n], &yp[..n], &y[n..]);
         let sc = &mut *self.scratch.borrow_mut();
-        self.dae.residual(t, y, yp, &mut sc.res);
+        // The wrapped DAE's residual straight into its rows (the multipliers' terms are added
+        // below).
+        self.dae.residual(t, y, yp, &mut out[..n]);
         let exact = self.gradient(t, y, yp, sc);
-        self.coefficients(t, y, yp, exact, sc);
-        out[..n].copy_from_slice(&sc.res);
+        // `c_j` as of the last iteration matrix (see the module documentation); only before
+        // the first one evaluated here.
+        if !sc.coef_held {
+            sc.res.copy_from_slice(&out[..n]);
+            self.coefficients(t, y, yp, exact, sc);
+        }
         out[n..].fill(0.0);
         // Only the constraint rows of `dgdt` are read: only they need zeroing.
         for &g in &self.rows {
@@ -597,7 +612,7 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         // phi_j)), once per pair; then per constraint its hidden row and its multiplier's terms
         // in the kinematic rows (plain loops: this runs at every residual).
         for ((v, &(j, i)), &cj) in sc.pair_phi.iter_mut().zip(&self.kinematic).zip(&sc.coef) {
-            *v = yp[j] - sc.res[i] / cj;
+            *v = yp[j] - out[i] / cj;
         }
         // `G` in `sc.grad`: constraint `a`'s row is its `a`-th selected row, position `q_j`
         // of pair `p` its `p`-th column (rows and unknowns are distinct, checked in `new`).
@@ -655,6 +670,7 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
             }
         }
         self.constraint_curvature(t, y, yp, exact, sc, out);
+        sc.coef_held = true;
     }
 
     fn is_differential(&self, i: usize) -> bool {
@@ -881,6 +897,32 @@ mod tests {
         }
     }
 
+    /// [`Moving`] with a kinematic coefficient that varies with the position:
+    /// `(2 + y0^2) (y0' - y1) = 0`.
+    struct MovingVarying;
+    impl ImplicitDae for MovingVarying {
+        fn dimension(&self) -> usize {
+            3
+        }
+        fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            Moving.residual(t, y, yp, out);
+            out[0] = (2.0 + y[0] * y[0]) * (yp[0] - y[1]);
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            t: f64,
+            y: &[f64],
+            yp: &[f64],
+            c: f64,
+            out: &mut S,
+        ) {
+            Moving.iteration_matrix(t, y, yp, c, out);
+            let k = 2.0 + y[0] * y[0];
+            out.set(0, 0, 2.0 * y[0] * (yp[0] - y[1]) + k * c);
+            out.set(0, 1, -k);
+        }
+    }
+
     /// A DAE whose iteration matrix has `d(equation 1)/d(y[0]) = NaN` everywhere.
     struct NotFinite;
     impl ImplicitDae for NotFinite {
@@ -956,6 +998,23 @@ mod tests {
             let mut r = [1.0; 4];
             s.residual(t, &y, &yp, &mut r);
             assert!(r[3].abs() < 1e-9, "t {t}: {r:?}");
+        }
+    }
+
+    #[test]
+    fn held_kinematic_coefficients_keep_exact_solutions_exact() {
+        // The residual holds `c_j` from the last iteration matrix, here evaluated far from
+        // the points below (c = 2 + 3^2 = 11 against 2 + sin^2 t): on the exact solution
+        // every residual still vanishes (F = 0, mu = 0, so phi_j = q_j' for any c_j).
+        let s = Stabilised::new(MovingVarying, vec![2], vec![(0, 0)]).unwrap();
+        let mut m = nalgebra::DMatrix::zeros(4, 4);
+        s.iteration_matrix(0.0, &[3.0, 0.0, 1.0, 0.0], &[0.0; 4], 5.0, &mut m);
+        for t in [0.3f64, 0.7, 2.0] {
+            let y = [t.sin(), t.cos(), 1.0, 0.0];
+            let yp = [t.cos(), -t.sin(), 0.0, 0.0];
+            let mut r = [1.0; 4];
+            s.residual(t, &y, &yp, &mut r);
+            assert!(r.iter().all(|v| v.abs() < 1e-9), "t {t}: {r:?}");
         }
     }
 

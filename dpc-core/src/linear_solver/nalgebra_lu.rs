@@ -73,7 +73,7 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
 
     fn solve_in_place(&mut self, b: &mut [f64]) {
         if self.factored {
-            unblocked::solve(self.lu.as_slice(), N, &self.pivots, b);
+            unblocked::solve_fixed::<N>(self.lu.as_slice(), &self.pivots, b);
         }
     }
 }

@@ -134,6 +134,32 @@ pub(crate) fn solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
     }
 }
 
+/// [`solve`] for a compile-time `N`, from `N = 8` in 256-bit vector instructions (AVX) when
+/// the processor has them: the same operations in the same order (no fused multiply-adds),
+/// so the same result to the bit, in fewer instructions than the baseline's 128-bit ones
+/// (12 x 12: the BDF on the stabilised car axis 3 % fewer instructions in all; below 8 the
+/// columns are too short to gain and the feature test costs more than it saves).
+#[inline(always)]
+pub(crate) fn solve_fixed<const N: usize>(lu: &[f64], pivots: &[usize], b: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if N >= 8 && std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: `solve_avx` only requires AVX, which the processor was just found to have.
+        unsafe { solve_avx::<N>(lu, pivots, b) };
+        return;
+    }
+    solve(lu, N, pivots, b)
+}
+
+/// [`solve`] compiled with AVX enabled (see [`solve_fixed`]).
+///
+/// # Safety
+/// The processor must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn solve_avx<const N: usize>(lu: &[f64], pivots: &[usize], b: &mut [f64]) {
+    solve(lu, N, pivots, b)
+}
+
 /// [`factor`] with `n` turned into a constant for each size up to
 /// [`UNBLOCKED_MAX_DIMENSION`], so that a run-time dimension gets the same unrolled loops as a
 /// compile-time one (for `n = 5` the generic loops spent about 600 instructions per solve in
@@ -181,6 +207,35 @@ mod tests {
         (0..n)
             .map(|i| (0..n).map(|j| a[i + j * n] * x[j]).sum())
             .collect()
+    }
+
+    #[test]
+    fn the_fixed_size_solve_equals_the_generic_one_to_the_bit() {
+        // A 12 x 12 matrix that needs interchanges (AVX from N = 8 where available).
+        let n = 12;
+        let mut state = 1u64;
+        let a: Vec<f64> = (0..n * n)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        let mut lu = a.clone();
+        let mut pivots = [0; 12];
+        factor(&mut lu, n, &mut pivots).expect("regular");
+        assert!(pivots.iter().enumerate().any(|(k, &p)| p != k));
+        let b: Vec<f64> = (0..n).map(|i| (0.7 * i as f64).sin()).collect();
+        let (mut generic, mut fixed) = (b.clone(), b.clone());
+        solve(&lu, n, &pivots, &mut generic);
+        solve_fixed::<12>(&lu, &pivots, &mut fixed);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&generic), bits(&fixed));
+        let residual = multiply(&a, n, &fixed);
+        for (r, want) in residual.iter().zip(&b) {
+            assert!((r - want).abs() < 1e-12, "{r} vs {want}");
+        }
     }
 
     #[test]
