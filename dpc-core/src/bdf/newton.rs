@@ -9,7 +9,10 @@
 //! it was factorised with (IDA's `XRATE = 0.25`); in between, updates are scaled by
 //! `2 / (1 + cj/cj_old)` to compensate (Brenan, Campbell & Petzold 1989, Section 5.2.2).
 //! Convergence is declared from the rate estimate `s = rho / (1 - rho)`:
-//! `s |delta| <= epcon` in the weighted RMS norm (IDA's `IDANewtonIter`).
+//! `s |delta| <= epcon` in the weighted RMS norm (IDA's `IDANewtonIter`). On a DAE whose
+//! unknowns all have index at most 1 the variable-step BDF asks ten times IDA's accuracy of the
+//! corrector and stops an iteration early when its rate cannot meet that within the allowed
+//! iterations (`RateTest::predictive`); see `variable.rs` (`INDEX1_NEWTON_FACTOR`).
 
 use super::{BdfError, Options, Stats, Tolerance};
 use crate::linear_solver::LinearSolver;
@@ -140,6 +143,9 @@ pub(crate) struct NewtonProblem {
     pub cj: f64,
     pub max_iterations: usize,
     pub epcon: f64,
+    /// Stop early when the measured rate cannot converge within `max_iterations`
+    /// (`RateTest::predictive`).
+    pub predictive: bool,
     /// When finite: the scaled residual `max_i |F_i| / max_j (|G_ij| / w_j)` at the solution
     /// must not exceed this.
     pub residual_tolerance: f64,
@@ -216,6 +222,11 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
 pub(crate) struct RateTest {
     /// The rate factor `s`, carried between solves by [`JacState::ss`].
     pub ss: f64,
+    /// Declare failure as soon as the measured rate `rho` shows that the iterations left cannot
+    /// converge: `rho^(max_iterations - m) / (1 - rho) |delta| > epcon` after the `m`-th update
+    /// (the test of diffsol's Newton). Without it an iteration that converges too slowly runs
+    /// to the cap before the fresh matrix is formed. Off in [`RateTest::new`].
+    pub predictive: bool,
     epcon: f64,
     max_iterations: usize,
     residual_tolerance: f64,
@@ -230,6 +241,7 @@ impl RateTest {
     pub fn new(ss: f64, epcon: f64, max_iterations: usize, residual_tolerance: f64) -> Self {
         Self {
             ss,
+            predictive: false,
             epcon,
             max_iterations,
             residual_tolerance,
@@ -295,6 +307,13 @@ impl<S, L: LinearSolver> Convergence<S, L> for RateTest {
                 return Verdict::Fail(NewtonFailure::Convergence);
             }
             self.ss = rate / (1.0 - rate);
+            if self.predictive && self.ss * delnrm > self.epcon {
+                let left = self.max_iterations.saturating_sub(it.solves);
+                let left = i32::try_from(left).unwrap_or(i32::MAX);
+                if rate.powi(left) / (1.0 - rate) * delnrm > self.epcon {
+                    return Verdict::Fail(NewtonFailure::Convergence);
+                }
+            }
         }
         if converged || self.ss * delnrm <= self.epcon {
             if !self.residual_tolerance.is_finite() {
@@ -362,6 +381,7 @@ impl<L: LinearSolver> Corrector<L> {
             };
             let mut test =
                 RateTest::new(self.jac.ss, p.epcon, p.max_iterations, p.residual_tolerance);
+            test.predictive = p.predictive;
             let outcome = self
                 .newton
                 .solve(&mut self.ls, &mut system, &mut test, fresh);
