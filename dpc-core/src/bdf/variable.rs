@@ -494,12 +494,14 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             .ewt
             .iter()
             .zip(&mut self.corrector.newton.w)
-            .zip(&mut state.w_err);
-        for (i, ((&w, w_newton), w_err)) in weights.enumerate() {
+            .zip(&mut state.w_err)
+            .zip(&mut self.corrector.w_scaled);
+        for (i, (((&w, w_newton), w_err), w_scaled)) in weights.enumerate() {
             let m = self.opts.index_of(i);
             if m <= 1 {
                 *w_newton = w;
                 *w_err = w;
+                *w_scaled = w;
                 continue;
             }
             let s = w * match m {
@@ -509,10 +511,13 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             };
             (*w_newton, *w_err) = match self.opts.higher_index {
                 // IDA's suppressalg: Newton keeps the plain weight. On the pendulum this gives
-                // fewer steps and more digits than scaling Newton's weights as well.
+                // fewer steps and more digits than scaling Newton's weights as well; the
+                // scaled weight is the fallback of an iteration held up by round-off
+                // (`RateTest::fallback`).
                 HigherIndexControl::Exclude => (w, 0.0),
                 HigherIndexControl::Scale => (s, s),
             };
+            *w_scaled = s;
         }
         Ok(())
     }
@@ -558,6 +563,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 max_iterations: self.opts.max_newton_iterations,
                 epcon,
                 predictive: index1,
+                fallback: !index1 && self.opts.higher_index == HigherIndexControl::Exclude,
                 residual_tolerance: f64::INFINITY,
                 force_setup: self.nst() == 0 && ncf == 0 && nef == 0,
             };
