@@ -9,7 +9,10 @@
 //! it was factorised with (IDA's `XRATE = 0.25`); in between, updates are scaled by
 //! `2 / (1 + cj/cj_old)` to compensate (Brenan, Campbell & Petzold 1989, Section 5.2.2).
 //! Convergence is declared from the rate estimate `s = rho / (1 - rho)`:
-//! `s |delta| <= epcon` in the weighted RMS norm (IDA's `IDANewtonIter`).
+//! `s |delta| <= epcon` in the weighted RMS norm (IDA's `IDANewtonIter`). On a DAE whose
+//! unknowns all have index at most 1 the variable-step BDF asks ten times IDA's accuracy of the
+//! corrector and stops an iteration early when its rate cannot meet that within the allowed
+//! iterations (`RateTest::predictive`); see `variable.rs` (`INDEX1_NEWTON_FACTOR`).
 
 use super::{BdfError, Options, Stats, Tolerance};
 use crate::linear_solver::LinearSolver;
@@ -140,6 +143,12 @@ pub(crate) struct NewtonProblem {
     pub cj: f64,
     pub max_iterations: usize,
     pub epcon: f64,
+    /// Stop early when the measured rate cannot converge within `max_iterations`
+    /// (`RateTest::predictive`).
+    pub predictive: bool,
+    /// Accept an iteration that cannot meet the test with the plain weights when it meets the
+    /// fallback test with [`Corrector::w_scaled`] (`RateTest::fallback`).
+    pub fallback: bool,
     /// When finite: the scaled residual `max_i |F_i| / max_j (|G_ij| / w_j)` at the solution
     /// must not exceed this.
     pub residual_tolerance: f64,
@@ -160,6 +169,9 @@ pub(crate) struct Corrector<L: LinearSolver> {
     pub y: Vec<f64>,
     pub yp: Vec<f64>,
     pub ee: Vec<f64>,
+    /// The fallback weights of Newton's test (see [`RateTest::fallback`]), set with the
+    /// weights when [`NewtonProblem::fallback`] is.
+    pub w_scaled: Vec<f64>,
 }
 
 /// The corrector's system at one step: the iterate `y` with `y' = y'_pred + cj (y - y_pred)`.
@@ -213,9 +225,27 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
 
 /// IDA's convergence-rate test, with the optional scaled-residual test of the fixed-step
 /// integrator.
-pub(crate) struct RateTest {
+pub(crate) struct RateTest<'a> {
     /// The rate factor `s`, carried between solves by [`JacState::ss`].
     pub ss: f64,
+    /// Weights with the higher-index components scaled by `h^(m - 1)`: an iteration that
+    /// fails the test with the plain weights (its rate above 0.9, or the iteration limit
+    /// reached) has converged if its last update is below `epcon / 20` in these weights (the
+    /// test of a fresh matrix, rate factor 20). With the higher-index components excluded
+    /// from the error test and held to their plain weight in Newton's (IDA's `suppressalg`),
+    /// the multipliers' updates carry the round-off of the constraints divided by `h^(m-1)`:
+    /// at tight tolerances and small steps no iteration meets the plain test and the step is
+    /// cut until it collapses (Andrews' and a double pendulum's stabilised forms at 1e-6 and
+    /// 1e-8, as IDA does). Only with a matrix formed in this solve (a stale one converges
+    /// slowly for other reasons). `None`: no fallback. Off in [`RateTest::new`].
+    pub fallback: Option<&'a [f64]>,
+    /// The matrix in use was formed in this solve.
+    formed: bool,
+    /// Declare failure as soon as the measured rate `rho` shows that the iterations left cannot
+    /// converge: `rho^(max_iterations - m) / (1 - rho) |delta| > epcon` after the `m`-th update
+    /// (the test of diffsol's Newton). Without it an iteration that converges too slowly runs
+    /// to the cap before the fresh matrix is formed. Off in [`RateTest::new`].
+    pub predictive: bool,
     epcon: f64,
     max_iterations: usize,
     residual_tolerance: f64,
@@ -224,12 +254,15 @@ pub(crate) struct RateTest {
     residual_pending: bool,
 }
 
-impl RateTest {
+impl RateTest<'_> {
     /// The test with the carried rate factor `ss`, the tolerance `epcon` of the weighted
     /// update, at most `max_iterations` solves and, when finite, the scaled-residual bound.
     pub fn new(ss: f64, epcon: f64, max_iterations: usize, residual_tolerance: f64) -> Self {
         Self {
             ss,
+            fallback: None,
+            formed: false,
+            predictive: false,
             epcon,
             max_iterations,
             residual_tolerance,
@@ -239,7 +272,26 @@ impl RateTest {
     }
 }
 
-impl<S, L: LinearSolver> Convergence<S, L> for RateTest {
+impl RateTest<'_> {
+    /// Whether the last update `delta` meets the fallback test (see [`RateTest::fallback`]).
+    fn fallback_converged(&self, delta: &[f64]) -> bool {
+        self.formed
+            && self
+                .fallback
+                .is_some_and(|w| wrms(delta, w) <= self.epcon / 20.0)
+    }
+
+    /// Converged: at once, or after the scaled-residual test at the next evaluation.
+    fn converged(&mut self) -> Verdict {
+        if !self.residual_tolerance.is_finite() {
+            return Verdict::Converged;
+        }
+        self.residual_pending = true;
+        Verdict::Continue
+    }
+}
+
+impl<S, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
     fn screen(&mut self, _sys: &mut S, res: &[f64]) -> Result<(), NewtonFailure> {
         match first_non_finite(res) {
             Some(i) => Err(NewtonFailure::NonFinite(i)),
@@ -250,6 +302,7 @@ impl<S, L: LinearSolver> Convergence<S, L> for RateTest {
     fn after_residual(&mut self, _sys: &mut S, it: Iterate<'_, L>) -> Verdict {
         if it.fresh {
             self.ss = 20.0;
+            self.formed = true;
         }
         if !self.residual_pending {
             return Verdict::Continue;
@@ -292,18 +345,27 @@ impl<S, L: LinearSolver> Convergence<S, L> for RateTest {
                 ratio.powf(1.0 / m as f64)
             };
             if rate > 0.9 {
+                if self.fallback_converged(it.delta) {
+                    return self.converged();
+                }
                 return Verdict::Fail(NewtonFailure::Convergence);
             }
             self.ss = rate / (1.0 - rate);
+            if self.predictive && self.ss * delnrm > self.epcon {
+                let left = self.max_iterations.saturating_sub(it.solves);
+                let left = i32::try_from(left).unwrap_or(i32::MAX);
+                if rate.powi(left) / (1.0 - rate) * delnrm > self.epcon {
+                    return Verdict::Fail(NewtonFailure::Convergence);
+                }
+            }
         }
         if converged || self.ss * delnrm <= self.epcon {
-            if !self.residual_tolerance.is_finite() {
-                return Verdict::Converged;
-            }
-            self.residual_pending = true;
-            return Verdict::Continue;
+            return self.converged();
         }
         if it.solves >= self.max_iterations {
+            if self.fallback_converged(it.delta) {
+                return self.converged();
+            }
             Verdict::Fail(NewtonFailure::Convergence)
         } else {
             Verdict::Continue
@@ -323,6 +385,7 @@ impl<L: LinearSolver> Corrector<L> {
             y: vec![0.0; n],
             yp: vec![0.0; n],
             ee: vec![0.0; n],
+            w_scaled: vec![0.0; n],
         }
     }
 
@@ -362,6 +425,8 @@ impl<L: LinearSolver> Corrector<L> {
             };
             let mut test =
                 RateTest::new(self.jac.ss, p.epcon, p.max_iterations, p.residual_tolerance);
+            test.predictive = p.predictive;
+            test.fallback = p.fallback.then_some(&self.w_scaled[..]);
             let outcome = self
                 .newton
                 .solve(&mut self.ls, &mut system, &mut test, fresh);

@@ -88,7 +88,13 @@ pub struct Options {
     /// Newton iterations per attempt (default 4, IDA's `maxcor`).
     pub max_newton_iterations: usize,
     /// Newton convergence constant (default 0.33, IDA's `epcon`): the iteration stops when the
-    /// estimated remaining error is below this fraction of the local error tolerance.
+    /// estimated remaining error is below this fraction of the local error tolerance. On a DAE
+    /// whose unknowns all have index at most 1 (no 2 or 3 in [`index`](Self::index)) the
+    /// variable-step integrator asks for a tenth of it and gives an iteration up as soon as its
+    /// convergence rate shows that [`max_newton_iterations`](Self::max_newton_iterations)
+    /// cannot reach that: the local error estimate contains the corrector's error, and where
+    /// algebraic unknowns amplify the differential ones' (the transistor amplifier) IDA's
+    /// constant lets it fail the error test.
     pub newton_tolerance: f64,
     /// Newton failures allowed within one step before giving up (default 10).
     pub max_newton_failures: usize,
