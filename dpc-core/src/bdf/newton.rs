@@ -235,8 +235,8 @@ pub(crate) struct RateTest<'a> {
     /// from the error test and held to their plain weight in Newton's (IDA's `suppressalg`),
     /// the multipliers' updates carry the round-off of the constraints divided by `h^(m-1)`:
     /// at tight tolerances and small steps no iteration meets the plain test and the step is
-    /// cut until it collapses (Andrews' and a double pendulum's stabilised forms at 1e-6 and
-    /// 1e-8, as IDA does). Only with a matrix formed in this solve (a stale one converges
+    /// cut until it collapses (Andrews' index-3 form, its and a double pendulum's stabilised
+    /// forms at 1e-6 and 1e-8, as IDA does). Only with a matrix formed in this solve (a stale one converges
     /// slowly for other reasons). `None`: no fallback. Off in [`RateTest::new`].
     pub fallback: Option<&'a [f64]>,
     /// The matrix in use was formed in this solve.
@@ -270,9 +270,7 @@ impl RateTest<'_> {
             residual_pending: false,
         }
     }
-}
 
-impl RateTest<'_> {
     /// Whether the last update `delta` meets the fallback test (see [`RateTest::fallback`]).
     fn fallback_converged(&self, delta: &[f64]) -> bool {
         self.formed
