@@ -3,8 +3,6 @@
 //! records (and for its dense output between samples nothing per point): counted with a
 //! thread-local counting allocator (the tests take a lock as well).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-
 use std::sync::{Arc, Mutex};
 
 use dpc::core::controller::{Dpc, DpcOptions, Extraction};
@@ -13,39 +11,9 @@ use dpc::core::simulate::{simulate, ClosedLoopOptions, Hold};
 use dpc_models::wheel_design;
 use dpc_models::{Wheel, WheelReference, WheelTracking};
 
-struct Counting;
-
-thread_local! {
-    /// Allocations made by this thread: the harness and other tests allocate on their own
-    /// threads at the same time, so a global count is not this test's count.
-    static ALLOCATIONS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
-}
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
-
-fn count_one() {
-    // During thread teardown the slot may be gone: such allocations are not a test's.
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count_one();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count_one();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "../dpc-core/tests/common/counting_allocator.rs"]
+mod counting_allocator;
+use counting_allocator::allocations;
 
 /// Held by each test while it counts.
 static COUNTING: Mutex<()> = Mutex::new(());

@@ -4,54 +4,15 @@
 //! every allocation of the test's thread; after the integrator is built and has taken its
 //! first step, further steps, output requests and interpolation must not allocate at all.
 
+#[path = "common/counting_allocator.rs"]
+mod counting_allocator;
 #[path = "common/bdf_problems.rs"]
 mod problems;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
+use counting_allocator::allocations;
 use dpc_core::bdf::{Bdf, FixedBdf, Options, Tolerance};
 use dpc_core::linear_solver::{FaerDenseLu, NalgebraLu};
 use problems::{robertson_atol, Pendulum, Robertson, PENDULUM_INDEX};
-
-struct Counting;
-
-thread_local! {
-    /// Allocations made by this thread: the harness's main thread allocates now and then
-    /// while the test runs (under load it did, 4 allocations counted in a CI run), so a
-    /// global count is not the test's count.
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn count_one() {
-    // During thread teardown the slot may be gone: such allocations are not the test's.
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-// SAFETY: forwards to the system allocator and only counts.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count_one();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count_one();
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
 
 #[test]
 fn steps_after_setup_do_not_allocate() {
