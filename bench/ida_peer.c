@@ -16,9 +16,19 @@
  * from the error test (IDASetId + IDASetSuppressAlg, IDA's usual setting and dpc-core's default
  * HigherIndexControl::Exclude). Robertson, the amplifier and the pendulum have analytic
  * Jacobians; Andrews and the car axis use IDA's difference-quotient Jacobian.
+ * The Test Set's chemical Akzo Nobel problem (chemakzo.f, index 1, 6 unknowns) to t = 180 and
+ * HIRES (hires.f, an ODE of 8 unknowns as F = y' - f(y)) to t = 321.8122, all components scored
+ * against the Test Set's references; Ascher and Petzold's linear index-2 problem (a = 50) to
+ * t = 1, scored on u1, u2 against its exact solution e^t, w (index 2) excluded from the error
+ * test as on the mechanisms. The same equations as dpc-core/tests/common/standard_dae.rs, with
+ * analytic dense Jacobians.
  * rtol = atol = 1e-k except for Robertson; k = 4, 6, 8. A failed solve is printed as such, with
  * IDA's return flag and the time it stopped at. Times: the thread's CPU time per solve, the
  * mean over repetitions filling at least 0.3 s (at least 3).
+ *
+ *   ida_peer                 # every row
+ *   ida_peer Akzo            # the rows of the problems whose label contains the argument
+ *   ida_peer --reference     # Akzo and HIRES at rtol = 1e-12, atol = 1e-15: the end values
  */
 #include <math.h>
 #include <stdio.h>
@@ -324,6 +334,162 @@ static int car_ggl_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *
   return 0;
 }
 
+/* The chemical Akzo Nobel problem (Test Set chemakzo.f): M y' = f(y), M = diag(1,1,1,1,1,0),
+ * F = M y' - f(y); the same equations as dpc-core/tests/common/standard_dae.rs. */
+#define AK_K1 18.7
+#define AK_K2 0.58
+#define AK_K3 0.09
+#define AK_K4 0.42
+#define AK_K 34.4
+#define AK_KLA 3.3
+#define AK_KS 115.83
+#define AK_PCO2 0.9
+#define AK_H 737.0
+
+static void akzo_f(const double *y, double *f) {
+  double s2 = sqrt(y[1]);
+  double r1 = AK_K1 * pow(y[0], 4) * s2, r2 = AK_K2 * y[2] * y[3], r3 = AK_K2 / AK_K * y[0] * y[4];
+  double r4 = AK_K3 * y[0] * y[3] * y[3], r5 = AK_K4 * y[5] * y[5] * s2;
+  double fin = AK_KLA * (AK_PCO2 / AK_H - y[1]);
+  f[0] = -2.0 * r1 + r2 - r3 - r4;
+  f[1] = -0.5 * r1 - r4 - 0.5 * r5 + fin;
+  f[2] = r1 - r2 + r3;
+  f[3] = -r2 + r3 - 2.0 * r4;
+  f[4] = r2 - r3 + r5;
+  f[5] = AK_KS * y[0] * y[3] - y[5];
+}
+
+static int akzo_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp), *r = N_VGetArrayPointer(rr);
+  double f[6];
+  (void)t; (void)ud;
+  akzo_f(y, f);
+  for (int i = 0; i < 6; i++) r[i] = (i < 5 ? p[i] : 0.0) - f[i];
+  return 0;
+}
+
+static int akzo_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
+                    void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
+  realtype *y = N_VGetArrayPointer(yy);
+  (void)t; (void)yp; (void)rr; (void)ud; (void)t1; (void)t2; (void)t3;
+  static const double S[5][5] = {{-2.0, 1.0, -1.0, -1.0, 0.0},
+                                 {-0.5, 0.0, 0.0, -1.0, -0.5},
+                                 {1.0, -1.0, 1.0, 0.0, 0.0},
+                                 {0.0, -1.0, 1.0, -2.0, 0.0},
+                                 {0.0, 1.0, -1.0, 0.0, 1.0}};
+  double s2 = sqrt(y[1]), dr[5][6] = {{0}};
+  dr[0][0] = 4.0 * AK_K1 * pow(y[0], 3) * s2;
+  dr[0][1] = 0.5 * AK_K1 * pow(y[0], 4) / s2;
+  dr[1][2] = AK_K2 * y[3];
+  dr[1][3] = AK_K2 * y[2];
+  dr[2][0] = AK_K2 / AK_K * y[4];
+  dr[2][4] = AK_K2 / AK_K * y[0];
+  dr[3][0] = AK_K3 * y[3] * y[3];
+  dr[3][3] = 2.0 * AK_K3 * y[0] * y[3];
+  dr[4][1] = 0.5 * AK_K4 * y[5] * y[5] / s2;
+  dr[4][5] = 2.0 * AK_K4 * y[5] * s2;
+  SUNMatZero(J);
+  for (int i = 0; i < 5; i++) {
+    for (int c = 0; c < 6; c++) {
+      double v = 0.0;
+      for (int k = 0; k < 5; k++) v += S[i][k] * dr[k][c];
+      SM_ELEMENT_D(J, i, c) = -v;
+    }
+    SM_ELEMENT_D(J, i, i) += cj;
+  }
+  SM_ELEMENT_D(J, 1, 1) += AK_KLA;
+  SM_ELEMENT_D(J, 5, 0) = -AK_KS * y[3];
+  SM_ELEMENT_D(J, 5, 3) = -AK_KS * y[0];
+  SM_ELEMENT_D(J, 5, 5) = 1.0;
+  return 0;
+}
+
+/* HIRES (Test Set hires.f) as F = y' - f(y). */
+static void hires_f(const double *y, double *f) {
+  double r = 280.0 * y[5] * y[7];
+  f[0] = -1.71 * y[0] + 0.43 * y[1] + 8.32 * y[2] + 0.0007;
+  f[1] = 1.71 * y[0] - 8.75 * y[1];
+  f[2] = -10.03 * y[2] + 0.43 * y[3] + 0.035 * y[4];
+  f[3] = 8.32 * y[1] + 1.71 * y[2] - 1.12 * y[3];
+  f[4] = -1.745 * y[4] + 0.43 * y[5] + 0.43 * y[6];
+  f[5] = -r + 0.69 * y[3] + 1.71 * y[4] - 0.43 * y[5] + 0.69 * y[6];
+  f[6] = r - 1.81 * y[6];
+  f[7] = -r + 1.81 * y[6];
+}
+
+static int hires_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp), *r = N_VGetArrayPointer(rr);
+  double f[8];
+  (void)t; (void)ud;
+  hires_f(y, f);
+  for (int i = 0; i < 8; i++) r[i] = p[i] - f[i];
+  return 0;
+}
+
+static int hires_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
+                     void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
+  realtype *y = N_VGetArrayPointer(yy);
+  (void)t; (void)yp; (void)rr; (void)ud; (void)t1; (void)t2; (void)t3;
+  double a = 280.0 * y[7], b = 280.0 * y[5];
+  SUNMatZero(J);
+  for (int i = 0; i < 8; i++) SM_ELEMENT_D(J, i, i) = cj;
+  /* minus df/dy */
+  SM_ELEMENT_D(J, 0, 0) += 1.71;
+  SM_ELEMENT_D(J, 0, 1) = -0.43;
+  SM_ELEMENT_D(J, 0, 2) = -8.32;
+  SM_ELEMENT_D(J, 1, 0) = -1.71;
+  SM_ELEMENT_D(J, 1, 1) += 8.75;
+  SM_ELEMENT_D(J, 2, 2) += 10.03;
+  SM_ELEMENT_D(J, 2, 3) = -0.43;
+  SM_ELEMENT_D(J, 2, 4) = -0.035;
+  SM_ELEMENT_D(J, 3, 1) = -8.32;
+  SM_ELEMENT_D(J, 3, 2) = -1.71;
+  SM_ELEMENT_D(J, 3, 3) += 1.12;
+  SM_ELEMENT_D(J, 4, 4) += 1.745;
+  SM_ELEMENT_D(J, 4, 5) = -0.43;
+  SM_ELEMENT_D(J, 4, 6) = -0.43;
+  SM_ELEMENT_D(J, 5, 3) = -0.69;
+  SM_ELEMENT_D(J, 5, 4) = -1.71;
+  SM_ELEMENT_D(J, 5, 5) += a + 0.43;
+  SM_ELEMENT_D(J, 5, 6) = -0.69;
+  SM_ELEMENT_D(J, 5, 7) = b;
+  SM_ELEMENT_D(J, 6, 5) = -a;
+  SM_ELEMENT_D(J, 6, 6) += 1.81;
+  SM_ELEMENT_D(J, 6, 7) = -b;
+  SM_ELEMENT_D(J, 7, 5) = a;
+  SM_ELEMENT_D(J, 7, 6) = -1.81;
+  SM_ELEMENT_D(J, 7, 7) += b;
+  return 0;
+}
+
+/* Ascher and Petzold's linear index-2 problem, a = 50: y = (u1, u2, w), exact u = e^t,
+ * w = -e^t / (2 - t). */
+#define AP_A 50.0
+static int ap_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp), *r = N_VGetArrayPointer(rr);
+  double d = 2.0 - t, e = exp(t);
+  (void)ud;
+  r[0] = p[0] - AP_A * d * y[2] - (AP_A - 1.0 / d) * y[0] - (3.0 - t) / d * e;
+  r[1] = p[1] - (AP_A - 1.0) * y[2] - (AP_A - 1.0) * y[0] / d + y[1] - 2.0 * e;
+  r[2] = (2.0 + t) * y[0] + (t * t - 4.0) * y[1] - (t * t + t - 2.0) * e;
+  return 0;
+}
+
+static int ap_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
+                  void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
+  double d = 2.0 - t;
+  (void)yy; (void)yp; (void)rr; (void)ud; (void)t1; (void)t2; (void)t3;
+  SUNMatZero(J);
+  SM_ELEMENT_D(J, 0, 0) = cj - (AP_A - 1.0 / d);
+  SM_ELEMENT_D(J, 0, 2) = -AP_A * d;
+  SM_ELEMENT_D(J, 1, 0) = -(AP_A - 1.0) / d;
+  SM_ELEMENT_D(J, 1, 1) = cj + 1.0;
+  SM_ELEMENT_D(J, 1, 2) = -(AP_A - 1.0);
+  SM_ELEMENT_D(J, 2, 0) = 2.0 + t;
+  SM_ELEMENT_D(J, 2, 1) = t * t - 4.0;
+  return 0;
+}
+
 static void pend_state(double th, double om, double *s) {
   s[0] = sin(th);
   s[1] = -cos(th);
@@ -364,15 +530,20 @@ static double now(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-enum { ROBERTSON, AMPLIFIER, PENDULUM, ANDREWS, ANDREWS_GGL, CAR, CAR_GGL, PROBLEMS };
+enum { ROBERTSON, AMPLIFIER, PENDULUM, ANDREWS, ANDREWS_GGL, CAR, CAR_GGL, AKZO, HIRES, AP,
+       PROBLEMS };
 static const char *NAMES[PROBLEMS] = {
     "Robertson (index 1)", "transistor amplifier (index 1)", "pendulum (index 3; x, y)",
     "Andrews (index 3; y1..y7)", "Andrews (stabilised index 2; y1..y7)",
-    "car axis (index 3; all)", "car axis (stabilised index 2; all)"};
-static const int DIM[PROBLEMS] = {3, 8, 5, 27, 33, 10, 12};
+    "car axis (index 3; all)", "car axis (stabilised index 2; all)",
+    "chemical Akzo Nobel (index 1; all)", "HIRES (ODE; all)",
+    "Ascher-Petzold (index 2; u1, u2)"};
+static const int DIM[PROBLEMS] = {3, 8, 5, 27, 33, 10, 12, 6, 8, 3};
 /* Leading unknowns of index 1 (the rest are excluded from the error test); 0: none excluded. */
-static const int DIFFERENTIAL[PROBLEMS] = {0, 0, 2, 14, 14, 8, 8};
-static const double T_END[PROBLEMS] = {1e11, 0.2, 3.0, 0.03, 0.03, 3.0, 3.0};
+static const int DIFFERENTIAL[PROBLEMS] = {0, 0, 2, 14, 14, 8, 8, 0, 0, 2};
+static const double T_END[PROBLEMS] = {1e11, 0.2, 3.0, 0.03, 0.03, 3.0, 3.0, 180.0, 321.8122, 1.0};
+/* Every atol is rtol times this (--reference sets it to 1e-3). */
+static double atol_scale = 1.0;
 
 /* One solve's counters and end state. */
 typedef struct {
@@ -384,7 +555,7 @@ typedef struct {
 
 static void initial(int problem, double rtol, double *y, double *p, double *a) {
   int n = DIM[problem];
-  for (int i = 0; i < n; i++) { y[i] = 0.0; p[i] = 0.0; a[i] = rtol; }
+  for (int i = 0; i < n; i++) { y[i] = 0.0; p[i] = 0.0; a[i] = rtol * atol_scale; }
   switch (problem) {
   case ROBERTSON: {
     double s = rtol / 1e-4;
@@ -425,6 +596,22 @@ static void initial(int problem, double rtol, double *y, double *p, double *a) {
     for (int i = 0; i < 10; i++) { y[i] = y0[i]; p[i] = p0[i]; }
     break;
   }
+  case AKZO: {
+    double f[6];
+    y[0] = 0.444; y[1] = 0.00123; y[3] = 0.007; y[5] = AK_KS * 0.444 * 0.007;
+    akzo_f(y, f);
+    for (int i = 0; i < 5; i++) p[i] = f[i];
+    p[5] = AK_KS * (f[0] * y[3] + y[0] * f[3]);
+    break;
+  }
+  case HIRES:
+    y[0] = 1.0; y[7] = 0.0057;
+    hires_f(y, p);
+    break;
+  case AP:
+    y[0] = 1.0; y[1] = 1.0; y[2] = -0.5;
+    p[0] = 1.0; p[1] = 1.0; p[2] = -0.75;
+    break;
   }
 }
 
@@ -435,8 +622,10 @@ static void quiet(int code, const char *module, const char *function, char *msg,
 
 static Run solve(SUNContext ctx, int problem, double rtol) {
   static IDAResFn const RES[PROBLEMS] = {rober_res, amp_res, pend_res, andrews_res,
-                                         andrews_ggl_res, car_res, car_ggl_res};
-  static IDALsJacFn const JAC[PROBLEMS] = {rober_jac, amp_jac, pend_jac, NULL, NULL, NULL, NULL};
+                                         andrews_ggl_res, car_res, car_ggl_res, akzo_res,
+                                         hires_res, ap_res};
+  static IDALsJacFn const JAC[PROBLEMS] = {rober_jac, amp_jac, pend_jac, NULL, NULL,
+                                           NULL, NULL, akzo_jac, hires_jac, ap_jac};
   int n = DIM[problem];
   Run run = {0};
   N_Vector yy = N_VNew_Serial(n, ctx), yp = N_VNew_Serial(n, ctx), atol = N_VNew_Serial(n, ctx);
@@ -477,7 +666,7 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
   return run;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
   SUNContext ctx;
   SUNContext_Create(NULL, &ctx);
   static const double rober_ref[3] = {0.2083340149701255e-7, 0.8333360770334713e-13,
@@ -495,12 +684,33 @@ int main(void) {
       0.373911027265361256927, -0.770583684040972357970e-1, 0.744686658723778553466e-2,
       0.175568157537232222276e-1, 0.770341043779251976443, -0.473688659084893324729e-2,
       -0.110468033125734368808e-2};
+  static const double akzo_ref[6] = {0.1150794920661702, 0.1203831471567715e-2,
+                                     0.1611562887407974, 0.3656156421249283e-3,
+                                     0.1708010885264404e-1, 0.4873531310307455e-2};
+  static const double hires_ref[8] = {0.7371312573325668e-3, 0.1442485726316185e-3,
+                                      0.5888729740967575e-4, 0.1175651343283149e-2,
+                                      0.2386356198831331e-2, 0.6238968252742796e-2,
+                                      0.2849998395185769e-2, 0.2850001604814231e-2};
+  double ap_ref[3] = {exp(1.0), exp(1.0), -exp(1.0)};
   double pend_ref[5];
   pend_reference(1.0, 3.0, pend_ref);
   const double *refs[PROBLEMS] = {rober_ref, amp_ref, pend_ref, andrews_ref, andrews_ref,
-                                  car_ref, car_ref};
-  const int scored[PROBLEMS] = {3, 8, 2, 7, 7, 10, 10};
+                                  car_ref, car_ref, akzo_ref, hires_ref, ap_ref};
+  const int scored[PROBLEMS] = {3, 8, 2, 7, 7, 10, 10, 6, 8, 2};
+  const char *only = argc > 1 ? argv[1] : NULL;
+  if (only && strcmp(only, "--reference") == 0) {
+    atol_scale = 1e-3;
+    for (int problem = AKZO; problem <= HIRES; problem++) {
+      Run run = solve(ctx, problem, 1e-12);
+      printf("%s: flag %d, %ld steps, scd %.2f\n", NAMES[problem], run.flag, run.steps,
+             digits(run.y, refs[problem], 0, scored[problem]));
+      for (int i = 0; i < DIM[problem]; i++) printf("  y%d = %.16e\n", i + 1, run.y[i]);
+    }
+    SUNContext_Free(&ctx);
+    return 0;
+  }
   for (int problem = 0; problem < PROBLEMS; problem++) {
+    if (only && !strstr(NAMES[problem], only)) continue;
     for (int k = 4; k <= 8; k += 2) {
       double rtol = pow(10.0, -k);
       Run run = solve(ctx, problem, rtol);

@@ -10,6 +10,9 @@
 //! * Andrews' squeezing mechanism (scored on `y1..y7`) and the car axis (all ten scored), each
 //!   in the Test Set's index-3 form and in the stabilised index-2 form of
 //!   [`dpc_core::stabilised::Stabilised`],
+//! * the Test Set's chemical Akzo Nobel problem (index 1, to `t = 180`) and HIRES (an ODE, to
+//!   `t = 321.8122`), all components scored, and Ascher and Petzold's linear index-2 problem
+//!   (`a = 50`, to `t = 1`, scored on `u1, u2` against the exact solution, `w` of index 2),
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
@@ -29,6 +32,8 @@
 mod peer_table;
 #[path = "../tests/common/bdf_problems.rs"]
 mod problems;
+#[path = "../tests/common/standard_dae.rs"]
+mod standard_dae;
 #[path = "../tests/common/testset_index1.rs"]
 mod testset_index1;
 #[path = "../tests/common/testset_index3.rs"]
@@ -43,6 +48,10 @@ use peer_table::Run;
 use problems::{
     robertson_atol, Pendulum, Robertson, PENDULUM_INDEX, PENDULUM_T, ROBERTSON_REF,
     ROBERTSON_T_END, THETA0,
+};
+use standard_dae::{
+    AscherPetzold, ChemAkzo, Hires, AKZO_REF, AKZO_T_END, AP_INDEX, AP_T_END, HIRES_REF,
+    HIRES_T_END,
 };
 use testset_index1::{TransistorAmplifier, TRANSAMP_REF, TRANSAMP_T_END};
 use testset_index3::*;
@@ -99,6 +108,9 @@ enum Problem {
     AndrewsStabilised,
     CarAxis,
     CarAxisStabilised,
+    Akzo,
+    Hires,
+    AscherPetzold,
 }
 
 impl Problem {
@@ -112,6 +124,9 @@ impl Problem {
             Self::AndrewsStabilised => "Andrews (stabilised index 2; y1..y7)",
             Self::CarAxis => "car axis (index 3; all)",
             Self::CarAxisStabilised => "car axis (stabilised index 2; all)",
+            Self::Akzo => "chemical Akzo Nobel (index 1; all)",
+            Self::Hires => "HIRES (ODE; all)",
+            Self::AscherPetzold => "Ascher-Petzold (index 2; u1, u2)",
         }
     }
 }
@@ -397,6 +412,57 @@ fn main() {
                     )
                 },
             );
+        }
+
+        let (ky0, kyp0) = ChemAkzo::initial();
+        let (hy0, hyp0) = Hires::initial();
+        let (py0, pyp0) = AscherPetzold::exact(0.0);
+        let (ap_ref, _) = AscherPetzold::exact(AP_T_END);
+        let ap = AscherPetzold::default();
+        for code in [Code::Radau, Code::Bdf] {
+            row(Problem::Akzo, k, code, &AKZO_REF, &all8[..6], || {
+                let y0 = (&ky0[..], &kyp0[..]);
+                match code {
+                    Code::Radau => radau_run::<6, _>(
+                        ChemAkzo,
+                        y0,
+                        radau::Options::with_tolerances(tol, tol),
+                        AKZO_T_END,
+                    ),
+                    _ => bdf_run::<6, _>(ChemAkzo, y0, scalar.clone(), AKZO_T_END),
+                }
+            });
+            row(Problem::Hires, k, code, &HIRES_REF, &all8, || {
+                let y0 = (&hy0[..], &hyp0[..]);
+                match code {
+                    Code::Radau => radau_run::<8, _>(
+                        Hires,
+                        y0,
+                        radau::Options::with_tolerances(tol, tol),
+                        HIRES_T_END,
+                    ),
+                    _ => bdf_run::<8, _>(Hires, y0, scalar.clone(), HIRES_T_END),
+                }
+            });
+            row(Problem::AscherPetzold, k, code, &ap_ref, &[0, 1], || {
+                let y0 = (&py0[..], &pyp0[..]);
+                match code {
+                    Code::Radau => {
+                        let opts = radau::Options {
+                            index: AP_INDEX.to_vec(),
+                            ..radau::Options::with_tolerances(tol, tol)
+                        };
+                        radau_run::<3, _>(ap, y0, opts, AP_T_END)
+                    }
+                    _ => {
+                        let opts = bdf::Options {
+                            index: AP_INDEX.to_vec(),
+                            ..scalar.clone()
+                        };
+                        bdf_run::<3, _>(ap, y0, opts, AP_T_END)
+                    }
+                }
+            });
         }
     }
 }
