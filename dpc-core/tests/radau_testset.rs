@@ -786,9 +786,9 @@ fn standard_dae_by_radau_reach_their_floors() {
     // for Ascher-Petzold against its exact solution; w has index 2):
     //   Akzo 3.49 / 5.34 / 6.88, HIRES 1.38 / 4.83 / 5.64, Ascher-Petzold 6.51 / 8.16 / 11.06
     // at 1e-4 / 1e-6 / 1e-8 (19 / 28 / 48, 29 / 51 / 96 and 141 / 148 / 167 steps at tol).
-    // IDA 6.4.1 at the tolerance itself (bench/ida_peer.c): Akzo 2.63 / 4.40 / 6.17, HIRES
-    // 1.03 / 2.59 / 4.84, Ascher-Petzold 3.81 / 5.28 / 6.41. Floors at 1e-6 half a digit below
-    // the medians (all above IDA's digits there).
+    // IDA 6.4.1 (bench/ida_peer.c), medians over the same jitter: Akzo 2.63 / 4.40 / 6.26,
+    // HIRES 1.03 / 2.70 / 4.84, Ascher-Petzold 3.88 / 5.28 / 6.41. Floors at 1e-6 half a digit
+    // below the medians (all above IDA's digits there).
     use standard_dae::*;
     let ap = AscherPetzold::default();
     let (ay0, ayp0) = ChemAkzo::initial();
