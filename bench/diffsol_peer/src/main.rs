@@ -349,8 +349,13 @@ fn main() {
     let (hy0, hyp0) = car.stabilised().extend(&cy0, &cyp0);
     let p = Pendulum::default();
     let (py0, pyp0) = p.initial(THETA0);
+    // The factor on every tolerance (the first argument, 1 by default), for the jitter scans.
+    let factor: f64 = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(1.0);
     for k in [4, 6, 8] {
-        let tol = 10f64.powi(-k);
+        let tol = 10f64.powi(-k) * factor;
         row(
             (1, "Robertson (index 1)"),
             k,

@@ -169,6 +169,8 @@ pub(crate) struct Corrector<L: LinearSolver> {
     pub y: Vec<f64>,
     pub yp: Vec<f64>,
     pub ee: Vec<f64>,
+    /// Scratch: `y' + e` for the filtered error estimate.
+    pub yp_e: Vec<f64>,
     /// The fallback weights of Newton's test (see [`RateTest::fallback`]), set with the
     /// weights when [`NewtonProblem::fallback`] is.
     pub w_scaled: Vec<f64>,
@@ -383,6 +385,7 @@ impl<L: LinearSolver> Corrector<L> {
             y: vec![0.0; n],
             yp: vec![0.0; n],
             ee: vec![0.0; n],
+            yp_e: vec![0.0; n],
             w_scaled: vec![0.0; n],
         }
     }
