@@ -539,24 +539,6 @@ impl<D: ImplicitDae> Stabilised<D> {
             }
         }
     }
-
-    /// The stabilisation's terms: per constraint `a` (row `g`) and position unknown `j` (with
-    /// kinematic row `i`, pair `p`) where `G_aj = dF_g/dy_j` is not zero, `(a, i, j, G_aj,
-    /// c_j)` with `c_j = dF_i/dy_j'`.
-    fn terms<'s>(
-        &'s self,
-        sc: &'s Scratch,
-    ) -> impl Iterator<Item = (usize, usize, usize, f64, f64)> + 's {
-        self.rows.iter().enumerate().flat_map(move |(a, &g)| {
-            self.kinematic
-                .iter()
-                .zip(&sc.coef)
-                .filter_map(move |(&(j, i), &c)| {
-                    let gj = sc.grad.get(g, j);
-                    (gj != 0.0).then_some((a, i, j, gj, c))
-                })
-        })
-    }
 }
 
 impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
@@ -658,14 +640,22 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
                 *cj = (sc.kin_c.get(i, j) - sc.grad.get(i, j)) / c;
             }
         }
-        for (a, i, j, gj, cj) in self.terms(sc) {
-            out.add(i, n + a, cj * gj);
-            // d/dy + c d/dy' of G_aj (q_j' - F_i / c_j) at fixed G and c_j.
-            out.add(n + a, j, gj * c);
-            for k in 0..n {
-                let v = sc.kin_c.get(i, k);
-                if v != 0.0 {
-                    out.add(n + a, k, -gj * v / cj);
+        // `kin_c` selects the kinematic rows, all columns: pair `p`'s row is its `p`-th row of
+        // `n` values (rows are distinct, checked in `new`), read without per-entry look-ups.
+        let kin_rows = sc.kin_c.values().chunks_exact(n.max(1));
+        for ((&(j, i), &cj), kin_row) in self.kinematic.iter().zip(&sc.coef).zip(kin_rows) {
+            for (a, &g) in self.rows.iter().enumerate() {
+                let gj = sc.grad.get(g, j);
+                if gj == 0.0 {
+                    continue;
+                }
+                out.add(i, n + a, cj * gj);
+                // d/dy + c d/dy' of G_aj (q_j' - F_i / c_j) at fixed G and c_j.
+                out.add(n + a, j, gj * c);
+                for (k, &v) in kin_row.iter().enumerate() {
+                    if v != 0.0 {
+                        out.add(n + a, k, -gj * v / cj);
+                    }
                 }
             }
         }

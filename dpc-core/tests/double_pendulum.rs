@@ -294,7 +294,8 @@ fn detected_stabilised_form_by_radau_and_the_bdf() {
     let index = s.index();
     let (y, yp) = s.extend(&y0, &yp0);
     // Measured digits of positions and velocities: Radau 5.71 / 7.31 at 1e-6 / 1e-8 (101 and
-    // 207 steps; the index-3 form: 5.16 / 6.03), the BDF 3.76 / 5.92 (352 and 698 steps; with
+    // 207 steps; the index-3 form: 5.16 / 6.03), the BDF 3.74 / 5.94 (340 and 642 steps; 3.76 /
+    // 5.92 in 352 and 698 before `MIN_CARRIED_RATE` of bdf/variable.rs; with
     // `HigherIndexControl::Scale` 4.28 / 6.13 in 739 and 1625). Before Newton's test had its
     // fallback for iterations held up by round-off (`RateTest::fallback`), the BDF failed its
     // first steps at 1e-8 (Newton at t = 9e-11 with h = 3e-19). Floors about half a digit

@@ -149,6 +149,8 @@ pub(crate) struct NewtonProblem {
     /// Accept an iteration that cannot meet the test with the plain weights when it meets the
     /// fallback test with [`Corrector::w_scaled`] (`RateTest::fallback`).
     pub fallback: bool,
+    /// The least rate factor the first update is judged with (`RateTest::min_carried`).
+    pub min_carried: f64,
     /// When finite: the scaled residual `max_i |F_i| / max_j (|G_ij| / w_j)` at the solution
     /// must not exceed this.
     pub residual_tolerance: f64,
@@ -248,6 +250,14 @@ pub(crate) struct RateTest<'a> {
     /// (the test of diffsol's Newton). Without it an iteration that converges too slowly runs
     /// to the cap before the fresh matrix is formed. Off in [`RateTest::new`].
     pub predictive: bool,
+    /// The first update of a solve is judged with the rate factor `s` carried from an earlier
+    /// solve, but never below this (0 in [`RateTest::new`]: IDA's test). A rate measured in one
+    /// solve can be tiny when that solve's first update was dominated by components the
+    /// equations hold linearly (the accelerations and multipliers of a mechanical DAE, whose
+    /// predictions are far off in their plain weights and are put right by one update); carried
+    /// to the next steps it accepts first updates of `10^5` tolerance units and more, with the
+    /// matrix aged, and leaves the constraints unmet (see `variable.rs`, `MIN_CARRIED_RATE`).
+    pub min_carried: f64,
     epcon: f64,
     max_iterations: usize,
     residual_tolerance: f64,
@@ -265,6 +275,7 @@ impl RateTest<'_> {
             fallback: None,
             formed: false,
             predictive: false,
+            min_carried: 0.0,
             epcon,
             max_iterations,
             residual_tolerance,
@@ -359,7 +370,12 @@ impl<S, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
                 }
             }
         }
-        if converged || self.ss * delnrm <= self.epcon {
+        let ss = if m == 0 {
+            self.ss.max(self.min_carried)
+        } else {
+            self.ss
+        };
+        if converged || ss * delnrm <= self.epcon {
             return self.converged();
         }
         if it.solves >= self.max_iterations {
@@ -427,6 +443,7 @@ impl<L: LinearSolver> Corrector<L> {
             let mut test =
                 RateTest::new(self.jac.ss, p.epcon, p.max_iterations, p.residual_tolerance);
             test.predictive = p.predictive;
+            test.min_carried = p.min_carried;
             test.fallback = p.fallback.then_some(&self.w_scaled[..]);
             let outcome = self
                 .newton
