@@ -503,6 +503,13 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.stats.steps - self.state.steps_at_start
     }
 
+    /// Every unknown has index at most 1 ([`Options::index`]): the corrector's tighter test
+    /// (`INDEX1_NEWTON_FACTOR`) and the filtered error estimate apply; DAEs with unknowns of
+    /// index 2 or 3 keep IDA's test with `MIN_CARRIED_RATE` and the fallback.
+    fn index_at_most_one(&self) -> bool {
+        self.opts.index.iter().all(|&m| m <= 1)
+    }
+
     fn hmin(&self) -> f64 {
         self.opts
             .min_step
@@ -571,7 +578,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             }
         }
         let saved_t = self.state.tn;
-        let index1 = self.opts.index.iter().all(|&m| m <= 1);
+        let index1 = self.index_at_most_one();
         let epcon = if index1 {
             self.opts.newton_tolerance * INDEX1_NEWTON_FACTOR
         } else {
@@ -810,7 +817,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     fn error_test(&mut self) -> bool {
         let kk = self.state.kk;
         let enorm_k = wrms(&self.corrector.ee, &self.state.w_err);
-        let index1 = self.opts.index.iter().all(|&m| m <= 1);
+        let index1 = self.index_at_most_one();
         // On index-1 DAEs the filtered estimate decides a step the raw one fails, and the
         // larger of the two sets the next step (see `filtered_error_norm`).
         let mut enorm_test = enorm_k;
