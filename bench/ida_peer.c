@@ -709,6 +709,15 @@ int main(int argc, char **argv) {
     SUNContext_Free(&ctx);
     return 0;
   }
+  if (only) {
+    int matches = 0;
+    for (int problem = 0; problem < PROBLEMS; problem++) matches += strstr(NAMES[problem], only) != NULL;
+    if (!matches) {
+      fprintf(stderr, "ida_peer: no problem's label contains '%s' (or pass --reference)\n", only);
+      SUNContext_Free(&ctx);
+      return 2;
+    }
+  }
   for (int problem = 0; problem < PROBLEMS; problem++) {
     if (only && !strstr(NAMES[problem], only)) continue;
     for (int k = 4; k <= 8; k += 2) {

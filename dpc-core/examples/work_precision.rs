@@ -114,6 +114,20 @@ enum Problem {
 }
 
 impl Problem {
+    /// Every problem, in the table's order.
+    const ALL: [Self; 10] = [
+        Self::Robertson,
+        Self::Amplifier,
+        Self::Pendulum,
+        Self::Andrews,
+        Self::AndrewsStabilised,
+        Self::CarAxis,
+        Self::CarAxisStabilised,
+        Self::Akzo,
+        Self::Hires,
+        Self::AscherPetzold,
+    ];
+
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
     fn name(self) -> &'static str {
         match self {
@@ -149,15 +163,42 @@ impl Code {
     }
 }
 
-/// The factor on every tolerance: the command line's second argument, 1 by default.
+/// Ends the run with `message` on standard error and exit status 2 (a bad command line).
+fn usage_error(message: &str) -> ! {
+    eprintln!("work_precision: {message}");
+    eprintln!("usage: work_precision [PROBLEM [TOLERANCE_FACTOR]]");
+    std::process::exit(2)
+}
+
+/// The factor on every tolerance: the command line's second argument, 1 by default; a value
+/// that is not a positive finite number is a usage error.
 fn tolerance_factor() -> f64 {
-    std::env::args()
-        .nth(2)
-        .map(|a| {
-            a.parse()
-                .expect("the second argument is a tolerance factor")
-        })
-        .unwrap_or(1.0)
+    let Some(a) = std::env::args().nth(2) else {
+        return 1.0;
+    };
+    match a.parse::<f64>() {
+        Ok(f) if f > 0.0 && f.is_finite() => f,
+        _ => usage_error(&format!(
+            "the second argument is a tolerance factor (a positive number), got '{a}'"
+        )),
+    }
+}
+
+/// The command line's first argument must be part of some problem's label: a filter that
+/// matches nothing would print an empty table.
+fn check_problem_filter() {
+    if let Some(only) = std::env::args().nth(1) {
+        if !Problem::ALL
+            .iter()
+            .any(|p| p.name().contains(only.as_str()))
+        {
+            let names: Vec<&str> = Problem::ALL.iter().map(|p| p.name()).collect();
+            usage_error(&format!(
+                "no problem's label contains '{only}'; the labels: {}",
+                names.join(", ")
+            ));
+        }
+    }
 }
 
 /// Prints the row of `code` on `problem` at `rtol = 1e-k`, scored over `scored` against
@@ -231,6 +272,7 @@ fn main() {
     let (ay0, ayp0) = Andrews::initial();
     let car = CarAxis::default();
     let (cy0, cyp0) = car.initial();
+    check_problem_filter();
     let factor = tolerance_factor();
     for k in [4, 6, 8] {
         let tol = 10f64.powi(-k) * factor;

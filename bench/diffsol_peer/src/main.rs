@@ -32,10 +32,10 @@
 mod bdf_problems;
 #[path = "../../../dpc-core/tests/common/peer_table.rs"]
 mod peer_table;
-#[path = "../../../dpc-core/tests/common/testset_index1.rs"]
-mod testset_index1;
 #[path = "../../../dpc-core/tests/common/standard_dae.rs"]
 mod standard_dae;
+#[path = "../../../dpc-core/tests/common/testset_index1.rs"]
+mod testset_index1;
 #[path = "../../../dpc-core/tests/common/testset_index3.rs"]
 mod testset_index3;
 
@@ -350,10 +350,18 @@ fn main() {
     let p = Pendulum::default();
     let (py0, pyp0) = p.initial(THETA0);
     // The factor on every tolerance (the first argument, 1 by default), for the jitter scans.
-    let factor: f64 = std::env::args()
-        .nth(1)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(1.0);
+    let factor: f64 = match std::env::args().nth(1) {
+        None => 1.0,
+        Some(a) => match a.parse::<f64>() {
+            Ok(f) if f > 0.0 && f.is_finite() => f,
+            _ => {
+                eprintln!(
+                    "diffsol_peer: the argument is a tolerance factor (a positive number), got '{a}'"
+                );
+                std::process::exit(2);
+            }
+        },
+    };
     for k in [4, 6, 8] {
         let tol = 10f64.powi(-k) * factor;
         row(
