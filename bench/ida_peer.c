@@ -28,10 +28,12 @@
  *
  *   ida_peer                 # every row
  *   ida_peer Akzo            # the rows of the problems whose label contains the argument
+ *   ida_peer Akzo 1.1        # the same at rtol = 1.1e-k (a tolerance jitter, as work_precision)
  *   ida_peer --reference     # Akzo and HIRES at rtol = 1e-12, atol = 1e-15: the end values
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -718,10 +720,21 @@ int main(int argc, char **argv) {
       return 2;
     }
   }
+  double factor = 1.0;
+  if (argc > 2) {
+    char *end = NULL;
+    factor = strtod(argv[2], &end);
+    if (end == argv[2] || *end != '\0' || !(factor > 0.0) || !isfinite(factor)) {
+      fprintf(stderr, "ida_peer: the tolerance factor must be a positive number, not '%s'\n",
+              argv[2]);
+      SUNContext_Free(&ctx);
+      return 2;
+    }
+  }
   for (int problem = 0; problem < PROBLEMS; problem++) {
     if (only && !strstr(NAMES[problem], only)) continue;
     for (int k = 4; k <= 8; k += 2) {
-      double rtol = pow(10.0, -k);
+      double rtol = factor * pow(10.0, -k);
       Run run = solve(ctx, problem, rtol);
       printf("%02d-%02d-4\t| %s | 1e-%d | IDA 6.4.1 | ", problem + 1, k, NAMES[problem], k);
       if (run.flag < 0) {

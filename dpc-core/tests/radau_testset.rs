@@ -6,14 +6,14 @@
 #[path = "common/bdf_problems.rs"]
 mod bdf_problems;
 #[path = "common/testset_index3.rs"]
-mod testset;
+mod testset_index3;
 
 use bdf_problems::{Pendulum, PENDULUM_INDEX};
 use dpc_core::linear_solver::{FaerDenseLu, FaerSparseLu, LinearSolver, NalgebraLu};
 use dpc_core::radau::{Options, Radau, Stats};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
-use testset::*;
+use testset_index3::*;
 
 /// Andrews to `t = 0.03` at `rtol = atol = tol`: (y(0.03), stats).
 fn andrews(tol: f64) -> ([f64; 27], Stats) {
@@ -42,13 +42,6 @@ fn car_axis<L: LinearSolver>(tol: f64, ls: L) -> ([f64; 10], Stats) {
     let mut y = [0.0; 10];
     r.solve_to(CAR_AXIS_T_END, &mut y, None).unwrap();
     (y, r.stats())
-}
-
-/// The Test Set's measure: the median of `digits(tol * f)` over the jitter `f = 0.9, 1, 1.1`.
-fn median_over_jitter(tol: f64, digits: impl Fn(f64) -> f64) -> f64 {
-    let mut d = [0.9, 1.0, 1.1].map(|f| digits(tol * f));
-    d.sort_by(f64::total_cmp);
-    d[1]
 }
 
 #[test]
@@ -685,6 +678,12 @@ fn detect_leaves_other_constraints_alone() {
 
 #[path = "common/standard_dae.rs"]
 mod standard_dae;
+#[path = "common/standard_scoring.rs"]
+mod standard_scoring;
+
+use standard_scoring::{
+    ascher_petzold_errors, median_over_jitter, standard_dae_digits, Integrator,
+};
 
 /// `dae` by Radau from `(y0, yp0)` at `t = 0` to `t_end` at `rtol = tol`, `atol = atol`, with
 /// `index` per unknown (empty: all 1): (y(t_end), stats).
@@ -705,6 +704,25 @@ fn radau_run<D: ImplicitDae>(
     let mut y = vec![0.0; n];
     r.solve_to(t_end, &mut y, None).unwrap();
     (y, r.stats())
+}
+
+/// Radau IIA with the dense faer LU at `rtol = atol`, as a user runs it.
+struct RadauRun;
+
+impl Integrator for RadauRun {
+    const NAME: &'static str = "Radau";
+    type Stats = Stats;
+
+    fn run<D: ImplicitDae>(
+        &self,
+        dae: D,
+        start: (&[f64], &[f64]),
+        index: &[u8],
+        t_end: f64,
+        tol: f64,
+    ) -> (Vec<f64>, Stats) {
+        radau_run(dae, start, index, t_end, (tol, tol))
+    }
 }
 
 #[test]
@@ -789,42 +807,8 @@ fn standard_dae_by_radau_reach_their_floors() {
     // IDA 6.4.1 (bench/ida_peer.c), medians over the same jitter: Akzo 2.63 / 4.40 / 6.26,
     // HIRES 1.03 / 2.70 / 4.84, Ascher-Petzold 3.88 / 5.28 / 6.41. Floors at 1e-6 half a digit
     // below the medians (all above IDA's digits there).
-    use standard_dae::*;
-    let ap = AscherPetzold::default();
-    let (ay0, ayp0) = ChemAkzo::initial();
-    let (hy0, hyp0) = Hires::initial();
-    let (py0, pyp0) = AscherPetzold::exact(0.0);
-    let (pref, _) = AscherPetzold::exact(AP_T_END);
-    let all: Vec<usize> = (0..8).collect();
     for tol in [1e-4, 1e-6, 1e-8] {
-        let akzo = |t| {
-            let (y, _) = radau_run(ChemAkzo, (&ay0, &ayp0), &[], AKZO_T_END, (t, t));
-            scd(&y, &AKZO_REF, &all[..6])
-        };
-        let hires = |t| {
-            let (y, _) = radau_run(Hires, (&hy0, &hyp0), &[], HIRES_T_END, (t, t));
-            scd(&y, &HIRES_REF, &all)
-        };
-        let apu = |t| {
-            let (y, _) = radau_run(ap, (&py0, &pyp0), &AP_INDEX, AP_T_END, (t, t));
-            scd(&y, &pref, &[0, 1])
-        };
-        let (da, dh, dp) = (
-            median_over_jitter(tol, akzo),
-            median_over_jitter(tol, hires),
-            median_over_jitter(tol, apu),
-        );
-        let (y, s) = radau_run(ChemAkzo, (&ay0, &ayp0), &[], AKZO_T_END, (tol, tol));
-        let m = mescd(&y, &AKZO_REF, &all[..6], tol, tol);
-        println!("Akzo Radau tol {tol:e}: median scd {da:.2}, mescd {m:.2} at tol, {s:?}");
-        let (y, s) = radau_run(Hires, (&hy0, &hyp0), &[], HIRES_T_END, (tol, tol));
-        let m = mescd(&y, &HIRES_REF, &all, tol, tol);
-        println!("HIRES Radau tol {tol:e}: median scd {dh:.2}, mescd {m:.2} at tol, {s:?}");
-        let (y, s) = radau_run(ap, (&py0, &pyp0), &AP_INDEX, AP_T_END, (tol, tol));
-        let w = scd(&y, &pref, &[2]);
-        println!(
-            "Ascher-Petzold Radau tol {tol:e}: median scd (u) {dp:.2}, w {w:.2} at tol, {s:?}"
-        );
+        let [da, dh, dp] = standard_dae_digits(&RadauRun, tol);
         if tol == 1e-6 {
             assert!(da >= 4.8, "Akzo: scd {da}");
             assert!(dh >= 4.3, "HIRES: scd {dh}");
@@ -841,19 +825,10 @@ fn ascher_petzold_errors_fall_with_the_tolerance() {
     // more Newton failures than steps (185 / 141 at 1e-4; 169 / 133 with a fresh Jacobian every
     // step): the steps are bounded by Newton's convergence, not by the error test). Checked:
     // every decade lowers the error in u and stays below tol.
-    use standard_dae::*;
-    let ap = AscherPetzold::default();
-    let (py0, pyp0) = AscherPetzold::exact(0.0);
-    let (pref, _) = AscherPetzold::exact(AP_T_END);
     let mut last: Option<f64> = None;
     for k in 4..=8 {
         let tol = 10f64.powi(-k);
-        let (y, s) = radau_run(ap, (&py0, &pyp0), &AP_INDEX, AP_T_END, (tol, tol));
-        let eu = (0..2)
-            .map(|i| (y[i] - pref[i]).abs() / pref[i].abs())
-            .fold(0.0, f64::max);
-        let ew = (y[2] - pref[2]).abs() / pref[2].abs();
-        println!("Ascher-Petzold Radau tol {tol:e}: error u {eu:.2e}, w {ew:.2e}, {s:?}");
+        let (eu, _, _) = ascher_petzold_errors(&RadauRun, tol);
         assert!(eu <= tol, "tol {tol}: error in u {eu}");
         if let Some(e) = last {
             assert!(eu < e, "tol {tol}: error in u {eu} not below {e}");
