@@ -14,6 +14,10 @@
 //!   (the test problem of Arévalo, Führer and Söderlind for index-3 Euler-Lagrange DAEs, as
 //!   recalled here; every formula below is checked against its exact solution): positions
 //!   constrained, multiplier algebraic, index 3, exact solution through `sin t^2`, `cos t^2`.
+//! * [`KnifeEdge`]: a knife edge (skate) on an inclined plane turning at a constant rate, the
+//!   classical nonholonomic example (Neimark & Fufaev, "Dynamics of nonholonomic systems";
+//!   Bloch, "Nonholonomic mechanics and control"): a velocity constraint with its multiplier,
+//!   index 2, with a closed-form solution.
 #![allow(dead_code)]
 
 use dpc_core::{ImplicitDae, MatrixSink};
@@ -225,5 +229,104 @@ impl ImplicitDae for CircularTrack {
     }
     fn is_differential(&self, i: usize) -> bool {
         i < 4
+    }
+}
+
+/// A knife edge of unit mass on a plane inclined so that gravity pulls along `x` with
+/// `G = g sin(alpha)`, turning at the constant rate `omega`; unknowns `(x, y, phi, u, v, w,
+/// lambda)`:
+///
+/// ```text
+/// x' = u     u' = G + lambda sin(phi)        w' = 0
+/// y' = v     v' = -lambda cos(phi)           0 = u sin(phi) - v cos(phi)
+/// phi' = w
+/// ```
+///
+/// The blade cannot slide sideways (the velocity constraint; `lambda` is the side force). Along
+/// the blade the speed `s` obeys `s' = G cos(phi)`, so from rest at the origin with `phi = 0`:
+/// `phi = omega t`, `s = a sin(omega t)` with `a = G / omega`, `u = a/2 sin(2 omega t)`,
+/// `v = a/2 (1 - cos(2 omega t))`, `x = a (1 - cos(2 omega t)) / (4 omega)`,
+/// `y = a/2 (t - sin(2 omega t) / (2 omega))`, `lambda = -2 G sin(omega t)`. Index 2 (the
+/// constraint's gradient in `(u, v)` is the blade's normal, along which `lambda` acts).
+#[derive(Debug, Clone, Copy)]
+pub struct KnifeEdge {
+    /// `g sin(alpha)`.
+    pub gravity: f64,
+    /// The turning rate.
+    pub omega: f64,
+}
+
+/// The knife edge of the tests: `g = 9.81` on a slope of 30 degrees, turning at 2 rad/s.
+pub const KNIFE: KnifeEdge = KnifeEdge {
+    gravity: 9.81 * 0.5,
+    omega: 2.0,
+};
+
+/// End of [`KnifeEdge`]'s interval (from 0; the blade has turned by 6 rad, no component near
+/// zero).
+pub const KNIFE_T_END: f64 = 3.0;
+
+impl KnifeEdge {
+    /// The exact solution and its derivative.
+    pub fn exact(&self, t: f64) -> ([f64; 7], [f64; 7]) {
+        let (g, w) = (self.gravity, self.omega);
+        let a = g / w;
+        let th = w * t;
+        let (s2, c2) = (2.0 * th).sin_cos();
+        let y = [
+            a * (1.0 - c2) / (4.0 * w),
+            0.5 * a * (t - s2 / (2.0 * w)),
+            th,
+            0.5 * a * s2,
+            0.5 * a * (1.0 - c2),
+            w,
+            -2.0 * g * th.sin(),
+        ];
+        let yp = [y[3], y[4], w, g * c2, g * s2, 0.0, -2.0 * g * w * th.cos()];
+        (y, yp)
+    }
+}
+
+impl ImplicitDae for KnifeEdge {
+    fn dimension(&self) -> usize {
+        7
+    }
+    fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        let (phi, u, v, w, l) = (y[2], y[3], y[4], y[5], y[6]);
+        let (s, c) = phi.sin_cos();
+        out[0] = yp[0] - u;
+        out[1] = yp[1] - v;
+        out[2] = yp[2] - w;
+        out[3] = yp[3] - self.gravity - l * s;
+        out[4] = yp[4] + l * c;
+        out[5] = yp[5];
+        out[6] = u * s - v * c;
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        y: &[f64],
+        _: &[f64],
+        c: f64,
+        m: &mut S,
+    ) {
+        let (phi, u, v, l) = (y[2], y[3], y[4], y[6]);
+        let (sn, cs) = phi.sin_cos();
+        for i in 0..6 {
+            m.set(i, i, c);
+        }
+        m.set(0, 3, -1.0);
+        m.set(1, 4, -1.0);
+        m.set(2, 5, -1.0);
+        m.set(3, 2, -l * cs);
+        m.set(3, 6, -sn);
+        m.set(4, 2, -l * sn);
+        m.set(4, 6, cs);
+        m.set(6, 2, u * cs + v * sn);
+        m.set(6, 3, sn);
+        m.set(6, 4, -cs);
+    }
+    fn is_differential(&self, i: usize) -> bool {
+        i < 6
     }
 }
