@@ -180,6 +180,10 @@ fn the_exact_solutions_satisfy_the_equations() {
         [0.0, 0.5, 1.0, 1.5, 2.0],
     );
     check_fixture(&KNIFE, |t| vecs(KNIFE.exact(t)), [0.0, 0.7, 1.4, 2.2, 3.0]);
+    for eta in [1.0, -0.2] {
+        let p = Bcp { eta };
+        check_fixture(&p, |t| vecs(p.exact(t)), [0.0, 0.7, 1.4, 2.2, 3.0]);
+    }
 }
 
 const TOLS: [f64; 3] = [1e-4, 1e-6, 1e-8];
@@ -542,5 +546,66 @@ fn a_forgotten_index_option_is_named_in_the_error() {
             .expect_err("the index-3 form without its index option");
             assert!(e.contains("index"), "{code:?} at {tol}: {e}");
         }
+    }
+}
+
+/// Gear and Petzold's problem on `[0, 3]` at 1e-6 with both integrators under every `index`
+/// option a user might pick: `Ok(relative errors)` or the error message.
+fn bcp_runs(eta: f64) -> Vec<(Code, Vec<u8>, Result<Vec<f64>, String>)> {
+    let p = Bcp { eta };
+    let (y0, yp0) = p.exact(0.0);
+    let (reference, _) = p.exact(3.0);
+    let mut out = Vec::new();
+    for code in [Code::Bdf, Code::Radau] {
+        for index in [vec![], vec![1, 2], vec![2, 2]] {
+            let r = solve(p, code, 1e-6, index.clone(), 0.0, 3.0, &y0, &yp0).map(|r| {
+                (0..2)
+                    .map(|i| (r.y[i] - reference[i]).abs() / reference[i].abs())
+                    .collect()
+            });
+            println!("Gear-Petzold eta {eta}, {code:?}, index {index:?}: {r:?}");
+            out.push((code, index, r));
+        }
+    }
+    out
+}
+
+#[test]
+#[ignore = "fails: Gear and Petzold's index-2 problem (every unknown of index 2) at eta = 1 \
+            and -0.2, 1e-6: no run of either integrator with index [], [1, 2] or [2, 2] ends \
+            within 1e-2 of the exact solution. Radau stops after 1-5 steps with ten Newton \
+            failures (its iteration matrix at one time serves stages where dF/dy2' = eta t \
+            differs by eta c_i h, which the factor 1/h turns into O(eta): with eta t frozen \
+            to a constant 1.5, Radau solves the same structure in 17-32 steps to 4-6 \
+            digits under all three options); the BDF stops \
+            (too many steps, Newton at h ~ 1e-18) or, with [2, 2], returns Ok 3-7 times off \
+            (see bcp_with_every_unknown_excluded_is_not_silently_wrong)"]
+fn bcp_index2_is_solved_by_some_documented_option() {
+    for eta in [1.0, -0.2] {
+        let runs = bcp_runs(eta);
+        for code in [Code::Bdf, Code::Radau] {
+            assert!(
+                runs.iter()
+                    .any(|(c, _, r)| *c == code
+                        && r.as_ref().is_ok_and(|e| e.iter().all(|&e| e < 1e-2))),
+                "eta {eta}, {code:?}: {runs:?}"
+            );
+        }
+    }
+}
+
+#[test]
+#[ignore = "fails: with index [2, 2] every unknown is excluded from the BDF's error test \
+            (HigherIndexControl::Exclude, the default), nothing bounds the step, and the BDF \
+            returns Ok in 24 steps with both unknowns 3-5 times off at eta = 1 (1e-6); no \
+            error and no warning says that nothing was controlled"]
+fn bcp_with_every_unknown_excluded_is_not_silently_wrong() {
+    let p = Bcp { eta: 1.0 };
+    let (y0, yp0) = p.exact(0.0);
+    let (reference, _) = p.exact(3.0);
+    let r = solve(p, Code::Bdf, 1e-6, vec![2, 2], 0.0, 3.0, &y0, &yp0);
+    if let Ok(run) = r {
+        let e = scd(&run.y, &reference, &[0, 1]);
+        assert!(e > 2.0, "Ok with {e} digits after {} steps", run.steps);
     }
 }

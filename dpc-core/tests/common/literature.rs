@@ -18,6 +18,10 @@
 //!   classical nonholonomic example (Neimark & Fufaev, "Dynamics of nonholonomic systems";
 //!   Bloch, "Nonholonomic mechanics and control"): a velocity constraint with its multiplier,
 //!   index 2, with a closed-form solution.
+//! * [`Bcp`]: the linear time-varying problem of Gear and Petzold (Brenan, Campbell & Petzold,
+//!   "Numerical solution of initial-value problems in DAEs"; Ascher & Petzold's book) with its
+//!   parameter `eta`: index 2 for every `eta != -1`, with every unknown of index 2 (its local
+//!   pencil `det(c A + B) = 1 + eta` does not depend on `c`), not index 1.
 #![allow(dead_code)]
 
 use dpc_core::{ImplicitDae, MatrixSink};
@@ -328,5 +332,53 @@ impl ImplicitDae for KnifeEdge {
     }
     fn is_differential(&self, i: usize) -> bool {
         i < 6
+    }
+}
+
+/// Gear and Petzold's linear time-varying DAE, unknowns `(y1, y2)`:
+///
+/// ```text
+/// 0 = y1 + eta t y2 - e^-t
+/// 0 = y1' + eta t y2' + (1 + eta) y2
+/// ```
+///
+/// with `y1 = (1 - eta t) e^-t`, `y2 = e^-t` for every `eta` (differentiating the first row
+/// and subtracting it from the second gives `y2 = e^-t`). Index 2; BDF methods are known to be
+/// unstable on it for `eta < -0.5`.
+#[derive(Debug, Clone, Copy)]
+pub struct Bcp {
+    /// The coupling parameter.
+    pub eta: f64,
+}
+
+impl Bcp {
+    /// The exact solution and its derivative.
+    pub fn exact(&self, t: f64) -> ([f64; 2], [f64; 2]) {
+        let e = (-t).exp();
+        let eta = self.eta;
+        ([(1.0 - eta * t) * e, e], [(eta * t - eta - 1.0) * e, -e])
+    }
+}
+
+impl ImplicitDae for Bcp {
+    fn dimension(&self) -> usize {
+        2
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        out[0] = y[0] + self.eta * t * y[1] - (-t).exp();
+        out[1] = yp[0] + self.eta * t * yp[1] + (1.0 + self.eta) * y[1];
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        _: &[f64],
+        _: &[f64],
+        c: f64,
+        m: &mut S,
+    ) {
+        m.set(0, 0, 1.0);
+        m.set(0, 1, self.eta * t);
+        m.set(1, 0, c);
+        m.set(1, 1, c * self.eta * t + 1.0 + self.eta);
     }
 }
