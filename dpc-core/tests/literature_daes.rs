@@ -551,7 +551,10 @@ fn a_forgotten_index_option_is_named_in_the_error() {
 
 /// Gear and Petzold's problem on `[0, 3]` at 1e-6 with both integrators under every `index`
 /// option a user might pick: `Ok(relative errors)` or the error message.
-fn bcp_runs(eta: f64) -> Vec<(Code, Vec<u8>, Result<Vec<f64>, String>)> {
+/// One run of [`bcp_runs`]: the code, the `index` option, the relative errors or the message.
+type BcpRun = (Code, Vec<u8>, Result<Vec<f64>, String>);
+
+fn bcp_runs(eta: f64) -> Vec<BcpRun> {
     let p = Bcp { eta };
     let (y0, yp0) = p.exact(0.0);
     let (reference, _) = p.exact(3.0);
