@@ -29,6 +29,16 @@ pub enum BdfError {
     /// An option or argument is out of range (order, step size, tolerance of Newton, ...).
     #[error("invalid option: {0}")]
     InvalidOption(#[from] crate::error::InvalidOption),
+    /// `index` gives every unknown index 2 or 3 and `higher_index` is
+    /// [`HigherIndexControl::Exclude`](super::HigherIndexControl::Exclude): no unknown would be
+    /// in the error test, so nothing would bound the step and the result could be wrong without
+    /// any sign of it.
+    #[error(
+        "every unknown has index 2 or 3 in `index` and `higher_index = Exclude` leaves none in \
+         the error test, so nothing would bound the step: give the unknowns that appear \
+         differentiated index 1, or use `HigherIndexControl::Scale`"
+    )]
+    NothingInErrorTest,
     /// A time argument lies outside where it can be served: an output time behind the
     /// integrator, an interpolation time outside the last step, a stop time not ahead.
     #[error("time {} is outside [{}, {}]", Time(*t), Time(*from), Time(*to))]

@@ -215,6 +215,22 @@ impl Options {
         Ok(())
     }
 
+    /// Check that some unknown is in the variable-step error test: [`Options::index`] giving
+    /// every unknown index 2 or 3 under [`HigherIndexControl::Exclude`] leaves none, and
+    /// nothing would bound the step (the fixed-step mode has no error test and does not ask).
+    ///
+    /// # Errors
+    /// [`BdfError::NothingInErrorTest`].
+    pub fn check_error_test(&self) -> Result<(), BdfError> {
+        if self.higher_index == HigherIndexControl::Exclude
+            && !self.index.is_empty()
+            && self.index.iter().all(|&m| m >= 2)
+        {
+            return Err(BdfError::NothingInErrorTest);
+        }
+        Ok(())
+    }
+
     /// Index of component `i` (at least 1).
     #[inline]
     pub(crate) fn index_of(&self, i: usize) -> u8 {

@@ -130,7 +130,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// # Errors
     /// [`BdfError::DimensionMismatch`] if `y0`, `yp0` or the solver do not match
     /// `dae.dimension()`; option errors from [`Options::validate`];
-    /// [`BdfError::NonFiniteResidual`] if `F(t0, y0, yp0)` is not finite.
+    /// [`BdfError::NothingInErrorTest`] if [`Options::index`] leaves no unknown in the error
+    /// test ([`Options::check_error_test`]); [`BdfError::NonFiniteResidual`] if
+    /// `F(t0, y0, yp0)` is not finite.
     pub fn new(
         dae: D,
         ls: L,
@@ -149,6 +151,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             ],
         )?;
         opts.validate(n)?;
+        opts.check_error_test()?;
         if !t0.is_finite() {
             return Err(InvalidOption::new("t0", t0, "finite").into());
         }
