@@ -32,6 +32,7 @@ pub mod controller;
 pub mod dae;
 pub mod design;
 pub mod error;
+pub mod index_estimate;
 pub mod linear_analysis;
 pub mod linear_solver;
 pub mod linearize;

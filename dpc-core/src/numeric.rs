@@ -86,6 +86,44 @@ impl std::fmt::Display for Time {
     }
 }
 
+/// Visit two points near `(t, y, y')`, each coordinate and `t` moved by up to 10 % of
+/// `1 + |value|` by a fixed deterministic sequence (xorshift64*): where a structure is read off
+/// a model, entries that vanish at the given point by coincidence (a pendulum hanging straight
+/// down, a road at its zero crossing) are seen at one of these, and the result never depends
+/// on a seed the user does not see. `visit` returns whether the point was usable (the model
+/// finite there); an unusable one is replaced by one moved ten times less, up to four times,
+/// then skipped.
+pub(crate) fn visit_nearby_points(
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+    mut visit: impl FnMut(f64, &[f64], &[f64]) -> bool,
+) {
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut unit = || {
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        let bits = state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
+        bits as f64 / (1u64 << 52) as f64 - 1.0
+    };
+    let (mut y_moved, mut yp_moved) = (vec![0.0; y.len()], vec![0.0; yp.len()]);
+    for _ in 0..2 {
+        let mut scale = 0.1;
+        for _ in 0..4 {
+            let mut moved = |v: f64| v + scale * (1.0 + v.abs()) * unit();
+            for (m, &v) in y_moved.iter_mut().zip(y).chain(yp_moved.iter_mut().zip(yp)) {
+                *m = moved(v);
+            }
+            let t_moved = moved(t);
+            if visit(t_moved, &y_moved, &yp_moved) {
+                break;
+            }
+            scale *= 0.1;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::{max_or_nan, Readable};

@@ -717,21 +717,6 @@ mod detect {
         pub(super) constrained: bool,
     }
 
-    /// A small deterministic generator (xorshift64*) for the sampling points: the structure
-    /// found must not depend on a seed the user does not see.
-    struct Jitter(u64);
-
-    impl Jitter {
-        /// A value in `[-1, 1)`.
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            let bits = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11;
-            bits as f64 / (1u64 << 52) as f64 - 1.0
-        }
-    }
-
     /// The iteration matrices at `c = 0` and `c = C` at one point, or the first non-finite
     /// entry `(row, column)`.
     fn matrices<D: ImplicitDae>(
@@ -781,23 +766,11 @@ mod detect {
             unknown: dae.unknown_name(j),
         })?;
         mark(&m0, &m1);
-        let mut jitter = Jitter(0x9e37_79b9_7f4a_7c15);
-        let (mut y_moved, mut yp_moved) = (vec![0.0; n], vec![0.0; n]);
-        for _ in 0..2 {
-            let mut scale = 0.1;
-            for _ in 0..4 {
-                let mut moved = |v: f64| v + scale * (1.0 + v.abs()) * jitter.next();
-                for (m, &v) in y_moved.iter_mut().zip(y).chain(yp_moved.iter_mut().zip(yp)) {
-                    *m = moved(v);
-                }
-                let t_moved = moved(t);
-                if let Ok((m0, m1)) = matrices(dae, t_moved, &y_moved, &yp_moved) {
-                    mark(&m0, &m1);
-                    break;
-                }
-                scale *= 0.1;
-            }
-        }
+        crate::numeric::visit_nearby_points(t, y, yp, |t_moved, y_moved, yp_moved| {
+            matrices(dae, t_moved, y_moved, yp_moved)
+                .map(|(m0, m1)| mark(&m0, &m1))
+                .is_ok()
+        });
         Ok((f_y, f_yp))
     }
 

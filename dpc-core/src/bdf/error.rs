@@ -130,6 +130,29 @@ pub enum BdfError {
         /// Where the integrator stopped.
         t: f64,
     },
+    /// A step failed ([`BdfError::NewtonFailed`], [`BdfError::ErrorTestFailed`],
+    /// [`BdfError::TooManySteps`]) on a DAE whose [`super::Options::index`] gives every
+    /// unknown index at most 1 (the default), while its iteration matrix at the last point
+    /// reached shows unknowns of index 2 or 3 ([`crate::index_estimate::unknown_indices`]):
+    /// the likely cause, since the error test and Newton's test then hold those unknowns to a
+    /// tolerance they cannot meet as `h` shrinks.
+    #[error(
+        "{source}; at t = {} the DAE has unknowns of higher index than `Options::index` \
+         declares (every unknown of index 1): {}; declare them in `index`, or integrate with \
+         dpc_core::radau::Radau (with the same option) or in the stabilised form of \
+         dpc_core::stabilised::Stabilised::detect",
+        Time(*t),
+        unknowns.iter().map(|(u, m)| format!("`{u}` of index {m}")).collect::<Vec<_>>().join(", ")
+    )]
+    UndeclaredIndex {
+        /// Time of the last point reached, where the index was estimated.
+        t: f64,
+        /// The unknowns estimated of index 2 or 3 there, by name, with their index.
+        unknowns: Vec<(String, u8)>,
+        /// The failure itself.
+        #[source]
+        source: Box<BdfError>,
+    },
     /// Consistent initialisation did not converge.
     #[error("consistent initialisation failed: {0}")]
     InitialisationFailed(String),

@@ -422,13 +422,14 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 }
             }
             if steps >= self.opts.max_steps {
-                return Err(BdfError::TooManySteps {
+                return Err(self.with_index_diagnosis(BdfError::TooManySteps {
                     max_steps: self.opts.max_steps,
                     tout,
                     t: self.state.tn,
-                });
+                }));
             }
-            self.step_internal()?;
+            self.step_internal()
+                .map_err(|e| self.with_index_diagnosis(e))?;
             steps += 1;
         }
         self.interpolate(tout, y_out, yp_out)?;
@@ -449,8 +450,43 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             let t = self.state.tstop.unwrap_or(self.state.tn);
             self.init_step(t);
         }
-        self.step_internal()?;
+        self.step_internal()
+            .map_err(|e| self.with_index_diagnosis(e))?;
         Ok(self.state.tn)
+    }
+
+    /// `e`, or [`BdfError::UndeclaredIndex`] wrapping it when it is a failure to step
+    /// (Newton, the error test, too many steps) of a DAE declared with every unknown of index
+    /// at most 1 whose iteration matrix at the last point reached shows unknowns of index 2 or
+    /// 3. Runs only on that error path (it allocates and decomposes the matrix a few times).
+    fn with_index_diagnosis(&self, e: BdfError) -> BdfError {
+        let stepping = matches!(
+            e,
+            BdfError::NewtonFailed { .. }
+                | BdfError::ErrorTestFailed { .. }
+                | BdfError::TooManySteps { .. }
+        );
+        if !stepping || !self.opts.index.iter().all(|&m| m <= 1) {
+            return e;
+        }
+        let t = self.state.tn;
+        let (mut y, mut yp) = (vec![0.0; self.n], vec![0.0; self.n]);
+        if self.interpolate(t, &mut y, Some(&mut yp)).is_err() {
+            return e;
+        }
+        match crate::index_estimate::unknown_indices(&self.dae, t, &y, &yp) {
+            Ok(estimate) if estimate.iter().any(|&m| m > 1) => BdfError::UndeclaredIndex {
+                t,
+                unknowns: estimate
+                    .iter()
+                    .enumerate()
+                    .filter(|&(_, &m)| m > 1)
+                    .map(|(i, &m)| (self.dae.unknown_name(i), m))
+                    .collect(),
+                source: Box::new(e),
+            },
+            _ => e,
+        }
     }
 
     /// Interpolate the solution (and derivative) at `t` in `[t - h_last, t]` of the last step,

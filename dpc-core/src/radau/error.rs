@@ -46,7 +46,7 @@ impl fmt::Display for StepFailure {
 pub enum RadauError {
     /// A tolerance is negative or non-finite, both tolerances of a component are zero, or an
     /// error weight `1/(rtol |y_i| + atol_i)` is not positive and finite.
-    #[error("invalid tolerance {which} of component {component}: {value}")]
+    #[error("invalid tolerance {which} of component {component}: {}", Readable(*value))]
     InvalidTolerance {
         /// `"rtol"`, `"atol"`, `"rtol and atol"` or `"error weight"`.
         which: &'static str,
@@ -70,7 +70,7 @@ pub enum RadauError {
     InvalidOption(InvalidOption),
     /// A time argument lies outside where it can be served: an output time behind the
     /// integrator, an interpolation time outside the last step, a stop time not ahead.
-    #[error("time {t} is outside [{from}, {to}]")]
+    #[error("time {} is outside [{}, {}]", Time(*t), Time(*from), Time(*to))]
     TimeOutOfRange {
         /// The time asked for.
         t: f64,
@@ -100,7 +100,7 @@ pub enum RadauError {
         equation: Option<String>,
     },
     /// The model's residual returned NaN or an infinity, and reducing the step did not help.
-    #[error("non-finite residual at t = {t} in {equation}")]
+    #[error("non-finite residual at t = {} in {equation}", Time(*t))]
     NonFiniteResidual {
         /// Time of the evaluation.
         t: f64,
@@ -116,7 +116,7 @@ pub enum RadauError {
         unknown: String,
     },
     /// The step size fell below its minimum (`max(min_step, 4 eps |t|)`).
-    #[error("step size {h} too small at t = {t}: {cause}")]
+    #[error("step size {} too small at t = {}: {cause}", Readable(*h), Time(*t))]
     StepTooSmall {
         /// Start of the step.
         t: f64,
@@ -126,7 +126,7 @@ pub enum RadauError {
         cause: StepFailure,
     },
     /// More consecutive failures in one step than the options allow.
-    #[error("{failures} consecutive failures ({cause}) at t = {t}, last step {h}")]
+    #[error("{failures} consecutive failures ({cause}) at t = {}, last step {}", Time(*t), Readable(*h))]
     RepeatedFailures {
         /// Start of the step.
         t: f64,
@@ -138,7 +138,7 @@ pub enum RadauError {
         cause: StepFailure,
     },
     /// More steps than [`super::Options::max_steps`] were needed to reach an output time.
-    #[error("too many steps ({max_steps}) before reaching t = {tout}; stopped at t = {t}")]
+    #[error("too many steps ({max_steps}) before reaching t = {}; stopped at t = {}", Time(*tout), Time(*t))]
     TooManySteps {
         /// The step limit.
         max_steps: usize,
@@ -146,6 +146,26 @@ pub enum RadauError {
         tout: f64,
         /// Where the integrator stopped.
         t: f64,
+    },
+    /// A step failed ([`RadauError::StepTooSmall`], [`RadauError::RepeatedFailures`],
+    /// [`RadauError::TooManySteps`]) on a DAE whose [`super::Options::index`] gives every
+    /// unknown index at most 1 (the default), while its iteration matrix at the last point
+    /// reached shows unknowns of index 2 or 3 ([`crate::index_estimate::unknown_indices`]):
+    /// the likely cause, since their errors are then not scaled by the step.
+    #[error(
+        "{source}; at t = {} the DAE has unknowns of higher index than `Options::index` \
+         declares (every unknown of index 1): {}; declare them in `index`",
+        Time(*t),
+        unknowns.iter().map(|(u, m)| format!("`{u}` of index {m}")).collect::<Vec<_>>().join(", ")
+    )]
+    UndeclaredIndex {
+        /// Time of the last point reached, where the index was estimated.
+        t: f64,
+        /// The unknowns estimated of index 2 or 3 there, by name, with their index.
+        unknowns: Vec<(String, u8)>,
+        /// The failure itself.
+        #[source]
+        source: Box<RadauError>,
     },
 }
 

@@ -442,13 +442,14 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 }
             }
             if steps >= self.opts.max_steps {
-                return Err(RadauError::TooManySteps {
+                return Err(self.with_index_diagnosis(RadauError::TooManySteps {
                     max_steps: self.opts.max_steps,
                     tout,
                     t: self.t,
-                });
+                }));
             }
-            self.step_internal()?;
+            self.step_internal()
+                .map_err(|e| self.with_index_diagnosis(e))?;
             steps += 1;
         }
         if self.tstop.is_some_and(|ts| ts <= tout && ts <= self.t) {
@@ -469,8 +470,37 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             let t = self.tstop.unwrap_or(self.t + 1.0);
             self.h = self.initial_step(t);
         }
-        self.step_internal()?;
+        self.step_internal()
+            .map_err(|e| self.with_index_diagnosis(e))?;
         Ok(self.t)
+    }
+
+    /// `e`, or [`RadauError::UndeclaredIndex`] wrapping it when it is a failure to step of a
+    /// DAE declared with every unknown of index at most 1 whose iteration matrix at the last
+    /// point reached shows unknowns of index 2 or 3. Runs only on that error path.
+    fn with_index_diagnosis(&self, e: RadauError) -> RadauError {
+        let stepping = matches!(
+            e,
+            RadauError::StepTooSmall { .. }
+                | RadauError::RepeatedFailures { .. }
+                | RadauError::TooManySteps { .. }
+        );
+        if !stepping || (0..self.n).any(|i| self.opts.index_of(i) > 1) {
+            return e;
+        }
+        match crate::index_estimate::unknown_indices(&self.dae, self.t, self.y(), self.yp()) {
+            Ok(estimate) if estimate.iter().any(|&m| m > 1) => RadauError::UndeclaredIndex {
+                t: self.t,
+                unknowns: estimate
+                    .iter()
+                    .enumerate()
+                    .filter(|&(_, &m)| m > 1)
+                    .map(|(i, &m)| (self.dae.unknown_name(i), m))
+                    .collect(),
+                source: Box::new(e),
+            },
+            _ => e,
+        }
     }
 
     /// Evaluate the collocation polynomial of the last step at `t` in `[t - h_last, t]` (the

@@ -1,0 +1,301 @@
+//! The index of each unknown of a DAE at a point, estimated from its iteration matrix.
+//!
+//! The integrators need to know which unknowns have index 2 or 3 (`Options::index` of
+//! [`crate::bdf`] and [`crate::radau`]): the BDF leaves them out of its error test or scales
+//! their errors, Radau scales them by the step. A DAE declared without that option fails in
+//! ways that do not point at it (repeated error-test or Newton failures near the start, or
+//! too many steps). [`unknown_indices`] reads the index of every unknown off the iteration
+//! matrix `G(c) = dF/dy + c dF/dy'` at one point, as the integrators form it: the row of
+//! `G(c)^-1` belonging to an unknown of index `m` grows like `c^(m-1)` as `c` grows (an unknown
+//! whose derivative the equations determine shrinks like `1/c`; an algebraic unknown of index
+//! 1 stays bounded; in a Hessenberg index-2 system the multiplier's row grows like `c`, in an
+//! index-3 one the velocities' rows like `c` and the multiplier's like `c^2`). The exponent is
+//! measured between two values of `c` far above the scale `|dF/dy| / |dF/dy'|`, where the
+//! lower-order terms no longer count. `G(c)^-1` comes from a singular value decomposition, so
+//! a pencil that is singular at the point (no regular DAE there) is reported, not inverted.
+//!
+//! The bound is the index the integrators' options mean (DASSL's and IDA's convention): the
+//! positions of a constrained mechanism have index 1 (they appear differentiated and their
+//! rows of `G^-1` stay bounded), velocities 2, multipliers 3, as in the Test Set's problems.
+
+use nalgebra::DMatrix;
+
+use crate::ImplicitDae;
+
+/// Why [`unknown_indices`] cannot estimate the index at the given point.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IndexEstimateError {
+    /// `y` or `y'` does not have the DAE's dimension.
+    #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
+    DimensionMismatch {
+        /// `"y"` or `"yp"`.
+        what: &'static str,
+        /// The DAE's dimension.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// The iteration matrix has a NaN or infinite entry at the point.
+    #[error(
+        "the iteration matrix has a non-finite entry in the row of {equation}, column of {unknown}"
+    )]
+    NonFinite {
+        /// Name of the row's equation.
+        equation: String,
+        /// Name of the column's unknown.
+        unknown: String,
+    },
+    /// The rows of `G(c)^-1` did not settle on whole powers of `c` before `G(c)` became too
+    /// ill-conditioned to invert (a DAE of index above 3, or one whose scales span more than
+    /// round-off leaves room for): no index is reported rather than a guessed one.
+    #[error(
+        "the index of the unknowns at t = {t} could not be read off the iteration matrix: the \
+         powers of c its inverse grows with did not settle before round-off"
+    )]
+    Inconclusive {
+        /// The time of the point.
+        t: f64,
+    },
+    /// `dF/dy + c dF/dy'` is singular for every `c` tried: the DAE is not regular at the point
+    /// (an equation missing, or two that say the same), and no index is defined there.
+    #[error(
+        "the iteration matrix dF/dy + c dF/dy' is singular at t = {t} for every c tried \
+         (smallest singular value {sigma_ratio:.1e} of the largest): the DAE is not regular there"
+    )]
+    SingularPencil {
+        /// The time of the point.
+        t: f64,
+        /// The smallest singular value relative to the largest, at the larger `c`.
+        sigma_ratio: f64,
+    },
+}
+
+/// Decades of `c` above the scale `|dF/dy| / |dF/dy'|` (of the equilibrated matrices) tried.
+const MAX_DECADES: usize = 14;
+
+/// `G(c)` is inverted only while its smallest singular value is at least this fraction of its
+/// largest (the inverse's rows then carry several correct digits; an index-3 pencil's
+/// condition number grows like `c^3`, so this bounds the decades an index-3 DAE can be read
+/// over).
+const MIN_SINGULAR_RATIO: f64 = 1e-12;
+
+/// Two consecutive powers of a row agree, and lie on a whole number, to within this.
+const SETTLED: f64 = 0.1;
+
+/// Scale the rows and columns of `F_y` and `F_y'` alike by powers of two (exact) so that the
+/// largest entry of `|F_y| + |F_y'|` in every row and column is near 1: the scaling does not
+/// change the power of `c` any row of `G(c)^-1` grows with, but it keeps `G(c)` as well
+/// conditioned as the DAE allows, so more decades of `c` can be read before round-off.
+fn equilibrate(dfdy: &mut DMatrix<f64>, dfdyp: &mut DMatrix<f64>) {
+    let n = dfdy.nrows();
+    let power_of_two = |m: f64| {
+        if m > 0.0 && m.is_finite() {
+            2f64.powi(-(m.log2().round() as i32))
+        } else {
+            1.0
+        }
+    };
+    for _ in 0..3 {
+        for i in 0..n {
+            let m = (0..n)
+                .map(|j| dfdy[(i, j)].abs() + dfdyp[(i, j)].abs())
+                .fold(0.0, f64::max);
+            let f = power_of_two(m);
+            dfdy.row_mut(i).scale_mut(f);
+            dfdyp.row_mut(i).scale_mut(f);
+        }
+        for j in 0..n {
+            let m = (0..n)
+                .map(|i| dfdy[(i, j)].abs() + dfdyp[(i, j)].abs())
+                .fold(0.0, f64::max);
+            let f = power_of_two(m);
+            dfdy.column_mut(j).scale_mut(f);
+            dfdyp.column_mut(j).scale_mut(f);
+        }
+    }
+}
+
+/// The index of every unknown of `dae` at `(t, y, y')`, in the sense of the integrators'
+/// `Options::index`: 1 for an unknown whose derivative is determined by the equations or an
+/// algebraic unknown of index 1, 2 or 3 (or higher) for the others. See the module
+/// documentation for the method. The index is read at the point and at two points near it
+/// (see `Stabilised::detect`), and the largest is taken: an entry that vanishes at the point by
+/// coincidence does not hide an index.
+///
+/// Costs two evaluations of the iteration matrix and two singular value decompositions of an
+/// `n x n` matrix: meant for set-up and diagnostics, not for every step.
+///
+/// ```
+/// use dpc::core::index_estimate::unknown_indices;
+/// use dpc::core::{ImplicitDae, MatrixSink};
+///
+/// /// The Cartesian pendulum `x' = u, y' = v, u' = -lambda x, v' = -lambda y - 1,
+/// /// 0 = x^2 + y^2 - 1`.
+/// struct Pendulum;
+/// impl ImplicitDae for Pendulum {
+///     fn dimension(&self) -> usize {
+///         5
+///     }
+///     fn residual(&self, _t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+///         out[0] = yp[0] - y[2];
+///         out[1] = yp[1] - y[3];
+///         out[2] = yp[2] + y[4] * y[0];
+///         out[3] = yp[3] + y[4] * y[1] + 1.0;
+///         out[4] = y[0] * y[0] + y[1] * y[1] - 1.0;
+///     }
+///     fn iteration_matrix<S: MatrixSink + ?Sized>(
+///         &self,
+///         _t: f64,
+///         y: &[f64],
+///         _yp: &[f64],
+///         c: f64,
+///         m: &mut S,
+///     ) {
+///         for i in 0..4 {
+///             m.set(i, i, c);
+///         }
+///         m.set(0, 2, -1.0);
+///         m.set(1, 3, -1.0);
+///         m.set(2, 0, y[4]);
+///         m.set(2, 4, y[0]);
+///         m.set(3, 1, y[4]);
+///         m.set(3, 4, y[1]);
+///         m.set(4, 0, 2.0 * y[0]);
+///         m.set(4, 1, 2.0 * y[1]);
+///     }
+/// }
+///
+/// let y = [1.0, 0.0, 0.0, 0.0, 0.0];
+/// let yp = [0.0, 0.0, 0.0, -1.0, 0.0];
+/// assert_eq!(unknown_indices(&Pendulum, 0.0, &y, &yp).unwrap(), [1, 1, 2, 2, 3]);
+/// ```
+///
+/// # Errors
+/// [`IndexEstimateError::DimensionMismatch`] for `y` or `y'` of the wrong length,
+/// [`IndexEstimateError::NonFinite`] for a NaN or infinite matrix entry,
+/// [`IndexEstimateError::SingularPencil`] when the DAE is not regular at the point.
+pub fn unknown_indices<D: ImplicitDae + ?Sized>(
+    dae: &D,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+) -> Result<Vec<u8>, IndexEstimateError> {
+    let n = dae.dimension();
+    for (what, found) in [("y", y.len()), ("yp", yp.len())] {
+        if found != n {
+            return Err(IndexEstimateError::DimensionMismatch {
+                what,
+                expected: n,
+                found,
+            });
+        }
+    }
+    // The point's own reading, unless it is inconclusive (an entry that is small there by
+    // coincidence delays the leading power beyond round-off): then the points near it decide.
+    let mut indices = match indices_at(dae, t, y, yp) {
+        Ok(indices) => Some(indices),
+        Err(IndexEstimateError::Inconclusive { .. }) => None,
+        Err(e) => return Err(e),
+    };
+    // Entries that vanish at the point by coincidence (the pendulum's horizontal velocity is
+    // free where it hangs straight down) hide an unknown's index there: the largest over the
+    // point and two points near it, as `Stabilised::detect` reads its structure.
+    crate::numeric::visit_nearby_points(t, y, yp, |t_moved, y_moved, yp_moved| {
+        match indices_at(dae, t_moved, y_moved, yp_moved) {
+            Ok(near) => {
+                match &mut indices {
+                    Some(indices) => {
+                        for (m, k) in indices.iter_mut().zip(near) {
+                            *m = (*m).max(k);
+                        }
+                    }
+                    None => indices = Some(near),
+                }
+                true
+            }
+            Err(_) => false,
+        }
+    });
+    indices.ok_or(IndexEstimateError::Inconclusive { t })
+}
+
+/// [`unknown_indices`] at the one point `(t, y, y')`.
+fn indices_at<D: ImplicitDae + ?Sized>(
+    dae: &D,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+) -> Result<Vec<u8>, IndexEstimateError> {
+    let n = dae.dimension();
+    let matrix = |c: f64| -> Result<DMatrix<f64>, IndexEstimateError> {
+        let mut m = DMatrix::zeros(n, n);
+        dae.iteration_matrix(t, y, yp, c, &mut m);
+        match m.iter().position(|v| !v.is_finite()) {
+            // Column-major: entry k is row k % n, column k / n.
+            Some(k) => Err(IndexEstimateError::NonFinite {
+                equation: dae.equation_name(k % n),
+                unknown: dae.unknown_name(k / n),
+            }),
+            None => Ok(m),
+        }
+    };
+    // G(c) = dF/dy + c dF/dy' is linear in c: its two parts from c = 0 and c = 1.
+    let mut dfdy = matrix(0.0)?;
+    let mut dfdyp = matrix(1.0)? - &dfdy;
+    equilibrate(&mut dfdy, &mut dfdyp);
+    let (ny, nyp) = (dfdy.norm(), dfdyp.norm());
+    let scale = if ny > 0.0 && nyp > 0.0 { ny / nyp } else { 1.0 };
+    // Row norms of G(c)^-1 for c = scale x 10, 100, ... while G(c) stays far from singular;
+    // the powers between consecutive decades, until two in a row agree on whole numbers.
+    // The row norms at the last c, the powers between the last two and between the two
+    // before: the sweep goes on to round-off (or MAX_DECADES), so these are the most
+    // asymptotic ones the arithmetic allows.
+    let mut last_norms: Option<Vec<f64>> = None;
+    let mut last_powers: Option<Vec<f64>> = None;
+    let mut earlier_powers: Option<Vec<f64>> = None;
+    let mut worst_ratio = f64::NAN;
+    let mut c = scale;
+    for _ in 0..MAX_DECADES {
+        c *= 10.0;
+        let g = &dfdy + &dfdyp * c;
+        let svd = g.svd(true, true);
+        let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
+        let ratio = if smax > 0.0 { smin / smax } else { 0.0 };
+        // G^-1 = V S^-1 U^T from the decomposition, only while every singular value is well
+        // above round-off.
+        let inverse = match svd.pseudo_inverse(0.0) {
+            Ok(inverse) if ratio > MIN_SINGULAR_RATIO => inverse,
+            _ => {
+                worst_ratio = ratio;
+                break;
+            }
+        };
+        let norms: Vec<f64> = (0..n).map(|i| inverse.row(i).amax()).collect();
+        if let Some(before) = &last_norms {
+            let powers: Vec<f64> = norms
+                .iter()
+                .zip(before)
+                .map(|(&b, &a)| (b / a).log10())
+                .collect();
+            earlier_powers = last_powers.replace(powers);
+        }
+        last_norms = Some(norms);
+    }
+    let (Some(last), Some(earlier)) = (last_powers, earlier_powers) else {
+        // Fewer than three values of c at which G(c) could be inverted.
+        return Err(IndexEstimateError::SingularPencil {
+            t,
+            sigma_ratio: worst_ratio,
+        });
+    };
+    let mut indices = Vec::with_capacity(n);
+    for (&p, &q) in last.iter().zip(&earlier) {
+        if (p - q).abs() > SETTLED || (p - p.round()).abs() > SETTLED {
+            return Err(IndexEstimateError::Inconclusive { t });
+        }
+        // The power of c the row grows with: -1 (a derivative the equations determine), 0
+        // (an algebraic unknown of index 1), 1, 2, ...; the index is the power + 1, at least 1.
+        indices.push((p.round() + 1.0).clamp(1.0, f64::from(u8::MAX)) as u8);
+    }
+    Ok(indices)
+}
