@@ -13,6 +13,12 @@
 //! * the Test Set's chemical Akzo Nobel problem (index 1, to `t = 180`) and HIRES (an ODE, to
 //!   `t = 321.8122`), all components scored, and Ascher and Petzold's linear index-2 problem
 //!   (`a = 50`, to `t = 1`, scored on `u1, u2` against the exact solution, `w` of index 2),
+//! * a Fekete-type problem with 20 points (the Test Set's Fekete problem as recalled: index 2,
+//!   160 unknowns, 20 position and 20 velocity constraints, to `t = 1000`; scored on the 60
+//!   coordinates of the points by `-log10 max |p - p_ref|`) in its GGL form, by Radau, by the
+//!   BDF with the stack LU (`NalgebraLu<160>`) and with faer's dense LU (`FaerDenseLu`), and by
+//!   the BDF on [`Stabilised::detect`] of the index-3 form as a user would declare it
+//!   (`p' = q`, `q' = g + 2 lambda p`, `|p|^2 = 1`; 140 unknowns),
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
@@ -28,6 +34,8 @@
 //! label): the Test Set's measure is the median over small jitters such as `0.9, 1, 1.1`, and
 //! the BDF's work on the transistor amplifier is a chaotic function of the tolerance.
 
+#[path = "../tests/common/fekete.rs"]
+mod fekete;
 #[path = "../tests/common/peer_table.rs"]
 mod peer_table;
 #[path = "../tests/common/bdf_problems.rs"]
@@ -40,10 +48,14 @@ mod testset_index1;
 mod testset_index3;
 
 use dpc_core::bdf::{self, Bdf, HigherIndexControl, Tolerance};
-use dpc_core::linear_solver::NalgebraLu;
+use dpc_core::linear_solver::{FaerDenseLu, LinearSolver, NalgebraLu};
 use dpc_core::radau::{self, Radau};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
+use fekete::{
+    fekete_digits, fekete_index, Fekete, FeketeIndex3, FEKETE_DIFFERENTIAL, FEKETE_REF,
+    FEKETE_T_END,
+};
 use peer_table::Run;
 use problems::{
     robertson_atol, Pendulum, Robertson, PENDULUM_INDEX, PENDULUM_T, ROBERTSON_REF,
@@ -58,20 +70,33 @@ use testset_index3::*;
 
 /// `fn $name::<N, D>(dae, (y0, yp0), opts, t_end)`: the integrator `$solver` with the stack LU
 /// of size `N` from `(y0, yp0)` at `t = 0` to `t_end`, and its work (the BDF's and Radau's
-/// constructors, stop times, `solve_to` and statistics have the same shape).
+/// constructors, stop times, `solve_to` and statistics have the same shape); `$with` the same
+/// with a given linear solver.
 macro_rules! run_with {
-    ($(#[$doc:meta])* $name:ident, $solver:ident, $options:ty) => {
+    ($(#[$doc:meta])* $name:ident, $with:ident, $solver:ident, $options:ty) => {
         $(#[$doc])*
         fn $name<const N: usize, D: ImplicitDae>(
             dae: D,
+            y0: (&[f64], &[f64]),
+            opts: $options,
+            t_end: f64,
+        ) -> Result<Run, String> {
+            $with(dae, NalgebraLu::<N>::new(), y0, opts, t_end)
+        }
+
+        /// As the function without a linear solver, with `ls`.
+        #[allow(dead_code)]
+        fn $with<L: LinearSolver, D: ImplicitDae>(
+            dae: D,
+            ls: L,
             (y0, yp0): (&[f64], &[f64]),
             opts: $options,
             t_end: f64,
         ) -> Result<Run, String> {
-            let mut s = $solver::new(dae, NalgebraLu::<N>::new(), opts, 0.0, y0, yp0)
-                .map_err(|e| e.to_string())?;
+            let n = ls.dimension();
+            let mut s = $solver::new(dae, ls, opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
             s.set_stop_time(t_end).map_err(|e| e.to_string())?;
-            let mut y = vec![0.0; N];
+            let mut y = vec![0.0; n];
             s.solve_to(t_end, &mut y, None).map_err(|e| e.to_string())?;
             let st = s.stats();
             Ok(Run {
@@ -88,12 +113,14 @@ macro_rules! run_with {
 run_with!(
     /// The BDF from `(y0, yp0)` at `t = 0` to `t_end`.
     bdf_run,
+    bdf_run_with,
     Bdf,
     bdf::Options
 );
 run_with!(
     /// Radau IIA, as [`bdf_run`].
     radau_run,
+    radau_run_with,
     Radau,
     radau::Options
 );
@@ -111,11 +138,12 @@ enum Problem {
     Akzo,
     Hires,
     AscherPetzold,
+    Fekete,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 10] = [
+    const ALL: [Self; 11] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -126,6 +154,7 @@ impl Problem {
         Self::Akzo,
         Self::Hires,
         Self::AscherPetzold,
+        Self::Fekete,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -141,6 +170,7 @@ impl Problem {
             Self::Akzo => "chemical Akzo Nobel (index 1; all)",
             Self::Hires => "HIRES (ODE; all)",
             Self::AscherPetzold => "Ascher-Petzold (index 2; u1, u2)",
+            Self::Fekete => "Fekete-type, 20 points (index 2; p)",
         }
     }
 }
@@ -151,6 +181,9 @@ enum Code {
     Radau = 1,
     Bdf,
     BdfScale,
+    /// 4 to 6: IDA and diffsol's two rows.
+    BdfFaer = 7,
+    BdfDetect,
 }
 
 impl Code {
@@ -159,6 +192,8 @@ impl Code {
             Self::Radau => "dpc Radau",
             Self::Bdf => "dpc BDF",
             Self::BdfScale => "dpc BDF (Scale)",
+            Self::BdfFaer => "dpc BDF (FaerDenseLu)",
+            Self::BdfDetect => "dpc BDF (Stabilised::detect of the index-3 form)",
         }
     }
 }
@@ -211,6 +246,17 @@ fn row(
     scored: &[usize],
     solve: impl Fn() -> Result<Run, String>,
 ) {
+    row_scored(problem, k, code, |y| scd(y, reference, scored), solve);
+}
+
+/// As [`row`], with the digits from `score`.
+fn row_scored(
+    problem: Problem,
+    k: i32,
+    code: Code,
+    score: impl Fn(&[f64]) -> f64,
+    solve: impl Fn() -> Result<Run, String>,
+) {
     if let Some(only) = std::env::args().nth(1) {
         if !problem.name().contains(only.as_str()) {
             return;
@@ -220,7 +266,7 @@ fn row(
         (problem as u8, problem.name()),
         k,
         (code as u8, code.name()),
-        |y| scd(y, reference, scored),
+        score,
         solve,
     );
 }
@@ -255,7 +301,7 @@ fn stabilised_run<const N: usize, D: ImplicitDae>(
             };
             radau_run::<N, _>(s, (&y0, &yp0), opts, t_end)
         }
-        Code::Bdf | Code::BdfScale => {
+        _ => {
             let opts = bdf::Options {
                 index,
                 ..scalar.clone()
@@ -506,5 +552,45 @@ fn main() {
                 }
             });
         }
+        let fekete_score = |y: &[f64]| fekete_digits(y, &FEKETE_REF);
+        let (fy0, fyp0) = Fekete::initial();
+        let f0 = (&fy0[..], &fyp0[..]);
+        for code in [Code::Radau, Code::Bdf, Code::BdfFaer] {
+            row_scored(Problem::Fekete, k, code, fekete_score, || match code {
+                Code::Radau => {
+                    let opts = radau::Options {
+                        index: fekete_index(),
+                        ..radau::Options::with_tolerances(tol, tol)
+                    };
+                    radau_run::<160, _>(Fekete, f0, opts, FEKETE_T_END)
+                }
+                _ => {
+                    let opts = bdf::Options {
+                        index: fekete_index(),
+                        ..scalar.clone()
+                    };
+                    match code {
+                        Code::BdfFaer => {
+                            bdf_run_with(Fekete, FaerDenseLu::new(160), f0, opts, FEKETE_T_END)
+                        }
+                        _ => bdf_run::<160, _>(Fekete, f0, opts, FEKETE_T_END),
+                    }
+                }
+            });
+        }
+        let (dy0, dyp0) = FeketeIndex3::initial();
+        row_scored(Problem::Fekete, k, Code::BdfDetect, fekete_score, || {
+            let s =
+                Stabilised::detect(FeketeIndex3, 0.0, &dy0, &dyp0).map_err(|e| e.to_string())?;
+            stabilised_run::<160, _>(
+                Code::Bdf,
+                s,
+                (&dy0, &dyp0),
+                FEKETE_DIFFERENTIAL,
+                tol,
+                &scalar,
+                FEKETE_T_END,
+            )
+        });
     }
 }
