@@ -41,7 +41,20 @@ impl<R: Dim, C: Dim, S: StorageMut<f64, R, C>> MatrixSink for Matrix<f64, R, C, 
         self[(row, col)] += value;
     }
     fn fill_zero(&mut self) {
-        self.fill(0.0);
+        // A contiguous column-major matrix (an owned `SMatrix` or `DMatrix`, the integrators'
+        // iteration matrices, zeroed before every evaluation) as one `fill` of its slice:
+        // nalgebra's `fill` walks the entries with a strided iterator, about nine
+        // instructions per entry (4.6 % of Andrews' stabilised form on the BDF at 1e-4).
+        let (rows, cols) = self.shape();
+        if self.strides() == (1, rows) {
+            let len = rows * cols;
+            // SAFETY: with row stride 1 and column stride `rows` the storage holds the
+            // `rows * cols` entries one after the other from `as_mut_ptr`, and `self` is
+            // borrowed mutably for the slice's lifetime.
+            unsafe { std::slice::from_raw_parts_mut(self.as_mut_ptr(), len) }.fill(0.0);
+        } else {
+            self.fill(0.0);
+        }
     }
 }
 

@@ -204,24 +204,24 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
     }
 
     fn correct(&mut self, delta: &mut [f64], _res: &mut [f64]) -> Result<Corrected, NewtonFailure> {
-        let cjratio = self.cj / *self.cj_factored;
-        if cjratio != 1.0 {
-            let scale = 2.0 / (1.0 + cjratio);
-            delta.iter_mut().for_each(|d| *d *= scale);
-        }
+        // The update scaled by `2 / (1 + cj / cj_factored)` in the same pass (the factor is
+        // exactly 1 when `cj` is the factorised one, and `d * 1.0 == d` to the bit).
+        let scale = 2.0 / (1.0 + self.cj / *self.cj_factored);
         // Indexed over equal lengths (no bounds checks): a vectorised loop.
         let n = delta.len();
         let (y, ee, yp, d) = (
             &mut self.y[..n],
             &mut self.ee[..n],
             &mut self.yp[..n],
-            &*delta,
+            &mut delta[..n],
         );
         let cj = self.cj;
         for i in 0..n {
-            y[i] -= d[i];
-            ee[i] -= d[i];
-            yp[i] -= cj * d[i];
+            let di = d[i] * scale;
+            d[i] = di;
+            y[i] -= di;
+            ee[i] -= di;
+            yp[i] -= cj * di;
         }
         Ok(Corrected::FULL)
     }

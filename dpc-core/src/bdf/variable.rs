@@ -21,7 +21,7 @@
 
 use super::history::History;
 use super::newton::{error_weights, Corrector, NewtonProblem};
-use super::{BdfError, HigherIndexControl, Options, Stats};
+use super::{BdfError, HigherIndexControl, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
 use crate::newton::{first_non_finite, wrms, NewtonFailure};
@@ -121,6 +121,14 @@ struct BdfState {
     /// components it excludes).
     ewt: Vec<f64>,
     w_err: Vec<f64>,
+    /// [`Options::index_of`] per component, read once at set-up (the weights are formed at
+    /// every attempt).
+    index: Vec<u8>,
+    /// Per component `[a, b, c, k]`: its index `m` as `a, b, c` (one of them 1 for `m` = 1,
+    /// 2, 3, the others 0) and `k = 1` when the error test keeps it with `Exclude` (`m <= 1`).
+    index_class: Vec<[f64; 4]>,
+    /// Every unknown has index at most 1 (`Bdf::index_at_most_one`).
+    index1: bool,
 }
 
 impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
@@ -172,6 +180,16 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             residual_evaluations: 1,
             ..Stats::default()
         };
+        let index: Vec<u8> = (0..n).map(|i| opts.index_of(i)).collect();
+        let index1 = index.iter().all(|&m| m <= 1);
+        let index_class = index
+            .iter()
+            .map(|&m| match m {
+                0 | 1 => [1.0, 0.0, 0.0, 1.0],
+                2 => [0.0, 1.0, 0.0, 0.0],
+                _ => [0.0, 0.0, 1.0, 0.0],
+            })
+            .collect();
         let mut corrector = Corrector::new(ls, n);
         corrector.y.copy_from_slice(y0);
         corrector.yp.copy_from_slice(yp0);
@@ -208,6 +226,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 tstop: None,
                 w_err: ewt.clone(),
                 ewt,
+                index,
+                index_class,
+                index1,
             },
             corrector,
             stats,
@@ -546,7 +567,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// (`INDEX1_NEWTON_FACTOR`) and the filtered error estimate apply; DAEs with unknowns of
     /// index 2 or 3 keep IDA's test with `MIN_CARRIED_RATE` and the fallback.
     fn index_at_most_one(&self) -> bool {
-        self.opts.index.iter().all(|&m| m <= 1)
+        self.state.index1
     }
 
     fn hmin(&self) -> f64 {
@@ -556,12 +577,54 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     }
 
     /// Weights for Newton and the error test from the current solution and step.
+    ///
+    /// With scalar tolerances (the common case, at every attempt) the error weights and the
+    /// three weights derived from them are formed in one pass, branch-free per component (the
+    /// scale `h^(m - 1)` and whether the error test keeps the component read from tables by
+    /// the index `m`), with the same values as `error_weights` and the per-component rule
+    /// below; an invalid weight is reported by `error_weights`.
     fn update_weights(&mut self) -> Result<(), BdfError> {
-        error_weights(&self.opts, self.state.phi.col(0), &mut self.state.ewt)?;
         let hs = self.state.hh.abs().min(1.0);
         // The scale h^(m - 1) of index m, for the usual 2 and 3 once per step (the same
         // values `powi` gives per component).
         let (hs2, hs3) = (hs.powi(1), hs.powi(2));
+        if let (Tolerance::Scalar(rtol), Tolerance::Scalar(atol)) =
+            (&self.opts.rtol, &self.opts.atol)
+        {
+            let (rtol, atol) = (*rtol, *atol);
+            // Per component, the scale `h^(m - 1)` of its index `m` as `a + b hs2 + c hs3`
+            // with one of `a, b, c` one and the others zero (exact: `0 + x + 0 == x`), and
+            // whether the error test keeps it; branch-free, so the loop vectorises.
+            let exclude = self.opts.higher_index == HigherIndexControl::Exclude;
+            let n = self.n;
+            let state = &mut self.state;
+            let (y, class) = (&state.phi.col(0)[..n], &state.index_class[..n]);
+            let (ewt, w_err) = (&mut state.ewt[..n], &mut state.w_err[..n]);
+            let w_newton = &mut self.corrector.newton.w[..n];
+            let w_scaled = &mut self.corrector.w_scaled[..n];
+            // The least and largest denominators and whether one is NaN: all are valid
+            // (positive and finite) iff the least is positive, the largest finite and none NaN.
+            let (mut lo, mut hi, mut nan) = (f64::INFINITY, 0.0f64, false);
+            for i in 0..n {
+                let d = rtol * y[i].abs() + atol;
+                lo = if d < lo { d } else { lo };
+                hi = if d > hi { d } else { hi };
+                nan |= d.is_nan();
+                let w = 1.0 / d;
+                let [a, b, c, k] = class[i];
+                let s = w * (a + b * hs2 + c * hs3);
+                ewt[i] = w;
+                // `w * 1.0` is `w` to the bit: index-1 components keep their weight.
+                w_newton[i] = if exclude { w } else { s };
+                w_err[i] = if exclude { w * k } else { s };
+                w_scaled[i] = s;
+            }
+            let valid = lo > 0.0 && hi < f64::INFINITY && !nan;
+            if valid {
+                return Ok(());
+            }
+        }
+        error_weights(&self.opts, self.state.phi.col(0), &mut self.state.ewt)?;
         let state = &mut self.state;
         let weights = state
             .ewt
@@ -570,7 +633,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             .zip(&mut state.w_err)
             .zip(&mut self.corrector.w_scaled);
         for (i, (((&w, w_newton), w_err), w_scaled)) in weights.enumerate() {
-            let m = self.opts.index_of(i);
+            let m = state.index[i];
             if m <= 1 {
                 *w_newton = w;
                 *w_err = w;
@@ -785,20 +848,18 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
     }
 
-    /// IDA's `IDAPredict`.
+    /// IDA's `IDAPredict`: `y_pred = sum_{j <= k} phi_j`, `y'_pred = sum_{1 <= j <= k} gamma_j
+    /// phi_j`, in one pass over the components with the order a constant (the columns added
+    /// in the same order as one pass per column would: the same values to the bit).
     fn predict(&mut self) {
+        let (phi, gamma) = (&self.state.phi, &self.state.gamma);
         let (y, yp) = (&mut self.corrector.y_pred, &mut self.corrector.yp_pred);
-        let n = y.len();
-        y.copy_from_slice(self.state.phi.col(0));
-        yp.fill(0.0);
-        for j in 1..=self.state.kk {
-            let g = self.state.gamma[j];
-            // Indexed over equal lengths (no bounds checks): a vectorised loop.
-            let (phi, y, yp) = (&self.state.phi.col(j)[..n], &mut y[..n], &mut yp[..n]);
-            for i in 0..n {
-                y[i] += phi[i];
-                yp[i] += g * phi[i];
-            }
+        match self.state.kk {
+            1 => predict_order::<1>(phi, gamma, y, yp),
+            2 => predict_order::<2>(phi, gamma, y, yp),
+            3 => predict_order::<3>(phi, gamma, y, yp),
+            4 => predict_order::<4>(phi, gamma, y, yp),
+            _ => predict_order::<MAXORD>(phi, gamma, y, yp),
         }
     }
 
@@ -855,7 +916,15 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// IDA's `IDATestError`: local error test and the order `knew` suggested after it.
     fn error_test(&mut self) -> bool {
         let kk = self.state.kk;
-        let enorm_k = wrms(&self.corrector.ee, &self.state.w_err);
+        // The norms of the estimates at orders k, k - 1 and k - 2 (`e`, `e + phi_k`,
+        // `e + phi_k + phi_{k-1}`) in one pass.
+        let (enorm_k, enorm_km1, enorm_km2) = error_norms(
+            &self.corrector.ee,
+            &self.state.w_err,
+            self.state.phi.col(kk),
+            self.state.phi.col(kk - 1),
+            kk,
+        );
         let index1 = self.index_at_most_one();
         // On index-1 DAEs the filtered estimate decides a step the raw one fails, and the
         // larger of the two sets the next step (see `filtered_error_norm`).
@@ -873,23 +942,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.state.terr_k = (kk as f64 + 1.0) * self.state.sigma[kk] * enorm_k;
         self.state.knew = kk;
         if kk > 1 {
-            let delta = &mut self.corrector.newton.delta;
-            for ((d, p), e) in delta
-                .iter_mut()
-                .zip(self.state.phi.col(kk))
-                .zip(&self.corrector.ee)
-            {
-                *d = p + e;
-            }
-            let enorm_km1 = wrms(&self.corrector.newton.delta, &self.state.w_err);
             self.state.err_km1 = self.state.sigma[kk - 1] * enorm_km1;
             self.state.terr_km1 = kk as f64 * self.state.err_km1;
             if kk > 2 {
-                let delta = &mut self.corrector.newton.delta;
-                for (d, p) in delta.iter_mut().zip(self.state.phi.col(kk - 1)) {
-                    *d += p;
-                }
-                let enorm_km2 = wrms(&self.corrector.newton.delta, &self.state.w_err);
                 let err_km2 = self.state.sigma[kk - 2] * enorm_km2;
                 let terr_km2 = (kk as f64 - 1.0) * err_km2;
                 if self.state.terr_km1.max(terr_km2) <= self.state.terr_k {
@@ -1000,19 +1055,69 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 self.state.hh *= base.powf(exponent).clamp(0.5, 0.9);
             }
         }
-        let ku = self.state.kused;
-        let phi = &mut self.state.phi;
-        let ee = &self.corrector.ee;
-        if ku < MAXORD {
-            phi.col_mut(ku + 1).copy_from_slice(ee);
-        }
-        phi.col_mut(ku)
-            .iter_mut()
-            .zip(ee)
-            .for_each(|(p, e)| *p += e);
-        for j in (0..ku).rev() {
-            let (lo, hi) = phi.pair_mut(j, j + 1);
-            lo.iter_mut().zip(hi).for_each(|(p, q)| *p += q);
+        // IDA's update of the differences: `phi_{k+1} = e` (below the maximum order),
+        // `phi_k += e`, then `phi_j += phi_{j+1}` downwards, in one pass over the components
+        // with the order a constant (the same operations in the same order per component).
+        let (phi, ee) = (&mut self.state.phi, &self.corrector.ee);
+        match self.state.kused {
+            1 => phi.accept::<1>(ee, true),
+            2 => phi.accept::<2>(ee, true),
+            3 => phi.accept::<3>(ee, true),
+            4 => phi.accept::<4>(ee, true),
+            _ => phi.accept::<MAXORD>(ee, false),
         }
     }
+}
+
+/// [`Bdf::predict`] at order `K` (1..=[`MAXORD`]): `y = phi_0 + phi_1 + ... + phi_K`,
+/// `y' = 0 + gamma_1 phi_1 + ... + gamma_K phi_K`, component by component.
+fn predict_order<const K: usize>(phi: &History, gamma: &[f64], y: &mut [f64], yp: &mut [f64]) {
+    let n = y.len();
+    let (y, yp) = (&mut y[..n], &mut yp[..n]);
+    let p0 = &phi.col(0)[..n];
+    let cols: [&[f64]; K] = std::array::from_fn(|j| &phi.col(j + 1)[..n]);
+    let g: [f64; K] = std::array::from_fn(|j| gamma[j + 1]);
+    for i in 0..n {
+        let mut a = p0[i];
+        let mut b = 0.0;
+        for j in 0..K {
+            a += cols[j][i];
+            b += g[j] * cols[j][i];
+        }
+        y[i] = a;
+        yp[i] = b;
+    }
+}
+
+/// The weighted RMS norms (`wrms`) of `e`, of `e + p_k` (order `k - 1`'s estimate, when
+/// `k > 1`) and of `e + p_k + p_km1` (order `k - 2`'s, when `k > 2`; zero otherwise), in one
+/// pass: each sum accumulated in the order `wrms` adds, the same values to the bit.
+fn error_norms(e: &[f64], w: &[f64], p_k: &[f64], p_km1: &[f64], k: usize) -> (f64, f64, f64) {
+    let n = e.len();
+    let (w, p_k, p_km1) = (&w[..n], &p_k[..n], &p_km1[..n]);
+    let (mut s0, mut s1, mut s2) = (0.0, 0.0, 0.0);
+    let sq = |a: f64, b: f64| (a * b) * (a * b);
+    match k {
+        1 => {
+            for i in 0..n {
+                s0 += sq(e[i], w[i]);
+            }
+        }
+        2 => {
+            for i in 0..n {
+                s0 += sq(e[i], w[i]);
+                s1 += sq(p_k[i] + e[i], w[i]);
+            }
+        }
+        _ => {
+            for i in 0..n {
+                s0 += sq(e[i], w[i]);
+                let d1 = p_k[i] + e[i];
+                s1 += sq(d1, w[i]);
+                s2 += sq(d1 + p_km1[i], w[i]);
+            }
+        }
+    }
+    let m = n.max(1) as f64;
+    ((s0 / m).sqrt(), (s1 / m).sqrt(), (s2 / m).sqrt())
 }
