@@ -14,6 +14,12 @@
 //! lower-order terms no longer count. `G(c)^-1` comes from a singular value decomposition, so
 //! a pencil that is singular at the point (no regular DAE there) is reported, not inverted.
 //!
+//! The reading is local: at a point where an entry that carries an unknown's coupling is zero
+//! (a pendulum's rod exactly horizontal with zero tension leaves the vertical velocity free
+//! there) that unknown may read one index lower; the two points near the given one, at which
+//! the largest reading is taken, catch most such coincidences but not every one (the
+//! horizontal pendulum still reads `v` as index 1). Estimate at a generic point of the motion.
+//!
 //! The bound is the index the integrators' options mean (DASSL's and IDA's convention): the
 //! positions of a constrained mechanism have index 1 (they appear differentiated and their
 //! rows of `G^-1` stay bounded), velocities 2, multipliers 3, as in the Test Set's problems.
@@ -165,8 +171,12 @@ fn equilibrate(dfdy: &mut DMatrix<f64>, dfdyp: &mut DMatrix<f64>) {
 ///     }
 /// }
 ///
-/// let y = [1.0, 0.0, 0.0, 0.0, 0.0];
-/// let yp = [0.0, 0.0, 0.0, -1.0, 0.0];
+/// // At rest at the angle 0.6 from the vertical, with the consistent multiplier and
+/// // accelerations.
+/// let (s, c) = 0.6f64.sin_cos();
+/// let lambda = c;
+/// let y = [s, -c, 0.0, 0.0, lambda];
+/// let yp = [0.0, 0.0, -lambda * s, lambda * c - 1.0, 0.0];
 /// assert_eq!(unknown_indices(&Pendulum, 0.0, &y, &yp).unwrap(), [1, 1, 2, 2, 3]);
 /// ```
 ///
