@@ -17,7 +17,11 @@
 //! matrix also decides a step the raw estimate fails, and whether a step doubles
 //! (`Bdf::filtered_error_norm`): the amplifier then takes 7 661-8 298 steps at `rtol = 1e-8`
 //! on every jitter of a 15-point scan, where the raw estimate alone fell into fail/pass cycles
-//! of the doubled step on three of them (up to 89 454 steps).
+//! of the doubled step on three of them (up to 89 454 steps). Both rules are for the error
+//! estimates of algebraic unknowns: an implicit ODE (`dF/dy'` regular at the start) keeps
+//! IDA's rules and takes IDA's steps (HIRES: 100 / 230 steps at 1e-4 / 1e-6 as IDA, and its
+//! digits over a tolerance jitter, where the DAE rules took larger steps and lost up to 0.33
+//! digits at 1e-6).
 
 use super::history::History;
 use super::newton::{error_weights, Corrector, NewtonProblem};
@@ -129,6 +133,9 @@ struct BdfState {
     index_class: Vec<[f64; 4]>,
     /// Every unknown has index at most 1 (`Bdf::index_at_most_one`).
     index1: bool,
+    /// Every unknown has index at most 1 and `dF/dy'` is singular at the start: a DAE with
+    /// algebraic unknowns, not an implicit ODE (`Bdf::index_one_dae`).
+    index1_dae: bool,
 }
 
 impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
@@ -182,6 +189,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         };
         let index: Vec<u8> = (0..n).map(|i| opts.index_of(i)).collect();
         let index1 = index.iter().all(|&m| m <= 1);
+        let index1_dae = index1 && leading_matrix_singular(&dae, t0, y0, yp0);
         let index_class = index
             .iter()
             .map(|&m| match m {
@@ -229,6 +237,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 index,
                 index_class,
                 index1,
+                index1_dae,
             },
             corrector,
             stats,
@@ -563,11 +572,19 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.stats.steps - self.state.steps_at_start
     }
 
-    /// Every unknown has index at most 1 ([`Options::index`]): the corrector's tighter test
-    /// (`INDEX1_NEWTON_FACTOR`) and the filtered error estimate apply; DAEs with unknowns of
-    /// index 2 or 3 keep IDA's test with `MIN_CARRIED_RATE` and the fallback.
+    /// Every unknown has index at most 1 ([`Options::index`]); DAEs with unknowns of index 2
+    /// or 3 keep IDA's test with `MIN_CARRIED_RATE` and the fallback.
     fn index_at_most_one(&self) -> bool {
         self.state.index1
+    }
+
+    /// Every unknown has index at most 1 and `dF/dy'` was singular at the start (algebraic
+    /// unknowns or combinations, [`leading_matrix_singular`]): the corrector's tighter test
+    /// (`INDEX1_NEWTON_FACTOR`) and the filtered error estimate apply. Both exist for the error
+    /// estimates of algebraic unknowns; an implicit ODE (`dF/dy'` regular, HIRES) keeps IDA's
+    /// rules and takes IDA's steps.
+    fn index_one_dae(&self) -> bool {
+        self.state.index1_dae
     }
 
     fn hmin(&self) -> f64 {
@@ -681,7 +698,8 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
         let saved_t = self.state.tn;
         let index1 = self.index_at_most_one();
-        let epcon = if index1 {
+        let index1_dae = self.index_one_dae();
+        let epcon = if index1_dae {
             self.opts.newton_tolerance * INDEX1_NEWTON_FACTOR
         } else {
             self.opts.newton_tolerance
@@ -698,7 +716,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 cj: self.state.cj,
                 max_iterations: self.opts.max_newton_iterations,
                 epcon,
-                predictive: index1,
+                predictive: index1_dae,
                 fallback: !index1 && self.opts.higher_index == HigherIndexControl::Exclude,
                 min_carried: if index1 { 0.0 } else { MIN_CARRIED_RATE },
                 residual_tolerance: f64::INFINITY,
@@ -925,7 +943,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             self.state.phi.col(kk - 1),
             kk,
         );
-        let index1 = self.index_at_most_one();
+        let index1 = self.index_one_dae();
         // On index-1 DAEs the filtered estimate decides a step the raw one fails, and the
         // larger of the two sets the next step (see `filtered_error_norm`).
         let mut enorm_test = enorm_k;
@@ -1120,4 +1138,36 @@ fn error_norms(e: &[f64], w: &[f64], p_k: &[f64], p_km1: &[f64], k: usize) -> (f
     }
     let m = n.max(1) as f64;
     ((s0 / m).sqrt(), (s1 / m).sqrt(), (s2 / m).sqrt())
+}
+
+/// Above this many unknowns [`leading_matrix_singular`] does not decompose `dF/dy'` and
+/// answers `true` (the DAE rules, which were the rules for every index-1 problem before the
+/// distinction): a dense `n x n` decomposition at set-up would cost more than it saves.
+const LEADING_CHECK_MAX: usize = 256;
+
+/// Whether `dF/dy'` at `(t, y, y')` is singular: some unknown declared algebraic
+/// ([`ImplicitDae::is_differential`]), or the smallest diagonal entry of a column-pivoted QR
+/// of `dF/dy' = G(1) - G(0)` at most `1e3 n eps` times the largest. A matrix that is not finite,
+/// or a DAE above [`LEADING_CHECK_MAX`] unknowns, counts as singular: an implicit ODE
+/// misread as a DAE only keeps the rules every index-1 problem had before.
+fn leading_matrix_singular<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> bool {
+    let n = dae.dimension();
+    if (0..n).any(|i| !dae.is_differential(i)) || n > LEADING_CHECK_MAX {
+        return true;
+    }
+    let (mut g0, mut g1) = (
+        nalgebra::DMatrix::zeros(n, n),
+        nalgebra::DMatrix::zeros(n, n),
+    );
+    dae.iteration_matrix(t, y, yp, 0.0, &mut g0);
+    dae.iteration_matrix(t, y, yp, 1.0, &mut g1);
+    let leading = g1 - g0;
+    if leading.iter().any(|v| !v.is_finite()) {
+        return true;
+    }
+    let r = leading.col_piv_qr().unpack_r();
+    let diagonal = r.diagonal().map(f64::abs);
+    let (largest, smallest) = (diagonal.max(), diagonal.min());
+    // Finite here, so the comparison is total; an all-zero dF/dy' is singular too.
+    smallest <= 1e3 * n as f64 * f64::EPSILON * largest
 }
