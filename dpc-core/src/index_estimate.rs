@@ -102,21 +102,24 @@ fn equilibrate(dfdy: &mut DMatrix<f64>, dfdyp: &mut DMatrix<f64>) {
         }
     };
     for _ in 0..3 {
-        for i in 0..n {
-            let m = (0..n)
-                .map(|j| dfdy[(i, j)].abs() + dfdyp[(i, j)].abs())
-                .fold(0.0, f64::max);
-            let f = power_of_two(m);
-            dfdy.row_mut(i).scale_mut(f);
-            dfdyp.row_mut(i).scale_mut(f);
-        }
-        for j in 0..n {
-            let m = (0..n)
-                .map(|i| dfdy[(i, j)].abs() + dfdyp[(i, j)].abs())
-                .fold(0.0, f64::max);
-            let f = power_of_two(m);
-            dfdy.column_mut(j).scale_mut(f);
-            dfdyp.column_mut(j).scale_mut(f);
+        // Rows, then columns: the transposes make one loop serve both.
+        for transpose in [false, true] {
+            if transpose {
+                dfdy.transpose_mut();
+                dfdyp.transpose_mut();
+            }
+            for i in 0..n {
+                let m = (0..n)
+                    .map(|j| dfdy[(i, j)].abs() + dfdyp[(i, j)].abs())
+                    .fold(0.0, f64::max);
+                let f = power_of_two(m);
+                dfdy.row_mut(i).scale_mut(f);
+                dfdyp.row_mut(i).scale_mut(f);
+            }
+            if transpose {
+                dfdy.transpose_mut();
+                dfdyp.transpose_mut();
+            }
         }
     }
 }
@@ -227,6 +230,29 @@ pub fn unknown_indices<D: ImplicitDae + ?Sized>(
         }
     });
     indices.ok_or(IndexEstimateError::Inconclusive { t })
+}
+
+/// The unknowns [`unknown_indices`] finds of index 2 or higher at `(t, y, y')`, by name
+/// ([`ImplicitDae::unknown_name`]) with their index; empty when every unknown has index 1 or
+/// the estimate is not available there (an error of [`unknown_indices`]). The integrators call
+/// it when a step fails on a DAE declared with every unknown of index 1, to name the likely
+/// cause (`BdfError::UndeclaredIndex`, `RadauError::UndeclaredIndex`).
+pub fn higher_index_unknowns<D: ImplicitDae + ?Sized>(
+    dae: &D,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+) -> Vec<(String, u8)> {
+    unknown_indices(dae, t, y, yp)
+        .map(|estimate| {
+            estimate
+                .iter()
+                .enumerate()
+                .filter(|&(_, &m)| m > 1)
+                .map(|(i, &m)| (dae.unknown_name(i), m))
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 /// [`unknown_indices`] at the one point `(t, y, y')`.

@@ -504,18 +504,14 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         if self.interpolate(t, &mut y, Some(&mut yp)).is_err() {
             return e;
         }
-        match crate::index_estimate::unknown_indices(&self.dae, t, &y, &yp) {
-            Ok(estimate) if estimate.iter().any(|&m| m > 1) => BdfError::UndeclaredIndex {
-                t,
-                unknowns: estimate
-                    .iter()
-                    .enumerate()
-                    .filter(|&(_, &m)| m > 1)
-                    .map(|(i, &m)| (self.dae.unknown_name(i), m))
-                    .collect(),
-                source: Box::new(e),
-            },
-            _ => e,
+        let unknowns = crate::index_estimate::higher_index_unknowns(&self.dae, t, &y, &yp);
+        if unknowns.is_empty() {
+            return e;
+        }
+        BdfError::UndeclaredIndex {
+            t,
+            unknowns,
+            source: Box::new(e),
         }
     }
 

@@ -488,18 +488,15 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         if !stepping || (0..self.n).any(|i| self.opts.index_of(i) > 1) {
             return e;
         }
-        match crate::index_estimate::unknown_indices(&self.dae, self.t, self.y(), self.yp()) {
-            Ok(estimate) if estimate.iter().any(|&m| m > 1) => RadauError::UndeclaredIndex {
-                t: self.t,
-                unknowns: estimate
-                    .iter()
-                    .enumerate()
-                    .filter(|&(_, &m)| m > 1)
-                    .map(|(i, &m)| (self.dae.unknown_name(i), m))
-                    .collect(),
-                source: Box::new(e),
-            },
-            _ => e,
+        let unknowns =
+            crate::index_estimate::higher_index_unknowns(&self.dae, self.t, self.y(), self.yp());
+        if unknowns.is_empty() {
+            return e;
+        }
+        RadauError::UndeclaredIndex {
+            t: self.t,
+            unknowns,
+            source: Box::new(e),
         }
     }
 
