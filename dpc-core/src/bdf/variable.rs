@@ -183,13 +183,19 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         phi.col_mut(1).copy_from_slice(yp0);
         let mut ewt = vec![0.0; n];
         error_weights(&opts, y0, &mut ewt)?;
-        let stats = Stats {
-            residual_evaluations: 1,
-            ..Stats::default()
-        };
         let index: Vec<u8> = (0..n).map(|i| opts.index_of(i)).collect();
         let index1 = index.iter().all(|&m| m <= 1);
-        let index1_dae = index1 && leading_matrix_singular(&dae, t0, y0, yp0);
+        let (index1_dae, classification_matrices) = if index1 {
+            leading_matrix_singular(&dae, t0, y0, yp0)
+        } else {
+            (false, 0)
+        };
+        // The residual checked above and the classification's iteration matrices.
+        let stats = Stats {
+            residual_evaluations: 1,
+            jacobian_evaluations: classification_matrices,
+            ..Stats::default()
+        };
         let index_class = index
             .iter()
             .map(|&m| match m {
@@ -1141,15 +1147,21 @@ fn error_norms(e: &[f64], w: &[f64], p_k: &[f64], p_km1: &[f64], k: usize) -> (f
 /// distinction): a dense `n x n` decomposition at set-up would cost more than it saves.
 const LEADING_CHECK_MAX: usize = 256;
 
-/// Whether `dF/dy'` at `(t, y, y')` is singular: some unknown declared algebraic
-/// ([`ImplicitDae::is_differential`]), or the smallest diagonal entry of a column-pivoted QR
-/// of `dF/dy' = G(1) - G(0)` at most `1e3 n eps` times the largest. A matrix that is not finite,
-/// or a DAE above [`LEADING_CHECK_MAX`] unknowns, counts as singular: an implicit ODE
-/// misread as a DAE only keeps the rules every index-1 problem had before.
-fn leading_matrix_singular<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> bool {
+/// Whether `dF/dy'` at `(t, y, y')` is singular, with the number of iteration matrices
+/// evaluated to tell: some unknown declared algebraic ([`ImplicitDae::is_differential`]), or the
+/// smallest diagonal entry of a column-pivoted QR of `dF/dy' = G(1) - G(0)` at most `1e3 n eps`
+/// times the largest. A matrix that is not finite, or a DAE above [`LEADING_CHECK_MAX`]
+/// unknowns, counts as singular: an implicit ODE misread as a DAE only keeps the rules every
+/// index-1 problem had before.
+fn leading_matrix_singular<D: ImplicitDae>(
+    dae: &D,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+) -> (bool, usize) {
     let n = dae.dimension();
     if (0..n).any(|i| !dae.is_differential(i)) || n > LEADING_CHECK_MAX {
-        return true;
+        return (true, 0);
     }
     let (mut g0, mut g1) = (
         nalgebra::DMatrix::zeros(n, n),
@@ -1159,11 +1171,11 @@ fn leading_matrix_singular<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64
     dae.iteration_matrix(t, y, yp, 1.0, &mut g1);
     let leading = g1 - g0;
     if leading.iter().any(|v| !v.is_finite()) {
-        return true;
+        return (true, 2);
     }
     let r = leading.col_piv_qr().unpack_r();
     let diagonal = r.diagonal().map(f64::abs);
     let (largest, smallest) = (diagonal.max(), diagonal.min());
     // Finite here, so the comparison is total; an all-zero dF/dy' is singular too.
-    smallest <= 1e3 * n as f64 * f64::EPSILON * largest
+    (smallest <= 1e3 * n as f64 * f64::EPSILON * largest, 2)
 }
