@@ -10,9 +10,11 @@
 //! whose derivative the equations determine shrinks like `1/c`; an algebraic unknown of index
 //! 1 stays bounded; in a Hessenberg index-2 system the multiplier's row grows like `c`, in an
 //! index-3 one the velocities' rows like `c` and the multiplier's like `c^2`). The exponent is
-//! measured between two values of `c` far above the scale `|dF/dy| / |dF/dy'|`, where the
-//! lower-order terms no longer count. `G(c)^-1` comes from a singular value decomposition, so
-//! a pencil that is singular at the point (no regular DAE there) is reported, not inverted.
+//! measured over decades of `c` above the scale `|dF/dy| / |dF/dy'|` of the equilibrated
+//! matrices, as far as round-off allows, and taken where the last two decades agree on whole
+//! numbers; where they do not, no index is reported (`Inconclusive`). `G(c)^-1` comes from a
+//! singular value decomposition, so a pencil that is singular at the point (no regular DAE
+//! there) is reported, not inverted.
 //!
 //! The reading is local: at a point where an entry that carries an unknown's coupling is zero
 //! (a pendulum's rod exactly horizontal with zero tension leaves the vertical velocity free
@@ -186,7 +188,8 @@ fn equilibrate(dfdy: &mut DMatrix<f64>, dfdyp: &mut DMatrix<f64>) {
 /// # Errors
 /// [`IndexEstimateError::DimensionMismatch`] for `y` or `y'` of the wrong length,
 /// [`IndexEstimateError::NonFinite`] for a NaN or infinite matrix entry,
-/// [`IndexEstimateError::SingularPencil`] when the DAE is not regular at the point.
+/// [`IndexEstimateError::SingularPencil`] when the DAE is not regular at the point,
+/// [`IndexEstimateError::Inconclusive`] when the powers do not settle at the point or near it.
 pub fn unknown_indices<D: ImplicitDae + ?Sized>(
     dae: &D,
     t: f64,
@@ -281,11 +284,9 @@ fn indices_at<D: ImplicitDae + ?Sized>(
     equilibrate(&mut dfdy, &mut dfdyp);
     let (ny, nyp) = (dfdy.norm(), dfdyp.norm());
     let scale = if ny > 0.0 && nyp > 0.0 { ny / nyp } else { 1.0 };
-    // Row norms of G(c)^-1 for c = scale x 10, 100, ... while G(c) stays far from singular;
-    // the powers between consecutive decades, until two in a row agree on whole numbers.
-    // The row norms at the last c, the powers between the last two and between the two
-    // before: the sweep goes on to round-off (or MAX_DECADES), so these are the most
-    // asymptotic ones the arithmetic allows.
+    // Row norms of G(c)^-1 for c = scale x 10, 100, ... while G(c) stays far from singular
+    // (or MAX_DECADES); kept: the norms at the last c, the powers between the last two and
+    // between the two before, the most asymptotic ones the arithmetic allows.
     let mut last_norms: Option<Vec<f64>> = None;
     let mut last_powers: Option<Vec<f64>> = None;
     let mut earlier_powers: Option<Vec<f64>> = None;
