@@ -174,3 +174,23 @@ impl<T: ImplicitDae + ?Sized> ImplicitDae for &T {
         (**self).unknown_name(i)
     }
 }
+
+/// The iteration matrix `dF/dy + c dF/dy'` of `dae` at `(t, y, y')` as a dense matrix, or the
+/// first entry `(row, column)` that is not finite: for set-up and analysis (structure
+/// detection, index estimates, classification), never for a step.
+pub(crate) fn dense_iteration_matrix<D: ImplicitDae + ?Sized>(
+    dae: &D,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+    c: f64,
+) -> Result<nalgebra::DMatrix<f64>, (usize, usize)> {
+    let n = dae.dimension();
+    let mut m = nalgebra::DMatrix::zeros(n, n);
+    dae.iteration_matrix(t, y, yp, c, &mut m);
+    match m.iter().position(|v| !v.is_finite()) {
+        // Column-major: entry k is row k % n, column k / n.
+        Some(k) => Err((k % n, k / n)),
+        None => Ok(m),
+    }
+}

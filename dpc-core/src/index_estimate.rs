@@ -266,17 +266,13 @@ fn indices_at<D: ImplicitDae + ?Sized>(
     yp: &[f64],
 ) -> Result<Vec<u8>, IndexEstimateError> {
     let n = dae.dimension();
-    let matrix = |c: f64| -> Result<DMatrix<f64>, IndexEstimateError> {
-        let mut m = DMatrix::zeros(n, n);
-        dae.iteration_matrix(t, y, yp, c, &mut m);
-        match m.iter().position(|v| !v.is_finite()) {
-            // Column-major: entry k is row k % n, column k / n.
-            Some(k) => Err(IndexEstimateError::NonFinite {
-                equation: dae.equation_name(k % n),
-                unknown: dae.unknown_name(k / n),
-            }),
-            None => Ok(m),
-        }
+    let matrix = |c: f64| {
+        crate::dae::dense_iteration_matrix(dae, t, y, yp, c).map_err(|(i, j)| {
+            IndexEstimateError::NonFinite {
+                equation: dae.equation_name(i),
+                unknown: dae.unknown_name(j),
+            }
+        })
     };
     // G(c) = dF/dy + c dF/dy' is linear in c: its two parts from c = 0 and c = 1.
     let mut dfdy = matrix(0.0)?;

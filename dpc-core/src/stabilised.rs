@@ -725,16 +725,10 @@ mod detect {
         y: &[f64],
         yp: &[f64],
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), (usize, usize)> {
-        let n = dae.dimension();
-        let (mut m0, mut m1) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
-        dae.iteration_matrix(t, y, yp, 0.0, &mut m0);
-        dae.iteration_matrix(t, y, yp, C, &mut m1);
-        for m in [&m0, &m1] {
-            if let Some(k) = m.iter().position(|v| !v.is_finite()) {
-                return Err((k % n, k / n));
-            }
-        }
-        Ok((m0, m1))
+        Ok((
+            crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0)?,
+            crate::dae::dense_iteration_matrix(dae, t, y, yp, C)?,
+        ))
     }
 
     /// Entries of `dF/dy` and `dF/dy'` that are non-zero at `(t, y, y')` or at one of two

@@ -502,7 +502,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 | BdfError::ErrorTestFailed { .. }
                 | BdfError::TooManySteps { .. }
         );
-        if !stepping || !self.opts.index.iter().all(|&m| m <= 1) {
+        if !stepping || !self.index_at_most_one() {
             return e;
         }
         let t = self.state.tn;
@@ -1163,16 +1163,13 @@ fn leading_matrix_singular<D: ImplicitDae>(
     if (0..n).any(|i| !dae.is_differential(i)) || n > LEADING_CHECK_MAX {
         return (true, 0);
     }
-    let (mut g0, mut g1) = (
-        nalgebra::DMatrix::zeros(n, n),
-        nalgebra::DMatrix::zeros(n, n),
-    );
-    dae.iteration_matrix(t, y, yp, 0.0, &mut g0);
-    dae.iteration_matrix(t, y, yp, 1.0, &mut g1);
-    let leading = g1 - g0;
-    if leading.iter().any(|v| !v.is_finite()) {
+    let (Ok(g0), Ok(g1)) = (
+        crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0),
+        crate::dae::dense_iteration_matrix(dae, t, y, yp, 1.0),
+    ) else {
         return (true, 2);
-    }
+    };
+    let leading = g1 - g0;
     let r = leading.col_piv_qr().unpack_r();
     let diagonal = r.diagonal().map(f64::abs);
     let (largest, smallest) = (diagonal.max(), diagonal.min());

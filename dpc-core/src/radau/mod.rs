@@ -485,7 +485,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 | RadauError::RepeatedFailures { .. }
                 | RadauError::TooManySteps { .. }
         );
-        if !stepping || (0..self.n).any(|i| self.opts.index_of(i) > 1) {
+        if !stepping || self.higher_index {
             return e;
         }
         let unknowns =
