@@ -322,6 +322,86 @@ impl Andrews {
     }
 }
 
+impl Andrews {
+    /// The derivatives of [`Self::dynamics`], `M(q) w - f(q, v) + G(q)^T lambda`, in `q` and in
+    /// `v` (row `i`, column `j`), differentiated by hand: `d(M w)/dq` from the three angles `M`
+    /// depends on, `-df/dq` and `-df/dv` of the forces (the spring's through `gamma` by the
+    /// chain rule), and `d(G^T lambda)/dq = sum_r lambda_r d^2 g_r / dq dq`.
+    fn dynamics_derivatives(y: &[f64]) -> ([[f64; 7]; 7], [[f64; 7]; 7]) {
+        use andrews_constants::*;
+        let (q, v, w, la) = (&y[0..7], &y[7..14], &y[14..21], &y[21..27]);
+        let (b, t, g, p, d, o, ep) = (q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
+        let (s1, c1) = t.sin_cos();
+        let (s3, c3) = p.sin_cos();
+        let (s5, c5) = o.sin_cos();
+        let (sb, cb) = b.sin_cos();
+        let (sbt, cbt) = (b + t).sin_cos();
+        let (sg, cg) = g.sin_cos();
+        let (spd, cpd) = (p + d).sin_cos();
+        let (sd, cd) = d.sin_cos();
+        let (soe, coe) = (o + ep).sin_cos();
+        let (sep, cep) = ep.sin_cos();
+        let e = E - EA;
+        let z = ZF - FA;
+        let (c2, c4, c6) = (M2 * DA * RR, M4 * ZT * e, M6 * U * z);
+        let mut dq = [[0.0; 7]; 7];
+        let mut dv = [[0.0; 7]; 7];
+        // d(M w)/dq: M00 and M01 = M10 through cos(theta), M34, M44 through sin(phi), M56, M66
+        // through sin(Omega).
+        dq[0][1] += 2.0 * c2 * s1 * w[0] + c2 * s1 * w[1];
+        dq[1][1] += c2 * s1 * w[0];
+        dq[3][3] += c4 * c3 * w[4];
+        dq[4][3] += c4 * c3 * w[3] + 2.0 * c4 * c3 * w[4];
+        dq[5][5] -= c6 * c5 * w[6];
+        dq[6][5] -= c6 * c5 * w[5] + 2.0 * c6 * c5 * w[6];
+        // -df/dq and -df/dv.
+        dq[0][1] += c2 * v[1] * (v[1] + 2.0 * v[0]) * c1;
+        dv[0][0] += 2.0 * c2 * v[1] * s1;
+        dv[0][1] += 2.0 * c2 * (v[1] + v[0]) * s1;
+        dq[1][1] -= c2 * v[0] * v[0] * c1;
+        dv[1][0] -= 2.0 * c2 * v[0] * s1;
+        dq[3][3] += c4 * v[4] * v[4] * s3;
+        dv[3][4] -= 2.0 * c4 * v[4] * c3;
+        dq[4][3] -= c4 * v[3] * (v[3] + 2.0 * v[4]) * s3;
+        dv[4][3] += 2.0 * c4 * (v[3] + v[4]) * c3;
+        dv[4][4] += 2.0 * c4 * v[3] * c3;
+        dq[5][5] -= c6 * v[6] * v[6] * s5;
+        dv[5][6] += 2.0 * c6 * v[6] * c5;
+        dq[6][5] += c6 * v[5] * (v[5] + 2.0 * v[6]) * s5;
+        dv[6][5] -= 2.0 * c6 * (v[5] + v[6]) * c5;
+        dv[6][6] -= 2.0 * c6 * v[5] * c5;
+        // The spring: f2 = force(l) (dx a + dy b) with (a, b) = d(xd, yd)/dgamma.
+        let (dx, dy) = (SD * cg + SC * sg + XB - XC, SD * sg - SC * cg + YB - YC);
+        let (a, bb) = (SC * cg - SD * sg, SD * cg + SC * sg);
+        let (da_, db_) = (-SC * sg - SD * cg, -SD * sg + SC * cg);
+        let lg = (dx * dx + dy * dy).sqrt();
+        let s = dx * a + dy * bb;
+        let force = -C0 * (lg - L0) / lg;
+        let dforce = -C0 * L0 * (s / lg) / (lg * lg);
+        let ds = a * a + bb * bb + dx * da_ + dy * db_;
+        dq[2][2] -= dforce * s + force * ds;
+        // d(G^T lambda)/dq: the Hessians of the constraints, contracted with lambda.
+        let (lx, ly) = (la[0] + la[2] + la[4], la[1] + la[3] + la[5]);
+        dq[0][0] += lx * (-RR * cb + D * cbt) + ly * (-RR * sb + D * sbt);
+        let h01 = D * (lx * cbt + ly * sbt);
+        dq[0][1] += h01;
+        dq[1][0] += h01;
+        dq[1][1] += h01;
+        dq[2][2] += SS * (la[0] * sg - la[1] * cg);
+        let h34 = E * (la[2] * spd - la[3] * cpd);
+        dq[3][3] += h34;
+        dq[3][4] += h34;
+        dq[4][3] += h34;
+        dq[4][4] += h34 + ZT * (la[2] * cd + la[3] * sd);
+        let h56 = ZF * (la[4] * coe + la[5] * soe);
+        dq[5][5] += h56;
+        dq[5][6] += h56;
+        dq[6][5] += h56;
+        dq[6][6] += h56 + U * (la[4] * sep - la[5] * cep);
+        (dq, dv)
+    }
+}
+
 impl ImplicitDae for Andrews {
     fn dimension(&self) -> usize {
         27
@@ -333,9 +413,9 @@ impl ImplicitDae for Andrews {
         out[14..21].copy_from_slice(&Self::dynamics(y));
         out[21..27].copy_from_slice(&Self::constraints(&y[0..7]));
     }
-    /// Analytic except the `q`- and `v`-derivatives of the seven dynamic equations, which are
-    /// central differences (relative step `1e-6`, error about `1e-12` relative): the simplified
-    /// Newton iteration needs only an approximation, and the solution does not depend on it.
+    /// Exact, written by hand as the `model!` macro would generate it: besides `c I`, `M(q)`
+    /// and `G(q)`, the seven dynamic rows' derivatives in `q` and `v`
+    /// ([`Self::dynamics_derivatives`]).
     fn iteration_matrix<S: MatrixSink + ?Sized>(
         &self,
         _: f64,
@@ -364,20 +444,14 @@ impl ImplicitDae for Andrews {
                 }
             }
         }
-        let mut yy = [0.0; 27];
-        yy.copy_from_slice(y);
-        for j in 0..14 {
-            let x = yy[j];
-            let dx = 1e-6 * (1.0 + x.abs());
-            yy[j] = x + dx;
-            let fp = Self::dynamics(&yy);
-            yy[j] = x - dx;
-            let fm = Self::dynamics(&yy);
-            yy[j] = x;
-            for i in 0..7 {
-                let d = (fp[i] - fm[i]) / (2.0 * dx);
-                if d != 0.0 {
-                    m.set(14 + i, j, d);
+        let (dq, dv) = Self::dynamics_derivatives(y);
+        for i in 0..7 {
+            for j in 0..7 {
+                if dq[i][j] != 0.0 {
+                    m.set(14 + i, j, dq[i][j]);
+                }
+                if dv[i][j] != 0.0 {
+                    m.set(14 + i, 7 + j, dv[i][j]);
                 }
             }
         }
