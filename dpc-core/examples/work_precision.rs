@@ -13,9 +13,9 @@
 //! * the Test Set's chemical Akzo Nobel problem (index 1, to `t = 180`) and HIRES (an ODE, to
 //!   `t = 321.8122`), all components scored, and Ascher and Petzold's linear index-2 problem
 //!   (`a = 50`, to `t = 1`, scored on `u1, u2` against the exact solution, `w` of index 2),
-//! * a Fekete-type problem with 20 points (the Test Set's Fekete problem as recalled: index 2,
-//!   160 unknowns, 20 position and 20 velocity constraints, to `t = 1000`; scored on the 60
-//!   coordinates of the points by `-log10 max |p - p_ref|`) in its GGL form, by Radau, by the
+//! * the Test Set's Fekete problem with 20 points (index 2, 160 unknowns, 20 position and 20
+//!   velocity constraints, to `t = 1000`; scored on the 60 coordinates of the points against
+//!   the Test Set's reference, as the Test Set scores it) in its GGL form, by Radau, by the
 //!   BDF with the stack LU (`NalgebraLu<160>`) and with faer's dense LU (`FaerDenseLu`), and by
 //!   the BDF on [`Stabilised::detect`] of the index-3 form as a user would declare it
 //!   (`p' = q`, `q' = g + 2 lambda p`, `|p|^2 = 1`; 140 unknowns),
@@ -53,7 +53,7 @@ use dpc_core::radau::{self, Radau};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
 use fekete::{
-    fekete_digits, fekete_index, Fekete, FeketeIndex3, FEKETE_DIFFERENTIAL, FEKETE_REF,
+    fekete_index, Fekete, FeketeIndex3, FEKETE_DIFFERENTIAL, FEKETE_REF, FEKETE_SCORED,
     FEKETE_T_END,
 };
 use peer_table::Run;
@@ -170,7 +170,7 @@ impl Problem {
             Self::Akzo => "chemical Akzo Nobel (index 1; all)",
             Self::Hires => "HIRES (ODE; all)",
             Self::AscherPetzold => "Ascher-Petzold (index 2; u1, u2)",
-            Self::Fekete => "Fekete-type, 20 points (index 2; p)",
+            Self::Fekete => "Fekete, 20 points (index 2; p)",
         }
     }
 }
@@ -552,7 +552,7 @@ fn main() {
                 }
             });
         }
-        let fekete_score = |y: &[f64]| fekete_digits(y, &FEKETE_REF);
+        let fekete_score = |y: &[f64]| scd(y, &FEKETE_REF, &FEKETE_SCORED);
         let (fy0, fyp0) = Fekete::initial();
         let f0 = (&fy0[..], &fyp0[..]);
         for code in [Code::Radau, Code::Bdf, Code::BdfFaer] {
