@@ -19,6 +19,9 @@
 //!   BDF with the stack LU (`NalgebraLu<160>`) and with faer's dense LU (`FaerDenseLu`), and by
 //!   the BDF on [`Stabilised::detect`] of the index-3 form as a user would declare it
 //!   (`p' = q`, `q' = g + 2 lambda p`, `|p|^2 = 1`; 140 unknowns),
+//! * the Test Set's slider crank (index 2, 24 unknowns, a flexible connecting rod, to
+//!   `t = 0.1`; scored on the seven positions against the Test Set's reference), by Radau and
+//!   by the BDF with the accelerations and multipliers (index 2) excluded from the error test,
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
@@ -40,6 +43,8 @@ mod fekete;
 mod peer_table;
 #[path = "../tests/common/bdf_problems.rs"]
 mod problems;
+#[path = "../tests/common/slider_crank.rs"]
+mod slider_crank;
 #[path = "../tests/common/standard_dae.rs"]
 mod standard_dae;
 #[path = "../tests/common/testset_index1.rs"]
@@ -61,6 +66,7 @@ use problems::{
     robertson_atol, Pendulum, Robertson, PENDULUM_INDEX, PENDULUM_T, ROBERTSON_REF,
     ROBERTSON_T_END, THETA0,
 };
+use slider_crank::{crank_index, SliderCrank, CRANK_REF, CRANK_SCORED, CRANK_T_END};
 use standard_dae::{
     AscherPetzold, ChemAkzo, Hires, AKZO_REF, AKZO_T_END, AP_INDEX, AP_T_END, HIRES_REF,
     HIRES_T_END,
@@ -139,11 +145,12 @@ enum Problem {
     Hires,
     AscherPetzold,
     Fekete,
+    SliderCrank,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 11] = [
+    const ALL: [Self; 12] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -155,6 +162,7 @@ impl Problem {
         Self::Hires,
         Self::AscherPetzold,
         Self::Fekete,
+        Self::SliderCrank,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -171,6 +179,7 @@ impl Problem {
             Self::Hires => "HIRES (ODE; all)",
             Self::AscherPetzold => "Ascher-Petzold (index 2; u1, u2)",
             Self::Fekete => "Fekete, 20 points (index 2; p)",
+            Self::SliderCrank => "slider crank (index 2; y1..y7)",
         }
     }
 }
@@ -592,5 +601,39 @@ fn main() {
                 FEKETE_T_END,
             )
         });
+        slider_crank_rows(k, tol, &scalar);
+    }
+}
+
+/// The slider crank's rows at `rtol = atol = tol` (label `1e-k`): Radau and the BDF, both with
+/// the index of every unknown (the BDF excludes the index-2 accelerations and multipliers from
+/// its error test, IDA's `suppressalg`).
+fn slider_crank_rows(k: i32, tol: f64, scalar: &bdf::Options) {
+    let (y0, yp0) = SliderCrank::initial();
+    let start = (&y0[..], &yp0[..]);
+    for code in [Code::Radau, Code::Bdf] {
+        row(
+            Problem::SliderCrank,
+            k,
+            code,
+            &CRANK_REF,
+            &CRANK_SCORED,
+            || match code {
+                Code::Radau => {
+                    let opts = radau::Options {
+                        index: crank_index(),
+                        ..radau::Options::with_tolerances(tol, tol)
+                    };
+                    radau_run::<24, _>(SliderCrank, start, opts, CRANK_T_END)
+                }
+                _ => {
+                    let opts = bdf::Options {
+                        index: crank_index(),
+                        ..scalar.clone()
+                    };
+                    bdf_run::<24, _>(SliderCrank, start, opts, CRANK_T_END)
+                }
+            },
+        );
     }
 }
