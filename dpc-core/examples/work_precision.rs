@@ -13,12 +13,15 @@
 //! * the Test Set's chemical Akzo Nobel problem (index 1, to `t = 180`) and HIRES (an ODE, to
 //!   `t = 321.8122`), all components scored, and Ascher and Petzold's linear index-2 problem
 //!   (`a = 50`, to `t = 1`, scored on `u1, u2` against the exact solution, `w` of index 2),
-//! * a Fekete-type problem with 20 points (the Test Set's Fekete problem as recalled: index 2,
-//!   160 unknowns, 20 position and 20 velocity constraints, to `t = 1000`; scored on the 60
-//!   coordinates of the points by `-log10 max |p - p_ref|`) in its GGL form, by Radau, by the
+//! * the Test Set's Fekete problem with 20 points (index 2, 160 unknowns, 20 position and 20
+//!   velocity constraints, to `t = 1000`; scored on the 60 coordinates of the points against
+//!   the Test Set's reference, as the Test Set scores it) in its GGL form, by Radau, by the
 //!   BDF with the stack LU (`NalgebraLu<160>`) and with faer's dense LU (`FaerDenseLu`), and by
 //!   the BDF on [`Stabilised::detect`] of the index-3 form as a user would declare it
 //!   (`p' = q`, `q' = g + 2 lambda p`, `|p|^2 = 1`; 140 unknowns),
+//! * the Test Set's slider crank (index 2, 24 unknowns, a flexible connecting rod, to
+//!   `t = 0.1`; scored on the seven positions against the Test Set's reference), by Radau and
+//!   by the BDF with the accelerations and multipliers (index 2) excluded from the error test,
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
@@ -40,6 +43,8 @@ mod fekete;
 mod peer_table;
 #[path = "../tests/common/bdf_problems.rs"]
 mod problems;
+#[path = "../tests/common/slider_crank.rs"]
+mod slider_crank;
 #[path = "../tests/common/standard_dae.rs"]
 mod standard_dae;
 #[path = "../tests/common/testset_index1.rs"]
@@ -53,7 +58,7 @@ use dpc_core::radau::{self, Radau};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
 use fekete::{
-    fekete_digits, fekete_index, Fekete, FeketeIndex3, FEKETE_DIFFERENTIAL, FEKETE_REF,
+    fekete_index, Fekete, FeketeIndex3, FEKETE_DIFFERENTIAL, FEKETE_REF, FEKETE_SCORED,
     FEKETE_T_END,
 };
 use peer_table::Run;
@@ -61,6 +66,7 @@ use problems::{
     robertson_atol, Pendulum, Robertson, PENDULUM_INDEX, PENDULUM_T, ROBERTSON_REF,
     ROBERTSON_T_END, THETA0,
 };
+use slider_crank::{crank_index, SliderCrank, CRANK_REF, CRANK_SCORED, CRANK_T_END};
 use standard_dae::{
     AscherPetzold, ChemAkzo, Hires, AKZO_REF, AKZO_T_END, AP_INDEX, AP_T_END, HIRES_REF,
     HIRES_T_END,
@@ -139,11 +145,12 @@ enum Problem {
     Hires,
     AscherPetzold,
     Fekete,
+    SliderCrank,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 11] = [
+    const ALL: [Self; 12] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -155,6 +162,7 @@ impl Problem {
         Self::Hires,
         Self::AscherPetzold,
         Self::Fekete,
+        Self::SliderCrank,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -170,7 +178,8 @@ impl Problem {
             Self::Akzo => "chemical Akzo Nobel (index 1; all)",
             Self::Hires => "HIRES (ODE; all)",
             Self::AscherPetzold => "Ascher-Petzold (index 2; u1, u2)",
-            Self::Fekete => "Fekete-type, 20 points (index 2; p)",
+            Self::Fekete => "Fekete, 20 points (index 2; p)",
+            Self::SliderCrank => "slider crank (index 2; y1..y7)",
         }
     }
 }
@@ -552,7 +561,7 @@ fn main() {
                 }
             });
         }
-        let fekete_score = |y: &[f64]| fekete_digits(y, &FEKETE_REF);
+        let fekete_score = |y: &[f64]| scd(y, &FEKETE_REF, &FEKETE_SCORED);
         let (fy0, fyp0) = Fekete::initial();
         let f0 = (&fy0[..], &fyp0[..]);
         for code in [Code::Radau, Code::Bdf, Code::BdfFaer] {
@@ -592,5 +601,39 @@ fn main() {
                 FEKETE_T_END,
             )
         });
+        slider_crank_rows(k, tol, &scalar);
+    }
+}
+
+/// The slider crank's rows at `rtol = atol = tol` (label `1e-k`): Radau and the BDF, both with
+/// the index of every unknown (the BDF excludes the index-2 accelerations and multipliers from
+/// its error test, IDA's `suppressalg`).
+fn slider_crank_rows(k: i32, tol: f64, scalar: &bdf::Options) {
+    let (y0, yp0) = SliderCrank::initial();
+    let start = (&y0[..], &yp0[..]);
+    for code in [Code::Radau, Code::Bdf] {
+        row(
+            Problem::SliderCrank,
+            k,
+            code,
+            &CRANK_REF,
+            &CRANK_SCORED,
+            || match code {
+                Code::Radau => {
+                    let opts = radau::Options {
+                        index: crank_index(),
+                        ..radau::Options::with_tolerances(tol, tol)
+                    };
+                    radau_run::<24, _>(SliderCrank, start, opts, CRANK_T_END)
+                }
+                _ => {
+                    let opts = bdf::Options {
+                        index: crank_index(),
+                        ..scalar.clone()
+                    };
+                    bdf_run::<24, _>(SliderCrank, start, opts, CRANK_T_END)
+                }
+            },
+        );
     }
 }
