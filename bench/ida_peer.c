@@ -625,9 +625,8 @@ static void pend_reference(double th0, double tend, double *s) {
  * state-dependent capacitance matrix, index 0) and charge pump (pump.f; 9 unknowns, index 2,
  * constant singular mass matrix): the same equations as dpc-core/tests/common/nand.rs and
  * pump.rs, run from corner to corner of the input pulses (IDASetStopTime at each, continuing)
- * and scored as the Test Set's drivers do (NAND: y5; pump: y1). The NAND's iteration matrix is
- * c C(y) plus central differences of the residual in y (dpc's fixture does the same); the
- * pump's is exact. */
+ * and scored as the Test Set's drivers do (NAND: y5; pump: y1). Both iteration matrices are
+ * exact, as in dpc's fixtures. */
 #define NG_RGS 4.0
 #define NG_RGD 4.0
 #define NG_RBS 10.0
@@ -684,27 +683,6 @@ static double ng_cbdbs(double v) {
   return v <= 0.0 ? NG_CBD / sqrt(1.0 - v / NG_PHIB) : NG_CBD * (1.0 + v / (2.0 * NG_PHIB));
 }
 
-static void nand_cap(const double *y, double c[14][14]) {
-  double c35 = ng_cbdbs(y[2] - y[4]), c95 = ng_cbdbs(y[8] - y[4]);
-  double c810 = ng_cbdbs(y[7] - y[9]), c1410 = ng_cbdbs(y[13] - y[9]);
-  memset(c, 0, sizeof(double) * 14 * 14);
-  c[0][0] = NG_CGS; c[0][4] = -NG_CGS;
-  c[1][1] = NG_CGD; c[1][4] = -NG_CGD;
-  c[2][2] = c35; c[2][4] = -c35;
-  c[3][3] = ng_cbdbs(y[3] - NG_VDD);
-  c[4][0] = -NG_CGS; c[4][1] = -NG_CGD; c[4][2] = -c35;
-  c[4][4] = NG_CGS + NG_CGD + c35 + c95 + NG_C9; c[4][8] = -c95;
-  c[5][5] = NG_CGS;
-  c[6][6] = NG_CGD;
-  c[7][7] = c810; c[7][9] = -c810;
-  c[8][4] = -c95; c[8][8] = c95;
-  c[9][7] = -c810; c[9][9] = c810 + c1410 + NG_C9; c[9][13] = -c1410;
-  c[10][10] = NG_CGS;
-  c[11][11] = NG_CGD;
-  c[12][12] = ng_cbdbs(y[12]);
-  c[13][9] = -c1410; c[13][13] = c1410;
-}
-
 static void nand_f(double t, const double *y, double *f) {
   double v1, v1d, v2, v2d;
   ng_pulse(t, 0.0, 5.0, 5.0, 5.0, 5.0, 5.0, 20.0, &v1, &v1d);
@@ -728,14 +706,27 @@ static void nand_f(double t, const double *y, double *f) {
   f[13] = -(y[13] - NG_VBB) / NG_RBD + ng_ib(y[13] - y[9]);
 }
 
+/* The capacitors of the network: C[k] between nodes A[k] and B[k] (-1: a fixed potential);
+ * C(y) (nand_cap, the Test Set's matrix) is the sum of their stamps. */
+static const int NG_CA[14] = {0, 1, 2, 3, 8, 4, 5, 6, 7, 13, 9, 10, 11, 12};
+static const int NG_CB[14] = {4, 4, 4, -1, 4, -1, -1, -1, 9, 9, -1, -1, -1, -1};
+static void nand_capacitors(const double *y, double *c) {
+  double v[14] = {NG_CGS, NG_CGD, ng_cbdbs(y[2] - y[4]), ng_cbdbs(y[3] - NG_VDD),
+                  ng_cbdbs(y[8] - y[4]), NG_C9, NG_CGS, NG_CGD, ng_cbdbs(y[7] - y[9]),
+                  ng_cbdbs(y[13] - y[9]), NG_C9, NG_CGS, NG_CGD, ng_cbdbs(y[12])};
+  for (int k = 0; k < 14; k++) c[k] = v[k];
+}
+
 static void nand_residual(double t, const double *y, const double *p, double *r) {
-  double c[14][14], f[14];
-  nand_cap(y, c);
+  double c[14], f[14];
+  nand_capacitors(y, c);
   nand_f(t, y, f);
-  for (int i = 0; i < 14; i++) {
-    double s = 0.0;
-    for (int j = 0; j < 14; j++) s += c[i][j] * p[j];
-    r[i] = s - f[i];
+  for (int i = 0; i < 14; i++) r[i] = -f[i];
+  for (int k = 0; k < 14; k++) {
+    int a = NG_CA[k], b = NG_CB[k];
+    double q = c[k] * (p[a] - (b >= 0 ? p[b] : 0.0));
+    r[a] += q;
+    if (b >= 0) r[b] -= q;
   }
 }
 
@@ -745,21 +736,103 @@ static int nand_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud)
   return 0;
 }
 
+static double ng_cbdbs_d(double v) {
+  return v <= 0.0 ? NG_CBD / (2.0 * NG_PHIB) / pow(1.0 - v / NG_PHIB, 1.5) : NG_CBD / (2.0 * NG_PHIB);
+}
+
+static double ng_ib_d(double v) { return v <= 0.0 ? -NG_CURIS / NG_VTH * exp(v / NG_VTH) : 0.0; }
+
+/* The drain current's derivatives in (vds, vgs, vbs, vgd, vbd). */
+static void ng_ids_grad(int ned, double vds, double vgs, double vbs, double vgd, double vbd,
+                        double g[5]) {
+  double vt0 = ned == 1 ? -2.43 : 0.2, gam = ned == 1 ? 0.2 : 0.035, phi = ned == 1 ? 1.28 : 1.01;
+  for (int k = 0; k < 5; k++) g[k] = 0.0;
+  if (vds > 0.0) {
+    double beta = ned == 1 ? 5.35e-4 : 1.748e-3, s = sqrt(phi - vbs);
+    double u = vgs - (vt0 + gam * (s - sqrt(phi))), du_dvbs = gam / (2.0 * s), di_du, di_dvds;
+    if (u <= 0.0) return;
+    if (u <= vds) {
+      di_du = -2.0 * beta * u * (1.0 + NG_DELTA * vds);
+      di_dvds = -beta * u * u * NG_DELTA;
+    } else {
+      di_du = -2.0 * beta * vds * (1.0 + NG_DELTA * vds);
+      di_dvds = -beta * ((2.0 * u - 2.0 * vds) * (1.0 + NG_DELTA * vds) +
+                         NG_DELTA * vds * (2.0 * u - vds));
+    }
+    g[0] = di_dvds; g[1] = di_du; g[2] = di_du * du_dvbs;
+  } else if (vds < 0.0) {
+    double beta = ned == 1 ? 5.35e-4 : 1.748e-4, s = sqrt(phi - vbd);
+    double u = vgd - (vt0 + gam * (s - sqrt(phi))), du_dvbd = gam / (2.0 * s), di_du, di_dvds;
+    if (u <= 0.0) return;
+    if (u <= -vds) {
+      di_du = 2.0 * beta * u * (1.0 - NG_DELTA * vds);
+      di_dvds = -beta * u * u * NG_DELTA;
+    } else {
+      di_du = -2.0 * beta * vds * (1.0 - NG_DELTA * vds);
+      di_dvds = -beta * ((2.0 * u + 2.0 * vds) * (1.0 - NG_DELTA * vds) -
+                         NG_DELTA * vds * (2.0 * u + vds));
+    }
+    g[0] = di_dvds; g[3] = di_du; g[4] = di_du * du_dvbd;
+  }
+}
+
+/* g times the stamp of a two-terminal element between nodes a and b (b < 0: a fixed potential). */
+static void ng_stamp(SUNMatrix J, int a, int b, double g) {
+  SM_ELEMENT_D(J, a, a) += g;
+  if (b >= 0) {
+    SM_ELEMENT_D(J, a, b) -= g;
+    SM_ELEMENT_D(J, b, a) -= g;
+    SM_ELEMENT_D(J, b, b) += g;
+  }
+}
+
+/* The exact iteration matrix: c C(y), d(C(y) y')/dy through the junction capacitances, and -df/dy
+ * from the currents' derivatives (dpc-core/tests/common/nand.rs has the same). */
 static int nand_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
                     void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
   realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp);
-  double c[14][14], z[14], up[14], down[14];
+  double c[14];
   (void)rr; (void)ud; (void)t1; (void)t2; (void)t3;
-  nand_cap(y, c);
-  for (int j = 0; j < 14; j++) z[j] = y[j];
-  for (int j = 0; j < 14; j++) {
-    double h = cbrt(2.220446049250313e-16) * fmax(fabs(y[j]), 1.0);
-    z[j] = y[j] + h;
-    nand_residual(t, z, p, up);
-    z[j] = y[j] - h;
-    nand_residual(t, z, p, down);
-    z[j] = y[j];
-    for (int i = 0; i < 14; i++) SM_ELEMENT_D(J, i, j) = cj * c[i][j] + (up[i] - down[i]) / (2.0 * h);
+  SUNMatZero(J);
+  nand_capacitors(y, c);
+  for (int k = 0; k < 14; k++) ng_stamp(J, NG_CA[k], NG_CB[k], cj * c[k]);
+  /* Junctions (capacitances and diodes): node a, node b (-1: none), fixed offset. */
+  static const int JA[6] = {2, 3, 8, 7, 13, 12}, JB[6] = {4, -1, 4, 9, 9, -1};
+  static const double JO[6] = {0.0, NG_VDD, 0.0, 0.0, 0.0, 0.0};
+  for (int k = 0; k < 6; k++) {
+    int a = JA[k], b = JB[k];
+    double v = y[a] - (b >= 0 ? y[b] : 0.0) - JO[k];
+    ng_stamp(J, a, b, ng_cbdbs_d(v) * (p[a] - (b >= 0 ? p[b] : 0.0)));
+    ng_stamp(J, a, b, -ng_ib_d(v));
+  }
+  static const int RA[12] = {0, 1, 2, 3, 4, 5, 7, 8, 9, 10, 12, 13};
+  static const int RB[12] = {4, -1, -1, -1, 6, 9, -1, -1, 11, -1, -1, -1};
+  static const double RV[12] = {NG_RGS, NG_RGD, NG_RBS, NG_RBD, NG_RGD, NG_RGS,
+                                NG_RBS, NG_RBD, NG_RGD, NG_RGS, NG_RBS, NG_RBD};
+  for (int k = 0; k < 12; k++) ng_stamp(J, RA[k], RB[k], 1.0 / RV[k]);
+  /* Transistors: type, source row, drain row, and per argument (plus node, minus node). */
+  double v1, v2, d;
+  ng_pulse(t, 0.0, 5.0, 5.0, 5.0, 5.0, 5.0, 20.0, &v1, &d);
+  ng_pulse(t, 0.0, 5.0, 15.0, 5.0, 15.0, 5.0, 40.0, &v2, &d);
+  static const int NED[3] = {1, 2, 2}, SRC[3] = {0, 5, 10}, DRN[3] = {1, 6, 11};
+  static const int AP[3][5] = {{1, 4, 2, 4, 3}, {6, -1, 7, -1, 8}, {11, -1, 12, -1, 13}};
+  static const int AN[3][5] = {{0, 0, 4, 1, -1}, {5, 5, 9, 6, 4}, {10, 10, -1, 11, 9}};
+  double off[3][5] = {{0, 0, 0, 0, -NG_VDD}, {0, v1, 0, v1, 0}, {0, v2, 0, v2, 0}};
+  for (int m = 0; m < 3; m++) {
+    double v[5], g[5];
+    for (int k = 0; k < 5; k++)
+      v[k] = (AP[m][k] >= 0 ? y[AP[m][k]] : 0.0) - (AN[m][k] >= 0 ? y[AN[m][k]] : 0.0) + off[m][k];
+    ng_ids_grad(NED[m], v[0], v[1], v[2], v[3], v[4], g);
+    for (int k = 0; k < 5; k++) {
+      if (AP[m][k] >= 0) {
+        SM_ELEMENT_D(J, SRC[m], AP[m][k]) += g[k];
+        SM_ELEMENT_D(J, DRN[m], AP[m][k]) -= g[k];
+      }
+      if (AN[m][k] >= 0) {
+        SM_ELEMENT_D(J, SRC[m], AN[m][k]) -= g[k];
+        SM_ELEMENT_D(J, DRN[m], AN[m][k]) += g[k];
+      }
+    }
   }
   return 0;
 }

@@ -171,14 +171,42 @@ fn nand_start_is_consistent_and_matrix_matches_differences() {
     let mut r = [0.0; 14];
     Nand.residual(0.0, &y0, &yp0, &mut r);
     assert!(r.iter().all(|v| v.abs() < 1e-14), "{r:?}");
-    // At the start and at a state inside the run (the pulses rising), with c of a step 1e-3.
-    let mut y = y0;
+    // Away from the transistor model's branch switches (at y0 the first transistor has
+    // V_DS = 0, where the difference quotient straddles two branches): y0 moved off them, and
+    // a state inside the run with the pulses rising; y' of a step with c = 1e3.
+    let moved: [f64; 14] = std::array::from_fn(|j| y0[j] + 0.01 * (j as f64 + 1.0));
+    let mut y = moved;
     y[5] = 1.2;
     y[10] = 0.3;
     y[4] = 4.2;
-    for (t, y) in [(0.0, y0), (7.5, y)] {
-        let e = matrix_error(&Nand, t, &y, &yp0, 1e3);
+    let yp: [f64; 14] = std::array::from_fn(|j| 0.1 * (j as f64 - 6.0));
+    for (t, y) in [(0.0, moved), (7.5, y), (17.5, moved)] {
+        let e = matrix_error(&Nand, t, &y, &yp, 1e3);
         assert!(e < 1e-6, "t = {t}: relative error {e:e}");
+    }
+}
+
+#[test]
+fn nand_capacitor_stamps_sum_to_the_test_set_matrix() {
+    let (y0, _) = Nand::initial();
+    let y: [f64; 14] = std::array::from_fn(|j| y0[j] + 0.3 * (j as f64 - 7.0));
+    let dense = Nand::capacitance(&y);
+    let mut sum = [[0.0; 14]; 14];
+    for (a, b, c) in Nand::capacitors(&y) {
+        sum[a][a] += c;
+        if let Some(b) = b {
+            sum[a][b] -= c;
+            sum[b][a] -= c;
+            sum[b][b] += c;
+        }
+    }
+    for i in 0..14 {
+        for j in 0..14 {
+            assert!(
+                (sum[i][j] - dense[i][j]).abs() <= 1e-15 * dense[i][i].abs(),
+                "({i}, {j})"
+            );
+        }
     }
 }
 
@@ -229,11 +257,11 @@ fn digits(
 
 #[test]
 fn nand_bdf_reaches_test_set_accuracy() {
-    // Median scd on y5 over tol x (0.9, 1, 1.1) at 1e-4, measured: 4.53 (889 steps at tol).
+    // Median scd on y5 over tol x (0.9, 1, 1.1) at 1e-4, measured: 4.94 (878 steps at tol).
     // Floor half a digit below. (Radau fails on this problem: see the ignored test.)
     let d = digits(1e-4, |t| nand_run(t, false), &NAND_REF, &NAND_SCORED);
     println!("NAND BDF tol 1e-4: median scd (y5) {d:.2}");
-    assert!(d >= 4.0, "scd {d}");
+    assert!(d >= 4.4, "scd {d}");
 }
 
 #[test]

@@ -19,11 +19,10 @@
 //! there, the drain current for `V_DS < 0` of the enhancement transistors uses
 //! `beta = 1.748e-4` (for `V_DS > 0`: `1.748e-3`); the reference was computed with these.
 //!
-//! The iteration matrix `dF/dy + c dF/dy'` is `c C(y)` (exact) plus `d(C(y) y' - f)/dy` by
-//! central differences of the residual in each unknown (step `cbrt(eps) max(|y_j|, 1)`); the
-//! currents are piecewise smooth in the voltages, so the exact derivative is the difference
-//! quotient's limit away from the branch switches. `bench/ida_peer.c` has the same equations
-//! and the same difference quotient. The Test Set's drivers score `y5` only (the gate's output
+//! The iteration matrix `dF/dy + c dF/dy'` is exact: `c C(y)`, the derivative of `C(y) y'`
+//! through the junction capacitances, and `-df/dy` from the derivatives of the currents (on a
+//! switch between two branches of the transistor model, those of the branch taken there).
+//! `bench/ida_peer.c` has the same equations and matrix. The Test Set's drivers score `y5` only (the gate's output
 //! node, [`NAND_SCORED`]).
 #![allow(dead_code)]
 // Equation rows and matrix entries are written by (row, column) index, as the model is.
@@ -169,6 +168,78 @@ fn cbdbs(v: f64) -> f64 {
     }
 }
 
+/// `d cbdbs / dv`.
+fn cbdbs_derivative(v: f64) -> f64 {
+    if v <= 0.0 {
+        CBD / (2.0 * PHIB) / (1.0 - v / PHIB).powf(1.5)
+    } else {
+        CBD / (2.0 * PHIB)
+    }
+}
+
+/// `d ib / dv`.
+fn ib_derivative(v: f64) -> f64 {
+    if v <= 0.0 {
+        -CURIS / VTH * (v / VTH).exp()
+    } else {
+        0.0
+    }
+}
+
+/// The drain current and its derivatives in `(vds, vgs, vbs, vgd, vbd)` (on a branch switch,
+/// those of the branch [`ids`] takes there).
+fn ids_gradient(ned: u8, vds: f64, vgs: f64, vbs: f64, vgd: f64, vbd: f64) -> [f64; 5] {
+    if vds > 0.0 {
+        let (vt0, gamma, phi, beta) = transistor(ned, false);
+        let s = (phi - vbs).sqrt();
+        let u = vgs - (vt0 + gamma * (s - phi.sqrt()));
+        // du/dvbs = -dvte/dvbs.
+        let du_dvbs = gamma / (2.0 * s);
+        let (di_du, di_dvds) = if u <= 0.0 {
+            (0.0, 0.0)
+        } else if u <= vds {
+            (-2.0 * beta * u * (1.0 + DELTA * vds), -beta * u * u * DELTA)
+        } else {
+            (
+                -2.0 * beta * vds * (1.0 + DELTA * vds),
+                -beta
+                    * ((2.0 * u - 2.0 * vds) * (1.0 + DELTA * vds) + DELTA * vds * (2.0 * u - vds)),
+            )
+        };
+        [di_dvds, di_du, di_du * du_dvbs, 0.0, 0.0]
+    } else if vds < 0.0 {
+        let (vt0, gamma, phi, beta) = transistor(ned, true);
+        let s = (phi - vbd).sqrt();
+        let u = vgd - (vt0 + gamma * (s - phi.sqrt()));
+        let du_dvbd = gamma / (2.0 * s);
+        let (di_du, di_dvds) = if u <= 0.0 {
+            (0.0, 0.0)
+        } else if u <= -vds {
+            (2.0 * beta * u * (1.0 - DELTA * vds), -beta * u * u * DELTA)
+        } else {
+            (
+                -2.0 * beta * vds * (1.0 - DELTA * vds),
+                -beta
+                    * ((2.0 * u + 2.0 * vds) * (1.0 - DELTA * vds) - DELTA * vds * (2.0 * u + vds)),
+            )
+        };
+        [di_dvds, 0.0, 0.0, di_du, di_du * du_dvbd]
+    } else {
+        [0.0; 5]
+    }
+}
+
+/// Adds `g` times the stamp of a two-terminal element between nodes `a` and `b` (`None`: a
+/// fixed potential) to `m`: `+g` on the diagonal entries, `-g` on the coupling ones.
+fn stamp<S: MatrixSink + ?Sized>(m: &mut S, a: usize, b: Option<usize>, g: f64) {
+    m.add(a, a, g);
+    if let Some(b) = b {
+        m.add(a, b, -g);
+        m.add(b, a, -g);
+        m.add(b, b, g);
+    }
+}
+
 impl Nand {
     /// The Test Set's `y0` and `y0' = 0` (consistent: `f(0, y0)` is below `1e-14`).
     pub fn initial() -> ([f64; 14], [f64; 14]) {
@@ -261,11 +332,40 @@ impl Nand {
         ]
     }
 
-    /// `C(y) y' - f(t, y)`.
+    /// The capacitors of the network: `(a, b, C)`, a capacitance `C` between nodes `a` and `b`
+    /// (`None`: a fixed potential). `C(y)` is their sum of stamps (`+C` at `(a, a)`, `(b, b)`,
+    /// `-C` at `(a, b)`, `(b, a)`); a test checks it against [`capacitance`](Self::capacitance).
+    pub fn capacitors(y: &[f64]) -> [(usize, Option<usize>, f64); 14] {
+        [
+            (0, Some(4), CGS),
+            (1, Some(4), CGD),
+            (2, Some(4), cbdbs(y[2] - y[4])),
+            (3, None, cbdbs(y[3] - VDD)),
+            (8, Some(4), cbdbs(y[8] - y[4])),
+            (4, None, C9),
+            (5, None, CGS),
+            (6, None, CGD),
+            (7, Some(9), cbdbs(y[7] - y[9])),
+            (13, Some(9), cbdbs(y[13] - y[9])),
+            (9, None, C9),
+            (10, None, CGS),
+            (11, None, CGD),
+            (12, None, cbdbs(y[12])),
+        ]
+    }
+
+    /// `C(y) y' - f(t, y)`, `C(y) y'` from the capacitors' stamps.
     fn residual_array(t: f64, y: &[f64], yp: &[f64]) -> [f64; 14] {
-        let c = Self::capacitance(y);
         let f = Self::f(t, y);
-        std::array::from_fn(|i| (0..14).map(|j| c[i][j] * yp[j]).sum::<f64>() - f[i])
+        let mut r: [f64; 14] = std::array::from_fn(|i| -f[i]);
+        for (a, b, cap) in Self::capacitors(y) {
+            let q = cap * (yp[a] - b.map_or(0.0, |b| yp[b]));
+            r[a] += q;
+            if let Some(b) = b {
+                r[b] -= q;
+            }
+        }
+        r
     }
 }
 
@@ -284,27 +384,108 @@ impl ImplicitDae for Nand {
         c: f64,
         m: &mut S,
     ) {
-        let cap = Self::capacitance(y);
-        for i in 0..14 {
-            for j in 0..14 {
-                if cap[i][j] != 0.0 {
-                    m.set(i, j, c * cap[i][j]);
-                }
-            }
+        // c C(y).
+        for (a, b, cap) in Self::capacitors(y) {
+            stamp(m, a, b, c * cap);
         }
-        let mut z = [0.0; 14];
-        z.copy_from_slice(y);
-        for j in 0..14 {
-            let h = f64::EPSILON.cbrt() * y[j].abs().max(1.0);
-            z[j] = y[j] + h;
-            let up = Self::residual_array(t, &z, yp);
-            z[j] = y[j] - h;
-            let down = Self::residual_array(t, &z, yp);
-            z[j] = y[j];
-            for i in 0..14 {
-                let d = (up[i] - down[i]) / (2.0 * h);
-                if d != 0.0 {
-                    m.add(i, j, d);
+        // d(C(y) y')/dy: each junction capacitance cbdbs(y_a - y_b) adds cbdbs (y_a' - y_b') to
+        // row a and takes it from row b.
+        let yb = |b: Option<usize>| b.map_or(0.0, |b| y[b]);
+        let ypb = |b: Option<usize>| b.map_or(0.0, |b| yp[b]);
+        for (a, b, offset) in [
+            (2, Some(4), 0.0),
+            (3, None, VDD),
+            (8, Some(4), 0.0),
+            (7, Some(9), 0.0),
+            (13, Some(9), 0.0),
+            (12, None, 0.0),
+        ] {
+            let v = y[a] - yb(b) - offset;
+            stamp(m, a, b, cbdbs_derivative(v) * (yp[a] - ypb(b)));
+        }
+        // -df/dy: resistors (current (y_a - y_b)/R leaves node a) ...
+        for (a, b, r) in [
+            (0, Some(4), RGS),
+            (1, None, RGD),
+            (2, None, RBS),
+            (3, None, RBD),
+            (4, Some(6), RGD),
+            (5, Some(9), RGS),
+            (7, None, RBS),
+            (8, None, RBD),
+            (9, Some(11), RGD),
+            (10, None, RGS),
+            (12, None, RBS),
+            (13, None, RBD),
+        ] {
+            stamp(m, a, b, 1.0 / r);
+        }
+        // ... the bulk diodes (current ib(y_a - y_b) enters node a) ...
+        for (a, b, offset) in [
+            (2, Some(4), 0.0),
+            (3, None, VDD),
+            (8, Some(4), 0.0),
+            (7, Some(9), 0.0),
+            (13, Some(9), 0.0),
+            (12, None, 0.0),
+        ] {
+            stamp(m, a, b, -ib_derivative(y[a] - yb(b) - offset));
+        }
+        // ... and the transistors: current ids leaves the source row and enters the drain
+        // row; each argument is a difference of two unknowns (`None`: an input or a supply).
+        let (v1, _) = pulse(t, 0.0, 5.0, 5.0, 5.0, 5.0, 5.0, 20.0);
+        let (v2, _) = pulse(t, 0.0, 5.0, 15.0, 5.0, 15.0, 5.0, 40.0);
+        type Arg = (Option<usize>, Option<usize>, f64);
+        let transistors: [(u8, usize, usize, [Arg; 5]); 3] = [
+            (
+                1,
+                0,
+                1,
+                [
+                    (Some(1), Some(0), 0.0),
+                    (Some(4), Some(0), 0.0),
+                    (Some(2), Some(4), 0.0),
+                    (Some(4), Some(1), 0.0),
+                    (Some(3), None, -VDD),
+                ],
+            ),
+            (
+                2,
+                5,
+                6,
+                [
+                    (Some(6), Some(5), 0.0),
+                    (None, Some(5), v1),
+                    (Some(7), Some(9), 0.0),
+                    (None, Some(6), v1),
+                    (Some(8), Some(4), 0.0),
+                ],
+            ),
+            (
+                2,
+                10,
+                11,
+                [
+                    (Some(11), Some(10), 0.0),
+                    (None, Some(10), v2),
+                    (Some(12), None, 0.0),
+                    (None, Some(11), v2),
+                    (Some(13), Some(9), 0.0),
+                ],
+            ),
+        ];
+        for (ned, source, drain, args) in transistors {
+            let v: [f64; 5] = std::array::from_fn(|k| {
+                let (p, n, offset) = args[k];
+                p.map_or(0.0, |p| y[p]) - n.map_or(0.0, |n| y[n]) + offset
+            });
+            let g = ids_gradient(ned, v[0], v[1], v[2], v[3], v[4]);
+            for (k, (p, n, _)) in args.into_iter().enumerate() {
+                for (j, sign) in [(p, 1.0), (n, -1.0)] {
+                    if let (Some(j), true) = (j, g[k] != 0.0) {
+                        m.add(source, j, sign * g[k]);
+                        m.add(drain, j, -sign * g[k]);
+                    }
                 }
             }
         }
