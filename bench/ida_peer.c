@@ -27,7 +27,13 @@
  * dpc-core/tests/common/fekete.rs with its analytic Jacobian; lambda and mu (index 2) excluded
  * from the error test; scored on the 60 coordinates of the points by -log10 max |p - p_ref|
  * (the points have length 1).
- * rtol = atol = 1e-k except for Robertson; k = 4, 6, 8. A failed solve is printed as such, with
+ * The Test Set's NAND gate (nand.f, 14 unknowns, C(y) y' = f(t, y) with a regular state-dependent
+ * capacitance matrix) to t = 80, scored on y5, and charge pump (pump.f, 9 unknowns, index 2) to
+ * t = 1.2e-6 with the Test Set driver's atol (1e-6 rtol on the charges y1..y5), y9 (index 2)
+ * excluded from the error test, scored on y1: the same equations and exact Jacobians as
+ * dpc-core/tests/common/nand.rs and pump.rs, integrated from corner to corner of the input
+ * pulses (IDASetStopTime at each, continuing).
+ * rtol = atol = 1e-k except for Robertson and the charge pump; k = 4, 6, 8. A failed solve is printed as such, with
  * IDA's return flag and the time it stopped at. Times: the thread's CPU time per solve, the
  * mean over repetitions filling at least 0.3 s (at least 3).
  *
