@@ -22,6 +22,10 @@
 //! * the Test Set's slider crank (index 2, 24 unknowns, a flexible connecting rod, to
 //!   `t = 0.1`; scored on the seven positions against the Test Set's reference), by Radau and
 //!   by the BDF with the accelerations and multipliers (index 2) excluded from the error test,
+//! * the Test Set's NAND gate (14 unknowns, state-dependent regular capacitance matrix, index 0,
+//!   to `t = 80`, scored on `y5` as the Test Set's drivers do) and charge pump (9 unknowns,
+//!   index 2, to `t = 1.2e-6`, the Test Set driver's `atol` (`1e-6 rtol` on the charges), `y9`
+//!   of index 2 excluded, scored on `y1`), each run from corner to corner of its input pulses,
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
@@ -39,10 +43,14 @@
 
 #[path = "../tests/common/fekete.rs"]
 mod fekete;
+#[path = "../tests/common/nand.rs"]
+mod nand;
 #[path = "../tests/common/peer_table.rs"]
 mod peer_table;
 #[path = "../tests/common/bdf_problems.rs"]
 mod problems;
+#[path = "../tests/common/pump.rs"]
+mod pump;
 #[path = "../tests/common/slider_crank.rs"]
 mod slider_crank;
 #[path = "../tests/common/standard_dae.rs"]
@@ -146,11 +154,13 @@ enum Problem {
     AscherPetzold,
     Fekete,
     SliderCrank,
+    Nand,
+    Pump,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 12] = [
+    const ALL: [Self; 14] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -163,6 +173,8 @@ impl Problem {
         Self::AscherPetzold,
         Self::Fekete,
         Self::SliderCrank,
+        Self::Nand,
+        Self::Pump,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -180,6 +192,8 @@ impl Problem {
             Self::AscherPetzold => "Ascher-Petzold (index 2; u1, u2)",
             Self::Fekete => "Fekete, 20 points (index 2; p)",
             Self::SliderCrank => "slider crank (index 2; y1..y7)",
+            Self::Nand => "NAND gate (index 0, C(y); y5)",
+            Self::Pump => "charge pump (index 2; y1)",
         }
     }
 }
@@ -204,6 +218,109 @@ impl Code {
             Self::BdfFaer => "dpc BDF (FaerDenseLu)",
             Self::BdfDetect => "dpc BDF (Stabilised::detect of the index-3 form)",
         }
+    }
+}
+
+/// `fn $name::<N, D>(dae, (y0, yp0), opts, breaks)`: `$solver` with the stack LU of size `N`
+/// from `t = 0` through the stop times `breaks` (the last is the end; the input pulses' corners
+/// of the NAND gate and the charge pump), continuing across each, and its work.
+macro_rules! piecewise_run {
+    ($name:ident, $solver:ident, $options:ty) => {
+        fn $name<const N: usize, D: ImplicitDae>(
+            dae: D,
+            (y0, yp0): (&[f64], &[f64]),
+            opts: $options,
+            breaks: &[f64],
+        ) -> Result<Run, String> {
+            let mut s = $solver::new(dae, NalgebraLu::<N>::new(), opts, 0.0, y0, yp0)
+                .map_err(|e| e.to_string())?;
+            let mut y = vec![0.0; N];
+            for &tb in breaks {
+                s.set_stop_time(tb).map_err(|e| e.to_string())?;
+                s.solve_to(tb, &mut y, None).map_err(|e| e.to_string())?;
+            }
+            let st = s.stats();
+            Ok(Run {
+                steps: st.steps,
+                error_test_failures: st.error_test_failures,
+                newton_failures: st.newton_failures,
+                jacobians: st.jacobian_evaluations,
+                y,
+            })
+        }
+    };
+}
+
+piecewise_run!(bdf_piecewise, Bdf, bdf::Options);
+piecewise_run!(radau_piecewise, Radau, radau::Options);
+
+/// The rows of the NAND gate (`rtol = atol = tol`) and the charge pump (`rtol = tol`, the Test
+/// Set driver's `atol`, `y9` of index 2 excluded) at `rtol = 1e-k`, by Radau and the BDF.
+fn circuit_rows(k: i32, tol: f64) {
+    let (ny0, nyp0) = nand::Nand::initial();
+    let nand_breaks = nand::nand_breaks();
+    let (py0, pyp0) = pump::Pump::initial();
+    let pump_breaks = pump::pump_breaks();
+    for code in [Code::Radau, Code::Bdf] {
+        row(
+            Problem::Nand,
+            k,
+            code,
+            &nand::NAND_REF,
+            &nand::NAND_SCORED,
+            || {
+                let y0 = (&ny0[..], &nyp0[..]);
+                match code {
+                    Code::Radau => radau_piecewise::<14, _>(
+                        nand::Nand,
+                        y0,
+                        radau::Options::with_tolerances(tol, tol),
+                        &nand_breaks,
+                    ),
+                    _ => bdf_piecewise::<14, _>(
+                        nand::Nand,
+                        y0,
+                        bdf::Options::with_tolerances(tol, tol),
+                        &nand_breaks,
+                    ),
+                }
+            },
+        );
+        row(
+            Problem::Pump,
+            k,
+            code,
+            &pump::PUMP_REF,
+            &pump::PUMP_SCORED,
+            || {
+                let y0 = (&py0[..], &pyp0[..]);
+                let (rtol, atol) = (
+                    Tolerance::Scalar(tol),
+                    Tolerance::Vector(pump::pump_atol(tol)),
+                );
+                let index = pump::PUMP_INDEX.to_vec();
+                match code {
+                    Code::Radau => {
+                        let opts = radau::Options {
+                            rtol,
+                            atol,
+                            index,
+                            ..radau::Options::default()
+                        };
+                        radau_piecewise::<9, _>(pump::Pump, y0, opts, &pump_breaks)
+                    }
+                    _ => {
+                        let opts = bdf::Options {
+                            rtol,
+                            atol,
+                            index,
+                            ..bdf::Options::default()
+                        };
+                        bdf_piecewise::<9, _>(pump::Pump, y0, opts, &pump_breaks)
+                    }
+                }
+            },
+        );
     }
 }
 
@@ -602,6 +719,7 @@ fn main() {
             )
         });
         slider_crank_rows(k, tol, &scalar);
+        circuit_rows(k, tol);
     }
 }
 
