@@ -64,7 +64,18 @@ use testset_index3::*;
 type M = NalgebraMat<f64>;
 
 /// Steps diffsol's BDF to `t_end` exactly and returns its counters and end state.
-fn finish<'a, Eqn, S>(mut solver: S, t_end: f64, n: usize) -> Result<Run, String>
+fn finish<'a, Eqn, S>(solver: S, t_end: f64, n: usize) -> Result<Run, String>
+where
+    Eqn: diffsol::OdeEquationsImplicit<T = f64> + 'a,
+    S: OdeSolverMethod<'a, Eqn>,
+    Eqn::V: diffsol::Vector<T = f64>,
+{
+    finish_breaks(solver, &[t_end], n)
+}
+
+/// Steps diffsol's BDF through the stop times `breaks` (the last is the end), continuing
+/// across each, and returns its counters and end state.
+fn finish_breaks<'a, Eqn, S>(mut solver: S, breaks: &[f64], n: usize) -> Result<Run, String>
 where
     Eqn: diffsol::OdeEquationsImplicit<T = f64> + 'a,
     S: OdeSolverMethod<'a, Eqn>,
@@ -74,42 +85,13 @@ where
     // diffsol's default step limit (5 000 per solve) is below what the transistor amplifier
     // needs at tight tolerances; dpc-core allows 100 000 per call.
     *solver.config_mut().as_base_mut().maximum_number_timesteps = 1_000_000;
-    solver.set_stop_time(t_end).map_err(|e| e.to_string())?;
-    loop {
-        match solver.step() {
-            Ok(diffsol::OdeSolverStopReason::TstopReached) => break,
-            Ok(_) => {}
-            // diffsol's errors name the time they occurred at.
-            Err(e) => return Err(e.to_string()),
-        }
-    }
-    let y = (0..n).map(|i| solver.state().y.get_index(i)).collect();
-    let s = solver.get_statistics();
-    Ok(Run {
-        steps: s.number_of_steps,
-        error_test_failures: s.number_of_error_test_failures,
-        newton_failures: s.number_of_nonlinear_solver_fails,
-        jacobians: s.number_of_linear_solver_setups,
-        y,
-    })
-}
-
-/// As [`finish`], through the stop times `breaks` (the last is the end), continuing across
-/// each.
-fn finish_breaks<'a, Eqn, S>(mut solver: S, breaks: &[f64], n: usize) -> Result<Run, String>
-where
-    Eqn: diffsol::OdeEquationsImplicit<T = f64> + 'a,
-    S: OdeSolverMethod<'a, Eqn>,
-    Eqn::V: diffsol::Vector<T = f64>,
-{
-    use diffsol::{OdeSolverConfig as _, Vector as _};
-    *solver.config_mut().as_base_mut().maximum_number_timesteps = 1_000_000;
     for &tb in breaks {
         solver.set_stop_time(tb).map_err(|e| e.to_string())?;
         loop {
             match solver.step() {
                 Ok(diffsol::OdeSolverStopReason::TstopReached) => break,
                 Ok(_) => {}
+                // diffsol's errors name the time they occurred at.
                 Err(e) => return Err(e.to_string()),
             }
         }
