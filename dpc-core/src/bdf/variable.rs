@@ -8,7 +8,8 @@
 //! selection follow IDA's `IDATestError`/`IDACompleteStep`, including the initial phase that
 //! raises the order and doubles the step until the first failure, with two departures: after
 //! repeated error-test failures within a step the order drops to 1 only from the fifth failure
-//! (IDA: the third), and a step that passed after two or more failures is not enlarged at once.
+//! (IDA: the third; an implicit ODE keeps IDA's count, `IDA_ORDER_ONE_FAILURES`), and a step
+//! that passed after two or more failures is not enlarged at once.
 //! On the Test Set's transistor amplifier IDA's rules lock into a cycle of failures at orders 1
 //! and 2 through each switching transient (at `rtol = 1e-8`: more than 100 000 steps, most of
 //! them rejected); with these two rules it takes 15 608 steps, and 7 657 with the corrector's
