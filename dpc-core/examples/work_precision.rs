@@ -419,20 +419,35 @@ fn stabilised_run<const N: usize, D: ImplicitDae>(
 ) -> Result<Run, String> {
     let (y0, yp0) = s.extend(y0, yp0);
     let index = stabilised_index(N, differential);
+    indexed_run::<N, _>(code, s, (&y0, &yp0), index, tol, scalar, t_end)
+}
+
+/// `dae` from `start` by `code` (Radau at `rtol = atol = tol`, or the BDF with the table's
+/// `scalar` options), each told the `index` of every unknown.
+#[allow(clippy::too_many_arguments)]
+fn indexed_run<const N: usize, D: ImplicitDae>(
+    code: Code,
+    dae: D,
+    start: (&[f64], &[f64]),
+    index: Vec<u8>,
+    tol: f64,
+    scalar: &bdf::Options,
+    t_end: f64,
+) -> Result<Run, String> {
     match code {
         Code::Radau => {
             let opts = radau::Options {
                 index,
                 ..radau::Options::with_tolerances(tol, tol)
             };
-            radau_run::<N, _>(s, (&y0, &yp0), opts, t_end)
+            radau_run::<N, _>(dae, start, opts, t_end)
         }
         _ => {
             let opts = bdf::Options {
                 index,
                 ..scalar.clone()
             };
-            bdf_run::<N, _>(s, (&y0, &yp0), opts, t_end)
+            bdf_run::<N, _>(dae, start, opts, t_end)
         }
     }
 }
@@ -660,22 +675,7 @@ fn main() {
             });
             row(Problem::AscherPetzold, k, code, &ap_ref, &[0, 1], || {
                 let y0 = (&py0[..], &pyp0[..]);
-                match code {
-                    Code::Radau => {
-                        let opts = radau::Options {
-                            index: AP_INDEX.to_vec(),
-                            ..radau::Options::with_tolerances(tol, tol)
-                        };
-                        radau_run::<3, _>(ap, y0, opts, AP_T_END)
-                    }
-                    _ => {
-                        let opts = bdf::Options {
-                            index: AP_INDEX.to_vec(),
-                            ..scalar.clone()
-                        };
-                        bdf_run::<3, _>(ap, y0, opts, AP_T_END)
-                    }
-                }
+                indexed_run::<3, _>(code, ap, y0, AP_INDEX.to_vec(), tol, &scalar, AP_T_END)
             });
         }
         let fekete_score = |y: &[f64]| scd(y, &FEKETE_REF, &FEKETE_SCORED);
@@ -736,21 +736,9 @@ fn slider_crank_rows(k: i32, tol: f64, scalar: &bdf::Options) {
             code,
             &CRANK_REF,
             &CRANK_SCORED,
-            || match code {
-                Code::Radau => {
-                    let opts = radau::Options {
-                        index: crank_index(),
-                        ..radau::Options::with_tolerances(tol, tol)
-                    };
-                    radau_run::<24, _>(SliderCrank, start, opts, CRANK_T_END)
-                }
-                _ => {
-                    let opts = bdf::Options {
-                        index: crank_index(),
-                        ..scalar.clone()
-                    };
-                    bdf_run::<24, _>(SliderCrank, start, opts, CRANK_T_END)
-                }
+            || {
+                let index = crank_index();
+                indexed_run::<24, _>(code, SliderCrank, start, index, tol, scalar, CRANK_T_END)
             },
         );
     }
