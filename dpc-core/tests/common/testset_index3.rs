@@ -320,9 +320,7 @@ impl Andrews {
         }
         out
     }
-}
 
-impl Andrews {
     /// The derivatives of [`Self::dynamics`], `M(q) w - f(q, v) + G(q)^T lambda`, in `q` and in
     /// `v` (row `i`, column `j`), differentiated by hand: `d(M w)/dq` from the three angles `M`
     /// depends on, `-df/dq` and `-df/dv` of the forces (the spring's through `gamma` by the
