@@ -645,6 +645,17 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         }
     }
 
+    /// The time at which the model is evaluated for the step's start `t_n`: the right limit
+    /// `t_n⁺` (the next float), as the step covers `(t_n, t_n + h]`. A model that is smooth in
+    /// `t` cannot tell the two apart; one with a corner or jump at `t_n` (a pulse input, a
+    /// stop time set at a discontinuity) is evaluated on the piece the step integrates, not
+    /// on the one that ended there. The left piece there made the error estimate carry the
+    /// jump (a term proportional to `h` that each rejection shrinks by at most the
+    /// controller's ratio) and fail the step.
+    fn start_limit(&self) -> f64 {
+        self.t.next_up()
+    }
+
     fn step_internal(&mut self) -> Result<(), RadauError> {
         let mut h = self.h;
         if let Some(ts) = self.tstop {
@@ -655,6 +666,8 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         }
         let mut newton_failures = 0;
         let mut error_failures = 0;
+        // The step size and error of the last error-test failure of this step.
+        let mut last_failure: Option<(f64, f64)> = None;
         let mut rejected = false;
         loop {
             h = h.min(self.opts.max_step);
@@ -670,7 +683,8 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 });
             }
             if self.need_jacobian && !self.sm.current {
-                self.sm.evaluate(&self.dae, self.t, &self.y, &self.yp);
+                self.sm
+                    .evaluate(&self.dae, self.start_limit(), &self.y, &self.yp);
                 self.stats.jacobian_evaluations += 1;
             }
             self.update_weights(h)?;
@@ -758,12 +772,13 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 }
             };
             let refine = self.nst() == 0 || rejected;
+            let t_start = self.start_limit();
             let err = match estimate::estimate(
                 &self.dae,
                 &mut self.sm,
                 &self.tab,
                 &mut self.stats,
-                self.t,
+                t_start,
                 h,
                 &self.y,
                 &self.stages,
@@ -793,6 +808,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             }
             self.stats.error_test_failures += 1;
             error_failures += 1;
+            let h_failed = h;
             if error_failures >= self.opts.max_error_test_failures {
                 return Err(RadauError::RepeatedFailures {
                     t: self.t,
@@ -804,8 +820,9 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             h = if self.nst() == 0 && !self.carried_step {
                 0.1 * h
             } else {
-                h / Controller::quotient(&self.opts, err, iterations)
+                h / Controller::rejection_quotient(&self.opts, err, iterations, last_failure, h)
             };
+            last_failure = Some((h_failed, err));
             rejected = true;
             self.need_jacobian = true;
         }
