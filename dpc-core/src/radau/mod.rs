@@ -16,8 +16,14 @@
 //!   the caller's [`LinearSolver`], the complex one in a dense complex LU (faer);
 //! * `estimate`: the embedded error estimate filtered through the real matrix, with the extra
 //!   solve on the first step and after rejections;
-//! * `control`: Gustafsson's predictive step-size controller;
+//! * `control`: Gustafsson's predictive step-size controller; after a step's second
+//!   error-test failure the rejection uses the exponent the estimate was seen to fall with,
+//!   where it fell slower than `h^4` (a fast transient or a corner inside the step);
 //! * `dense`: the collocation polynomial as dense output and as Newton's starting guess;
+//! * the model is evaluated for a step's start at the right limit `t_n⁺`, the piece the step
+//!   integrates (a step that starts at a stop time on a corner of the inputs);
+//! * a diverging Newton iteration cuts the step to where its contraction would be a half
+//!   (between a tenth and RADAU5's half);
 //! * the Jacobian is kept while Newton contracts fast (rate at most
 //!   [`Options::jacobian_reuse_rate`]); the step size, and with it the factorisations, is kept
 //!   when the proposed change is small ([`Options::keep_step_window`]).
