@@ -15,7 +15,13 @@ use super::{zero_row, FactorError, LinearSolver};
 #[derive(Debug, Clone)]
 pub struct NalgebraLu<const N: usize> {
     matrix: SMatrix<f64, N, N>,
+    /// The factors (from [`unblocked::SPLIT_FROM`] on: `L` below the diagonal, zeros on and
+    /// above it).
     lu: SMatrix<f64, N, N>,
+    /// From [`unblocked::SPLIT_FROM`] on: `U` above the diagonal (zeros on and below it).
+    upper: SMatrix<f64, N, N>,
+    /// From [`unblocked::SPLIT_FROM`] on: the diagonal of `U`.
+    diag: [f64; N],
     pivots: [usize; N],
     factored: bool,
 }
@@ -26,6 +32,8 @@ impl<const N: usize> NalgebraLu<N> {
         Self {
             matrix: SMatrix::zeros(),
             lu: SMatrix::zeros(),
+            upper: SMatrix::zeros(),
+            diag: [0.0; N],
             pivots: [0; N],
             factored: false,
         }
@@ -52,9 +60,17 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
     fn factor(&mut self) -> Result<(), FactorError> {
         self.factored = false;
         self.lu = self.matrix;
-        if let Err(SingularPivot { column }) =
+        let factored = if N >= unblocked::SPLIT_FROM {
+            unblocked::factor_split_fixed::<N>(
+                self.lu.as_mut_slice(),
+                &mut self.pivots,
+                self.upper.as_mut_slice(),
+                &mut self.diag,
+            )
+        } else {
             unblocked::factor(self.lu.as_mut_slice(), N, &mut self.pivots)
-        {
+        };
+        if let Err(SingularPivot { column }) = factored {
             let m = &self.matrix;
             return Err(FactorError::Singular {
                 column: Some(column),
@@ -73,7 +89,17 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
 
     fn solve_in_place(&mut self, b: &mut [f64]) {
         if self.factored {
-            unblocked::solve_fixed::<N>(self.lu.as_slice(), &self.pivots, b);
+            if N >= unblocked::SPLIT_FROM {
+                unblocked::solve_split_fixed::<N>(
+                    self.lu.as_slice(),
+                    self.upper.as_slice(),
+                    &self.diag,
+                    &self.pivots,
+                    b,
+                );
+            } else {
+                unblocked::solve(self.lu.as_slice(), N, &self.pivots, b);
+            }
         }
     }
 }
