@@ -37,9 +37,13 @@
  * excluded from the error test, scored on y1: the same equations and exact Jacobians as
  * dpc-core/tests/common/nand.rs and pump.rs, integrated from corner to corner of the input
  * pulses (IDASetStopTime at each, continuing).
- * rtol = atol = 1e-k except for Robertson and the charge pump; k = 4, 6, 8. A failed solve is printed as such, with
- * IDA's return flag and the time it stopped at. Times: the thread's CPU time per solve, the
- * mean over repetitions filling at least 0.3 s (at least 3).
+ * The Test Set's water tube system (water.f, 49 unknowns, index 2, a laminar/turbulent switch in
+ * every pipe) to t = 17 h with the Test Set driver's atol (1e6 rtol on the thirteen pressures),
+ * the eleven pressures of index 2 excluded from the error test, all 49 unknowns scored: the
+ * same equations and exact Jacobian as dpc-core/tests/common/water_tube.rs.
+ * rtol = atol = 1e-k except for Robertson, the charge pump and the water tube; k = 4, 6, 8.
+ * A failed solve is printed as such, with IDA's return flag and the time it stopped at. Times:
+ * the thread's CPU time per solve, the mean over repetitions filling at least 0.3 s (at least 3).
  *
  *   ida_peer                 # every row
  *   ida_peer Akzo            # the rows of the problems whose label contains the argument
