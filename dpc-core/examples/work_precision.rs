@@ -29,6 +29,8 @@
 //! * the Test Set's water tube system (49 unknowns, index 2, a laminar/turbulent switch in every
 //!   pipe, to `t = 17 h`; the driver's `atol`, `1e6 rtol` on the pressures; the eleven pressures
 //!   of index 2 excluded from the BDF's error test; all 49 unknowns scored),
+//! * the Test Set's wheelset (17 unknowns, index 2, creep forces, to `t = 10`; the two normal
+//!   forces of index 2 excluded from the BDF's error test; all 17 unknowns scored),
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
@@ -64,6 +66,8 @@ mod testset_index1;
 mod testset_index3;
 #[path = "../tests/common/water_tube.rs"]
 mod water_tube;
+#[path = "../tests/common/wheelset.rs"]
+mod wheelset;
 
 use dpc_core::bdf::{self, Bdf, HigherIndexControl, Tolerance};
 use dpc_core::linear_solver::{FaerDenseLu, LinearSolver, NalgebraLu};
@@ -162,11 +166,12 @@ enum Problem {
     Nand,
     Pump,
     WaterTube,
+    Wheelset,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 15] = [
+    const ALL: [Self; 16] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -182,6 +187,7 @@ impl Problem {
         Self::Nand,
         Self::Pump,
         Self::WaterTube,
+        Self::Wheelset,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -202,6 +208,7 @@ impl Problem {
             Self::Nand => "NAND gate (index 0, C(y); y5)",
             Self::Pump => "charge pump (index 2; y1)",
             Self::WaterTube => "water tube (index 2; all)",
+            Self::Wheelset => "wheelset (index 2; all)",
         }
     }
 }
@@ -729,6 +736,7 @@ fn main() {
         slider_crank_rows(k, tol, &scalar);
         circuit_rows(k, tol);
         water_tube_rows(k, tol);
+        wheelset_rows(k, tol, &scalar);
     }
 }
 
@@ -795,5 +803,21 @@ fn water_tube_rows(k: i32, tol: f64) {
                 }
             },
         );
+    }
+}
+
+/// The wheelset's rows at `rtol = atol = tol` (label `1e-k`): Radau and the BDF, both with the
+/// index of every unknown (the BDF excludes the two normal forces of index 2 from its error
+/// test).
+fn wheelset_rows(k: i32, tol: f64, scalar: &bdf::Options) {
+    use wheelset::{Wheelset, WHEEL_DIM, WHEEL_INDEX, WHEEL_REF, WHEEL_T_END};
+    let (y0, yp0) = Wheelset::initial();
+    let all: Vec<usize> = (0..WHEEL_DIM).collect();
+    for code in [Code::Radau, Code::Bdf] {
+        row(Problem::Wheelset, k, code, &WHEEL_REF, &all, || {
+            let start = (&y0[..], &yp0[..]);
+            let index = WHEEL_INDEX.to_vec();
+            indexed_run::<WHEEL_DIM, _>(code, Wheelset, start, index, tol, scalar, WHEEL_T_END)
+        });
     }
 }
