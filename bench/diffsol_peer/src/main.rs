@@ -41,6 +41,9 @@
 //! problems (the algebraic rows do not contain the eleven pressures of index 2); from the
 //! consistent `(y0, y0')` it solves it, with those pressures in its error test at their plain
 //! weight (which the driver's `atol` on the pressures, about `10 tol` relative, makes loose).
+//!
+//! The Test Set's wheelset (row 16 of dpc-core's table) has no row here: its mass matrix holds
+//! `cos(phi)` and `sin(phi)` of the roll angle, which a constant mass matrix cannot express.
 
 #[path = "../../../dpc-core/tests/common/bdf_problems.rs"]
 mod bdf_problems;
