@@ -37,9 +37,17 @@
  * excluded from the error test, scored on y1: the same equations and exact Jacobians as
  * dpc-core/tests/common/nand.rs and pump.rs, integrated from corner to corner of the input
  * pulses (IDASetStopTime at each, continuing).
- * rtol = atol = 1e-k except for Robertson and the charge pump; k = 4, 6, 8. A failed solve is printed as such, with
- * IDA's return flag and the time it stopped at. Times: the thread's CPU time per solve, the
- * mean over repetitions filling at least 0.3 s (at least 3).
+ * The Test Set's water tube system (water.f, 49 unknowns, index 2, a laminar/turbulent switch in
+ * every pipe) to t = 17 h with the Test Set driver's atol (1e6 rtol on the thirteen pressures),
+ * the eleven pressures of index 2 excluded from the error test, all 49 unknowns scored: the
+ * same equations and exact Jacobian as dpc-core/tests/common/water_tube.rs.
+ * The Test Set's wheelset (wheel.f, 17 unknowns, index 2, creep forces) to t = 10, the two
+ * normal forces of index 2 excluded from the error test, all 17 unknowns scored: the same
+ * equations and iteration matrix (dF/dy' exact, central differences in y) as
+ * dpc-core/tests/common/wheelset.rs.
+ * rtol = atol = 1e-k except for Robertson, the charge pump and the water tube; k = 4, 6, 8.
+ * A failed solve is printed as such, with IDA's return flag and the time it stopped at. Times:
+ * the thread's CPU time per solve, the mean over repetitions filling at least 0.3 s (at least 3).
  *
  *   ida_peer                 # every row
  *   ida_peer Akzo            # the rows of the problems whose label contains the argument
@@ -1142,6 +1150,291 @@ static int pump_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector 
   return 0;
 }
 
+/* The Test Set's water tube system (water.f; index 2, 49 unknowns: 18 flows, 18 friction
+ * factors, the pressures p5, p8 of the two buffered nodes and the eleven other pressures, of
+ * index 2), as dpc-core/tests/common/water_tube.rs: F = M y' - f(t, y), the laminar/turbulent
+ * switch of every pipe at Re = 2300, the same exact iteration matrix. */
+#define WT_NU 1.31e-6
+#define WT_G 9.8
+#define WT_RHO 1.0e3
+#define WT_RCRIT 2.3e3
+#define WT_LENGTH 1.0e3
+#define WT_K 2.0e-4
+#define WT_D 1.0
+#define WT_B 2.0e2
+#define WT_A (3.141592653589793 * WT_D * WT_D / 4.0)
+#define WT_C (WT_B / (WT_RHO * WT_G))
+#define WT_V (WT_RHO * WT_LENGTH / WT_A)
+#define WT_LAMBDA0 0.47519404529185289807e-1
+static const int WT_PIPE_I[18] = {1, 2, 2, 3, 3, 4, 5, 6, 7, 7, 8, 8, 9, 11, 11, 12, 12, 13};
+static const int WT_PIPE_J[18] = {2, 3, 6, 4, 5, 5, 10, 5, 4, 8, 5, 10, 8, 9, 12, 7, 8, 11};
+
+/* The unknown holding node n's pressure (n = 1..13), also the row of its flow balance. */
+static int wt_p(int n) {
+  if (n == 5) return 36;
+  if (n == 8) return 37;
+  if (n <= 4) return 37 + n;
+  if (n <= 7) return 36 + n;
+  return 35 + n;
+}
+
+/* One pipe's friction term and Colebrook residual R at (phi, lambda), and
+ * d = (dfriction/dphi, dfriction/dlambda, dR/dphi, dR/dlambda). */
+static void wt_pipe(double phi, double lambda, double *friction, double *r, double d[4]) {
+  double s = sqrt(lambda), re = fabs(phi * WT_D / (WT_NU * WT_A));
+  int turbulent = re > WT_RCRIT;
+  double rr = turbulent ? re : WT_RCRIT;
+  double u = 2.0 * WT_K / WT_D + 18.7 / (rr * s);
+  double dlog = 2.0 / (log(10.0) * u);
+  *r = 1.0 / s - 1.74 + 2.0 * log10(u);
+  d[3] = -1.0 / (2.0 * lambda * s) * (1.0 + dlog * 18.7 / rr);
+  if (turbulent) {
+    double q = WT_RHO * WT_LENGTH / (WT_A * WT_A * WT_D);
+    double dre = (phi > 0.0 ? 1.0 : phi < 0.0 ? -1.0 : 0.0) * WT_D / (WT_NU * WT_A);
+    *friction = lambda * q * phi * phi;
+    d[0] = 2.0 * lambda * q * phi;
+    d[1] = q * phi * phi;
+    d[2] = dlog * (-18.7 / (re * re * s)) * dre;
+  } else {
+    double q = 32.0 * WT_NU * WT_RHO * WT_LENGTH / (WT_A * WT_D * WT_D);
+    *friction = q * phi;
+    d[0] = q; d[1] = 0.0; d[2] = 0.0;
+  }
+}
+
+static int water_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp), *r = N_VGetArrayPointer(rr);
+  (void)ud;
+  /* A negative friction factor: a recoverable error (the Test Set's ierr = -1). */
+  for (int e = 0; e < 18; e++)
+    if (y[18 + e] < 0.0) return 1;
+  double th = t / 3600.0, s = 1.0 - cos(exp(-th) - 1.0);
+  for (int n = 1; n <= 13; n++) r[wt_p(n)] = 0.0;
+  r[wt_p(1)] = -s / 200.0;
+  r[wt_p(13)] = -s / 80.0;
+  r[wt_p(10)] = th * th * (3.0 * th * th - 92.0 * th + 720.0) / 1e6;
+  for (int e = 0; e < 18; e++) {
+    int i = WT_PIPE_I[e], j = WT_PIPE_J[e];
+    double friction, res, d[4];
+    wt_pipe(y[e], y[18 + e], &friction, &res, d);
+    r[e] = WT_V * p[e] - (y[wt_p(i)] - y[wt_p(j)] - friction);
+    r[18 + e] = -res;
+    r[wt_p(i)] += y[e];
+    r[wt_p(j)] -= y[e];
+  }
+  r[wt_p(5)] += WT_C * p[wt_p(5)];
+  r[wt_p(8)] += WT_C * p[wt_p(8)];
+  return 0;
+}
+
+static int water_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
+                     void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
+  realtype *y = N_VGetArrayPointer(yy);
+  (void)t; (void)yp; (void)rr; (void)ud; (void)t1; (void)t2; (void)t3;
+  SUNMatZero(J);
+  for (int e = 0; e < 18; e++) {
+    int i = WT_PIPE_I[e], j = WT_PIPE_J[e], l = 18 + e;
+    double friction, res, d[4];
+    wt_pipe(y[e], y[l], &friction, &res, d);
+    SM_ELEMENT_D(J, e, e) = cj * WT_V + d[0];
+    SM_ELEMENT_D(J, e, l) = d[1];
+    SM_ELEMENT_D(J, e, wt_p(i)) = -1.0;
+    SM_ELEMENT_D(J, e, wt_p(j)) = 1.0;
+    SM_ELEMENT_D(J, l, e) = -d[2];
+    SM_ELEMENT_D(J, l, l) = -d[3];
+    SM_ELEMENT_D(J, wt_p(i), e) = 1.0;
+    SM_ELEMENT_D(J, wt_p(j), e) = -1.0;
+  }
+  SM_ELEMENT_D(J, wt_p(5), wt_p(5)) = cj * WT_C;
+  SM_ELEMENT_D(J, wt_p(8), wt_p(8)) = cj * WT_C;
+  return 0;
+}
+
+/* The Test Set's wheelset (wheel.f, reswhs and its routines; index-2 formulation, straight track,
+ * no propulsion, no chassis mass), as dpc-core/tests/common/wheelset.rs: 17 unknowns
+ * (p, v, beta, q = (psi_R, xi_R, psi_L, xi_L), lambda in 1e4 N), F = M y' - f; IDA's own
+ * difference-quotient Jacobian. A derailment or a singular contact geometry: a recoverable
+ * error. */
+#define WH_MR 16.08
+#define WH_G 9.81
+#define WH_V 30.0
+#define WH_RN0 0.1
+#define WH_LI1 0.0605
+#define WH_LI2 0.366
+#define WH_MU 0.12
+#define WH_XL 0.19
+#define WH_CX 6400.0
+#define WH_CZ 6400.0
+#define WH_E 1.3537956
+#define WH_GG 0.7115218
+#define WH_SIGMA 0.28
+#define WH_GM 7.92e10
+#define WH_PI 3.1415926
+#define WH_C11 4.72772197
+#define WH_C22 4.27526987
+#define WH_C23 1.97203505
+#define WH_DELTA0 0.0262
+#define WH_AR 0.1506
+#define WH_RS 0.06
+#define WH_EPS 0.00001
+
+static double wh_sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
+
+/* Wheel (cone) and rail (circle) profiles: value, first and second derivative; 0 off them. */
+static int wh_wheel(double xi, double *r, double *dr, double *d2r) {
+  double a = fabs(xi), ta = tan(WH_DELTA0);
+  if (0.0 >= a || a >= 4.0) return 0;
+  *r = WH_RN0 + ta * (WH_AR - a); *dr = -ta * wh_sign(xi); *d2r = 0.0;
+  return 1;
+}
+static int wh_rail(double x, double *g, double *dg, double *d2g) {
+  double sir = sin(WH_DELTA0) * WH_RS, a = fabs(x);
+  if (WH_AR + sir + WH_RS - WH_EPS <= a || WH_AR + sir - WH_RS + WH_EPS >= a) return 0;
+  double t = sqrt(WH_RS * WH_RS - (a - WH_AR - sir) * (a - WH_AR - sir));
+  *g = t - WH_RN0 - cos(WH_DELTA0) * WH_RS;
+  *dg = wh_sign(x) * (-a + WH_AR + sir) / t;
+  *d2g = -WH_RS * WH_RS / (t * t * t);
+  return 1;
+}
+
+static void wh_constm(double xr, double rx, double dgx, double sit, double cot, double sip,
+                      double cop, double sis, double cos_, double q[5]) {
+  q[0] = dgx; q[1] = -1.0; q[2] = 0.0;
+  q[3] = dgx * (rx * (-cot * sis - cos_ * sip * sit) - cop * sit * xr);
+  q[4] = -(cos_ * rx * sip) - cop * xr + dgx * (cop * cos_ * cot * rx - cot * sip * xr);
+}
+
+/* The creep force of one contact (s = 1 left, -1 right) in the nominal frame. */
+static void wh_creep(const double *y, double xr, double rx, double drx, double d2rx, double dgx,
+                     double d2gx, double sis, double cos_, double delta, double fn, double s,
+                     double out[3]) {
+  double tetap = y[8], phip = y[9], w = WH_V / WH_RN0 + y[10];
+  double sip = sin(y[4]), cop = cos(y[4]), sid = sin(delta), cod = cos(delta);
+  double sit = sin(y[3] / cod), cot = cos(y[3] / cod);
+  double rr = rx * sqrt(1.0 + drx * drx);
+  double rhog = -d2gx / pow(1.0 + dgx * dgx, 1.5), rhor = d2rx / pow(1.0 + drx * drx, 1.5);
+  double a = 0.5 / rr, b = 0.5 * (rhog + rhor);
+  double cc = cbrt((fabs(fn) * 3.0 * (1.0 - WH_SIGMA) * WH_E) /
+                   (2.0 * WH_PI * (a + b) * WH_GM * sqrt(WH_GG)));
+  double vk1 = -w * rx * (sit * cos_ + cot * sip * sis) + y[5] -
+               tetap * (rx * (sit * sip * cos_ + cot * sis) + xr * sit * cop) -
+               phip * cot * (xr * sip - rx * cop * cos_);
+  double vk2 = w * rx * cop * sis + y[6] + phip * (xr * cop + rx * sip * cos_);
+  double vk3 = -w * rx * (cot * cos_ - sit * sip * sis) + WH_V + y[7] -
+               tetap * (xr * cot * cop + rx * (cot * sip * cos_ - sit * sis)) +
+               phip * sit * (xr * sip - rx * cop * cos_);
+  double vk4 = vk1 - 2.0 * y[5], vk5 = vk2 - 2.0 * y[6], vk6 = vk3 - 2.0 * y[7] - 2.0 * WH_V;
+  double vr = 0.5 * sqrt(vk4 * vk4 + vk5 * vk5 + vk6 * vk6);
+  double nux = (sit * vk1 + cot * vk3) / vr;
+  double nuy = (cot * cod * vk1 + s * sid * vk2 - sit * cod * vk3) / vr;
+  double phis = (-s * sid * w + cod * tetap) / vr;
+  double wt = WH_MU * fn;
+  double tx = -wt * tanh(WH_GM * cc * cc * WH_C11 * nux / wt);
+  double ty = -wt * tanh(WH_GM * cc * cc * WH_C22 * nuy / wt + WH_GM * cc * cc * cc * WH_C23 * phis / wt);
+  double sqt = sqrt(tx * tx + ty * ty);
+  if (sqt * sqt > wt * wt) { tx *= fabs(wt) / sqt; ty *= fabs(wt) / sqt; }
+  out[0] = sit * tx + cot * cod * ty; out[1] = s * sid * ty; out[2] = cot * tx - sit * cod * ty;
+}
+
+/* f of reswhs at y (this fixture's order), in its rows' order; 0 at a derailment. */
+static int wh_forces(const double *y, double *f) {
+  double xx = y[0], zz = y[2], teta = y[3], phi = y[4], tetap = y[8], phip = y[9], betap = y[10];
+  double psir = y[11], xrr = y[12], psil = y[13], xrl = y[14], e1 = y[15] * 1e4, e2 = y[16] * 1e4;
+  double omega = WH_V / WH_RN0;
+  double sit = sin(teta), cot = cos(teta), sip = sin(phi), cop = cos(phi);
+  double sisl = sin(psil), cosl = cos(psil), sisr = sin(psir), cosr = cos(psir);
+  double rxl, drxl, d2rxl, rxr, drxr, d2rxr, gxl, dgxl, d2gxl, gxr, dgxr, d2gxr;
+  if (!wh_wheel(xrl, &rxl, &drxl, &d2rxl)) return 0;
+  double xgl = xx + xrl * cot * cop + rxl * (cot * sip * cosl - sit * sisl);
+  if (!wh_rail(xgl, &gxl, &dgxl, &d2gxl)) return 0;
+  if (!wh_wheel(xrr, &rxr, &drxr, &d2rxr)) return 0;
+  double xgr = xx + xrr * cot * cop + rxr * (cot * sip * cosr - sit * sisr);
+  if (!wh_rail(xgr, &gxr, &dgxr, &d2gxr)) return 0;
+  double ql[5], qr[5];
+  wh_constm(xrl, rxl, dgxl, sit, cot, sip, cop, sisl, cosl, ql);
+  wh_constm(xrr, rxr, dgxr, sit, cot, sip, cop, sisr, cosr, qr);
+  double deltal = atan(((drxl * cop - sip * cosl) * cot + sisl * sit) / (-drxl * sip - cosl * cop));
+  double deltar = atan(((drxr * cop - sip * cosr) * cot + sisr * sit) / (drxr * sip + cosr * cop));
+  double sidl = sin(deltal), codl = cos(deltal), sidr = sin(deltar), codr = cos(deltar);
+  double deter = -sidl * codr - sidr * codl;
+  if (fabs(deter) < 1e-8) return 0;
+  double w1 = ql[0] * e1 + qr[0] * e2, w2 = ql[1] * e1 + qr[1] * e2;
+  double fnl = (codr * w1 - sidr * w2) / deter, fnr = (-codl * w1 - sidl * w2) / deter;
+  double tl[3], tr[3];
+  wh_creep(y, xrl, rxl, drxl, d2rxl, dgxl, d2gxl, sisl, cosl, deltal, fnl, 1.0, tl);
+  wh_creep(y, xrr, rxr, drxr, d2rxr, dgxr, d2gxr, sisr, cosr, deltar, fnr, -1.0, tr);
+  double fq3 = -2.0 * WH_CZ * zz, lm2 = -2.0 * WH_XL * WH_XL * WH_CZ * teta;
+  for (int i = 0; i < 5; i++) f[i] = y[5 + i];
+  f[5] = tl[0] + tr[0] + ql[0] * e1 + qr[0] * e2 - 2.0 * WH_CX * xx;
+  f[6] = tl[1] + tr[1] - WH_MR * WH_G + ql[1] * e1 + qr[1] * e2;
+  f[7] = tl[2] + tr[2] + fq3 + ql[2] * e1 + qr[2] * e2;
+  w1 = -(xrl * sit + rxl * sisl * cot * cop) * tl[0] - rxl * sisl * sip * tl[1] +
+       (-xrl * cot + rxl * sisl * sit * cop) * tl[2];
+  w2 = -(xrr * sit + rxr * sisr * cot * cop) * tr[0] - rxr * sisr * sip * tr[1] +
+       (-xrr * cot + rxr * sisr * sit * cop) * tr[2];
+  f[8] = WH_LI2 * tetap * phip * sip - WH_LI1 * (omega + betap) * phip -
+         (WH_LI1 - WH_LI2) * tetap * sip * phip + w1 + w2 + cop * lm2 + ql[3] * e1 + qr[3] * e2;
+  w1 = -(xrl * cot * sip - rxl * cosl * cot * cop) * tl[0] + (xrl * cop + rxl * cosl * sip) * tl[1] +
+       (xrl * sit * sip - rxl * cosl * sit * cop) * tl[2];
+  w2 = -(xrr * cot * sip - rxr * cosr * cot * cop) * tr[0] + (xrr * cop + rxr * cosr * sip) * tr[1] +
+       (xrr * sit * sip - rxr * cosr * sit * cop) * tr[2];
+  f[9] = WH_LI1 * (omega + betap) * tetap * cop + (WH_LI1 - WH_LI2) * tetap * sip * tetap * cop +
+         w1 + w2 + ql[4] * e1 + qr[4] * e2;
+  w1 = -rxl * (cosl * sit + sisl * cot * sip) * tl[0] + rxl * sisl * cop * tl[1] -
+       rxl * (cosl * cot - sisl * sit * sip) * tl[2];
+  w2 = -rxr * (cosr * sit + sisr * cot * sip) * tr[0] + rxr * sisr * cop * tr[1] -
+       rxr * (cosr * cot - sisr * sit * sip) * tr[2];
+  f[10] = -WH_LI1 * tetap * phip * cop + w1 + w2 + sip * lm2;
+  f[11] = 0.0; f[12] = 0.0;
+  for (int i = 0; i < 5; i++) { f[11] += ql[i] * y[5 + i]; f[12] += qr[i] * y[5 + i]; }
+  f[13] = dgxl * (drxl * sip + cop * cosl) + drxl * cot * cop - cot * sip * cosl + sit * sisl;
+  f[14] = drxl * sit * cop - sit * sip * cosl - cot * sisl;
+  f[15] = dgxr * (drxr * sip + cop * cosr) + drxr * cot * cop - cot * sip * cosr + sit * sisr;
+  f[16] = drxr * sit * cop - sit * sip * cosr - cot * sisr;
+  return 1;
+}
+
+static int wheel_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp), *r = N_VGetArrayPointer(rr);
+  double f[17];
+  (void)t; (void)ud;
+  if (!wh_forces(y, f)) return 1;
+  for (int i = 0; i < 5; i++) r[i] = p[i] - f[i];
+  for (int i = 5; i < 8; i++) r[i] = WH_MR * p[i] - f[i];
+  r[8] = WH_LI2 * cos(y[4]) * p[8] - f[8];
+  r[9] = WH_LI2 * p[9] - f[9];
+  r[10] = WH_LI1 * sin(y[4]) * p[8] + WH_LI1 * p[10] - f[10];
+  for (int i = 11; i < 17; i++) r[i] = -f[i];
+  return 0;
+}
+
+/* The iteration matrix of dpc-core's fixture: dF/dy' exact, dF/dy by central differences of
+ * the residual (step cbrt(eps) max(|y_j|, 1e-3)). */
+static int wheel_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
+                     void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
+  realtype *y = N_VGetArrayPointer(yy), *up = N_VGetArrayPointer(t1), *down = N_VGetArrayPointer(t2);
+  double h0 = cbrt(2.220446049250313e-16);
+  (void)rr; (void)t3;
+  SUNMatZero(J);
+  for (int i = 0; i < 5; i++) SM_ELEMENT_D(J, i, i) = cj;
+  for (int i = 5; i < 8; i++) SM_ELEMENT_D(J, i, i) = cj * WH_MR;
+  SM_ELEMENT_D(J, 8, 8) = cj * WH_LI2 * cos(y[4]);
+  SM_ELEMENT_D(J, 9, 9) = cj * WH_LI2;
+  SM_ELEMENT_D(J, 10, 8) = cj * WH_LI1 * sin(y[4]);
+  SM_ELEMENT_D(J, 10, 10) = cj * WH_LI1;
+  for (int j = 0; j < 17; j++) {
+    double yj = y[j], h = h0 * fmax(fabs(yj), 1e-3);
+    y[j] = yj + h;
+    int bad = wheel_res(t, yy, yp, t1, ud);
+    y[j] = yj - h;
+    bad |= wheel_res(t, yy, yp, t2, ud);
+    y[j] = yj;
+    if (bad) return 1;
+    for (int i = 0; i < 17; i++) SM_ELEMENT_D(J, i, j) += (up[i] - down[i]) / (2.0 * h);
+  }
+  return 0;
+}
+
 /* The stop times of a problem run from corner to corner of its inputs (the last is T_END):
  * their number, 0 for the problems solved in one call. */
 static int breaks(int problem, double *tb);
@@ -1165,7 +1458,7 @@ static double now(void) {
 }
 
 enum { ROBERTSON, AMPLIFIER, PENDULUM, ANDREWS, ANDREWS_GGL, CAR, CAR_GGL, AKZO, HIRES, AP,
-       FEKETE, CRANK, NAND, PUMP, PROBLEMS };
+       FEKETE, CRANK, NAND, PUMP, WATER, WHEEL, PROBLEMS };
 static const char *NAMES[PROBLEMS] = {
     "Robertson (index 1)", "transistor amplifier (index 1)", "pendulum (index 3; x, y)",
     "Andrews (index 3; y1..y7)", "Andrews (stabilised index 2; y1..y7)",
@@ -1173,12 +1466,13 @@ static const char *NAMES[PROBLEMS] = {
     "chemical Akzo Nobel (index 1; all)", "HIRES (ODE; all)",
     "Ascher-Petzold (index 2; u1, u2)", "Fekete, 20 points (index 2; p)",
     "slider crank (index 2; y1..y7)", "NAND gate (index 0, C(y); y5)",
-    "charge pump (index 2; y1)"};
-static const int DIM[PROBLEMS] = {3, 8, 5, 27, 33, 10, 12, 6, 8, 3, 160, 24, 14, 9};
+    "charge pump (index 2; y1)", "water tube (index 2; all)",
+    "wheelset (index 2; all)"};
+static const int DIM[PROBLEMS] = {3, 8, 5, 27, 33, 10, 12, 6, 8, 3, 160, 24, 14, 9, 49, 17};
 /* Leading unknowns of index 1 (the rest are excluded from the error test); 0: none excluded. */
-static const int DIFFERENTIAL[PROBLEMS] = {0, 0, 2, 14, 14, 8, 8, 0, 0, 2, 120, 14, 0, 8};
+static const int DIFFERENTIAL[PROBLEMS] = {0, 0, 2, 14, 14, 8, 8, 0, 0, 2, 120, 14, 0, 8, 38, 15};
 static const double T_END[PROBLEMS] = {1e11, 0.2, 3.0, 0.03, 0.03, 3.0, 3.0, 180.0, 321.8122, 1.0,
-                                        1000.0, 0.1, 80.0, 1200e-9};
+                                        1000.0, 0.1, 80.0, 1200e-9, 17.0 * 3600.0, 10.0};
 /* The relative digits over the first n unknowns (every problem but the NAND gate, scored on
  * y5 alone, scores a leading block). */
 static double score(int problem, const double *y, const double *ref, int n) {
@@ -1279,6 +1573,26 @@ static void initial(int problem, double rtol, double *y, double *p, double *a) {
     for (int i = 0; i < 5; i++) a[i] = 1e-6 * rtol * atol_scale;
     break;
   }
+  case WATER:
+    /* No flow, every pressure 109 800 Pa, the laminar friction factor, y' = 0; the Test Set
+     * driver's atol: 1e6 rtol on the pressures. */
+    for (int i = 18; i < 36; i++) y[i] = WT_LAMBDA0;
+    for (int i = 36; i < 49; i++) { y[i] = 109800.0; a[i] = 1e6 * rtol * atol_scale; }
+    break;
+  case WHEEL: {
+    /* The Test Set's consistent initial values. */
+    static const double y0[17] = {0.14941e-02, 0.40089e-06, 0.11241e-05, -0.28573e-03,
+                                  0.26459e-03, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                                  -7.4122380357667139e-06, -0.1521364296121248,
+                                  7.5634406395172940e-06, 0.1490635714733819, -8.3593e-3,
+                                  -7.4144e-3};
+    static const double p0[6] = {-1.975258894011285, -1.0898297102811276e-03,
+                                 7.8855083626142589e-02, -5.533362821731549,
+                                 -0.3487021489546511, -2.132968724380927};
+    for (int i = 0; i < 17; i++) y[i] = y0[i];
+    for (int i = 0; i < 6; i++) p[5 + i] = p0[i];
+    break;
+  }
   }
 }
 
@@ -1308,10 +1622,12 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
   static IDAResFn const RES[PROBLEMS] = {rober_res, amp_res, pend_res, andrews_res,
                                          andrews_ggl_res, car_res, car_ggl_res, akzo_res,
                                          hires_res, ap_res, fekete_res, crank_res,
-                                         nand_res, pump_res};
+                                         nand_res, pump_res, water_res,
+                                         wheel_res};
   static IDALsJacFn const JAC[PROBLEMS] = {rober_jac, amp_jac, pend_jac, NULL, NULL,
                                            NULL, NULL, akzo_jac, hires_jac, ap_jac, fekete_jac,
-                                           crank_jac, nand_jac, pump_jac};
+                                           crank_jac, nand_jac, pump_jac, water_jac,
+                                           wheel_jac};
   int n = DIM[problem];
   Run run = {0};
   N_Vector yy = N_VNew_Serial(n, ctx), yp = N_VNew_Serial(n, ctx), atol = N_VNew_Serial(n, ctx);
@@ -1425,13 +1741,40 @@ int main(int argc, char **argv) {
       -0.2499999999999991e+1, -0.2500077409198803e+1};
   static const double pump_ref[9] = {0.1262800429876759e-12, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
                                      0.1522565920949845e-03};
+  /* The water tube at t = 17 h: the Test Set's reference (water.f). */
+  static const double water_ref[49] = {
+      0.2298488296477430e-002, 0.1188984650746585e-002, 0.1109503645730845e-002,
+      0.1589620100314825e-003, 0.1030022640715102e-002, 0.8710606306836165e-003,
+      0.3243571480903489e-002, 0.1109503645730845e-002, 0.7120986206521341e-003,
+      0.6414613963833099e-003, 0.9416978549524347e-003, 0.3403428519096511e-002,
+      0.2397639310739395e-002, 0.2397639310739395e-002, 0.3348581430454180e-002,
+      0.1353560017035444e-002, 0.1995021413418736e-002, 0.5746220741193575e-002,
+      0.4751940452918529e-001, 0.4751940452918529e-001, 0.4751940452918529e-001,
+      0.4751940452918529e-001, 0.4751940452918529e-001, 0.4751940452918529e-001,
+      0.4311196778792902e-001, 0.4751940452918529e-001, 0.4751940452918529e-001,
+      0.4751940452918529e-001, 0.4751940452918529e-001, 0.4249217433601160e-001,
+      0.4732336439609648e-001, 0.4732336439609648e-001, 0.4270002118868241e-001,
+      0.4751940452918529e-001, 0.4751940452918529e-001, 0.3651427026675656e-001,
+      0.1111268591478108e+006, 0.1111270045592387e+006, 0.1111271078730254e+006,
+      0.1111269851929858e+006, 0.1111269255355337e+006, 0.1111269322658045e+006,
+      0.1111269221703983e+006, 0.1111270121140691e+006, 0.1111274419515807e+006,
+      0.1111255158881087e+006, 0.1111278793439227e+006, 0.1111270995171642e+006,
+      0.1111298338971779e+006};
+  /* The wheelset at t = 10: the Test Set's reference (wheel.f, DASSL at 1e-9). */
+  static const double wheel_ref[17] = {
+      0.86355386965811e-02, 0.13038281022727e-04, -0.93635784016818e-04, -0.13642299804033e-01,
+      0.15292895005422e-02, -0.76985374142666e-01, -0.25151106429207e-03, 0.20541188079539e-02,
+      -0.23904837703692e+00, -0.13633468454173e-01, -0.24421377661131e+00,
+      -0.33666751972196e-03, -0.15949425684022e+00, 0.37839614386969e-03,
+      0.14173214964613e+00, -0.10124044903201e-01, -0.56285630573753e-02};
   double ap_ref[3] = {exp(1.0), exp(1.0), -exp(1.0)};
   double pend_ref[5];
   pend_reference(1.0, 3.0, pend_ref);
   const double *refs[PROBLEMS] = {rober_ref, amp_ref, pend_ref, andrews_ref, andrews_ref,
                                   car_ref, car_ref, akzo_ref, hires_ref, ap_ref, fekete_ref,
-                                  crank_ref, nand_ref, pump_ref};
-  const int scored[PROBLEMS] = {3, 8, 2, 7, 7, 10, 10, 6, 8, 2, 60, 7, 5, 1};
+                                  crank_ref, nand_ref, pump_ref, water_ref,
+                                  wheel_ref};
+  const int scored[PROBLEMS] = {3, 8, 2, 7, 7, 10, 10, 6, 8, 2, 60, 7, 5, 1, 49, 17};
   const char *only = argc > 1 ? argv[1] : NULL;
   if (only && strcmp(only, "--reference") == 0) {
     static const int reference[3] = {AKZO, HIRES, FEKETE};

@@ -26,6 +26,11 @@
 //!   to `t = 80`, scored on `y5` as the Test Set's drivers do) and charge pump (9 unknowns,
 //!   index 2, to `t = 1.2e-6`, the Test Set driver's `atol` (`1e-6 rtol` on the charges), `y9`
 //!   of index 2 excluded, scored on `y1`), each run from corner to corner of its input pulses,
+//! * the Test Set's water tube system (49 unknowns, index 2, a laminar/turbulent switch in every
+//!   pipe, to `t = 17 h`; the driver's `atol`, `1e6 rtol` on the pressures; the eleven pressures
+//!   of index 2 excluded from the BDF's error test; all 49 unknowns scored),
+//! * the Test Set's wheelset (17 unknowns, index 2, creep forces, to `t = 10`; the two normal
+//!   forces of index 2 excluded from the BDF's error test; all 17 unknowns scored),
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
@@ -59,6 +64,10 @@ mod standard_dae;
 mod testset_index1;
 #[path = "../tests/common/testset_index3.rs"]
 mod testset_index3;
+#[path = "../tests/common/water_tube.rs"]
+mod water_tube;
+#[path = "../tests/common/wheelset.rs"]
+mod wheelset;
 
 use dpc_core::bdf::{self, Bdf, HigherIndexControl, Tolerance};
 use dpc_core::linear_solver::{FaerDenseLu, LinearSolver, NalgebraLu};
@@ -156,11 +165,13 @@ enum Problem {
     SliderCrank,
     Nand,
     Pump,
+    WaterTube,
+    Wheelset,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 14] = [
+    const ALL: [Self; 16] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -175,6 +186,8 @@ impl Problem {
         Self::SliderCrank,
         Self::Nand,
         Self::Pump,
+        Self::WaterTube,
+        Self::Wheelset,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -194,6 +207,8 @@ impl Problem {
             Self::SliderCrank => "slider crank (index 2; y1..y7)",
             Self::Nand => "NAND gate (index 0, C(y); y5)",
             Self::Pump => "charge pump (index 2; y1)",
+            Self::WaterTube => "water tube (index 2; all)",
+            Self::Wheelset => "wheelset (index 2; all)",
         }
     }
 }
@@ -720,6 +735,8 @@ fn main() {
         });
         slider_crank_rows(k, tol, &scalar);
         circuit_rows(k, tol);
+        water_tube_rows(k, tol);
+        wheelset_rows(k, tol, &scalar);
     }
 }
 
@@ -741,5 +758,66 @@ fn slider_crank_rows(k: i32, tol: f64, scalar: &bdf::Options) {
                 indexed_run::<24, _>(code, SliderCrank, start, index, tol, scalar, CRANK_T_END)
             },
         );
+    }
+}
+
+/// The water tube's rows at `rtol = tol` (label `1e-k`) with the Test Set driver's `atol`
+/// (`1e6 tol` on the pressures): Radau and the BDF, both with the index of every unknown (the
+/// BDF excludes the eleven pressures of index 2 from its error test).
+fn water_tube_rows(k: i32, tol: f64) {
+    use water_tube::{WaterTube, WATER_DIM, WATER_INDEX, WATER_REF, WATER_SCORED, WATER_T_END};
+    let (y0, yp0) = WaterTube::initial();
+    for code in [Code::Radau, Code::Bdf] {
+        row(
+            Problem::WaterTube,
+            k,
+            code,
+            &WATER_REF,
+            &WATER_SCORED,
+            || {
+                let start = (&y0[..], &yp0[..]);
+                let (rtol, atol) = (
+                    Tolerance::Scalar(tol),
+                    Tolerance::Vector(water_tube::water_atol(tol)),
+                );
+                let index = WATER_INDEX.to_vec();
+                match code {
+                    Code::Radau => {
+                        let opts = radau::Options {
+                            rtol,
+                            atol,
+                            index,
+                            ..radau::Options::default()
+                        };
+                        radau_run::<WATER_DIM, _>(WaterTube, start, opts, WATER_T_END)
+                    }
+                    _ => {
+                        let opts = bdf::Options {
+                            rtol,
+                            atol,
+                            index,
+                            ..bdf::Options::default()
+                        };
+                        bdf_run::<WATER_DIM, _>(WaterTube, start, opts, WATER_T_END)
+                    }
+                }
+            },
+        );
+    }
+}
+
+/// The wheelset's rows at `rtol = atol = tol` (label `1e-k`): Radau and the BDF, both with the
+/// index of every unknown (the BDF excludes the two normal forces of index 2 from its error
+/// test).
+fn wheelset_rows(k: i32, tol: f64, scalar: &bdf::Options) {
+    use wheelset::{Wheelset, WHEEL_DIM, WHEEL_INDEX, WHEEL_REF, WHEEL_T_END};
+    let (y0, yp0) = Wheelset::initial();
+    let all: Vec<usize> = (0..WHEEL_DIM).collect();
+    for code in [Code::Radau, Code::Bdf] {
+        row(Problem::Wheelset, k, code, &WHEEL_REF, &all, || {
+            let start = (&y0[..], &yp0[..]);
+            let index = WHEEL_INDEX.to_vec();
+            indexed_run::<WHEEL_DIM, _>(code, Wheelset, start, index, tol, scalar, WHEEL_T_END)
+        });
     }
 }
