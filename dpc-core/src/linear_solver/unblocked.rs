@@ -4,8 +4,9 @@
 //! elimination (Golub & Van Loan, *Matrix Computations*, Algorithm 3.4.1) on a contiguous
 //! column-major array beats a blocked factorisation, whose set-up and dispatch cost more than
 //! the arithmetic at these sizes. Both [`super::NalgebraLu`] and [`super::FaerDenseLu`] (up to
-//! [`UNBLOCKED_MAX_DIMENSION`]) factorise with [`factor`] and solve with [`solve`]; neither
-//! allocates.
+//! [`UNBLOCKED_MAX_DIMENSION`]) factorise with [`factor`] and solve with [`solve`];
+//! [`super::NalgebraLu`] from [`SPLIT_FROM`] on with the same elimination in full-length
+//! column updates ([`factor_split_fixed`], [`solve_split_fixed`]). None allocates.
 
 /// Largest dimension for which [`super::FaerDenseLu`] uses this unblocked LU instead of
 /// faer's blocked one ([`super::NalgebraLu`] always uses it).
@@ -64,7 +65,7 @@ pub(crate) fn factor(a: &mut [f64], n: usize, pivots: &mut [usize]) -> Result<()
 /// update has a trip count known at compile time and unrolls into full-width vector operations
 /// (rows `0..=k` take exact zeros). The same factors as [`factor`] up to the sign of zero
 /// entries, then split for [`solve_split_fixed`] (see [`split`]). In 256-bit instructions
-/// (AVX) from `N = 8` where the processor has them.
+/// (AVX) where the processor has them (used from [`SPLIT_FROM`] on).
 ///
 /// # Errors
 /// As [`factor`].
@@ -76,7 +77,7 @@ pub(crate) fn factor_split_fixed<const N: usize>(
     diag: &mut [f64; N],
 ) -> Result<(), SingularPivot> {
     #[cfg(target_arch = "x86_64")]
-    if N >= 8 && std::arch::is_x86_feature_detected!("avx") {
+    if std::arch::is_x86_feature_detected!("avx") {
         // SAFETY: `factor_split_avx` only requires AVX, which the processor was just found to
         // have.
         return unsafe { factor_split_avx::<N>(a, pivots, upper, diag) };
@@ -231,7 +232,8 @@ pub(crate) const SPLIT_FROM: usize = 8;
 /// zeros outside the triangle) with a trip count known at compile time, which the compiler
 /// unrolls into full-width vector operations: no loop set-up, no remainder per column, twice
 /// the multiplications. The same result as [`solve`] up to the sign of zero entries when `b` is
-/// finite; in 256-bit instructions (AVX) from `N = 8` where the processor has them.
+/// finite; in 256-bit instructions (AVX) where the processor has them (used from
+/// [`SPLIT_FROM`] on).
 #[inline(always)]
 pub(crate) fn solve_split_fixed<const N: usize>(
     lower: &[f64],
@@ -241,7 +243,7 @@ pub(crate) fn solve_split_fixed<const N: usize>(
     b: &mut [f64],
 ) {
     #[cfg(target_arch = "x86_64")]
-    if N >= 8 && std::arch::is_x86_feature_detected!("avx") {
+    if std::arch::is_x86_feature_detected!("avx") {
         // SAFETY: `solve_split_avx` only requires AVX, which the processor was just found to
         // have.
         unsafe { solve_split_avx::<N>(lower, upper, diag, pivots, b) };
