@@ -11,6 +11,8 @@
 //! cargo test --release -p dpc-core --test circuits -- --ignored --nocapture
 //! ```
 
+#[path = "common/matrix_check.rs"]
+mod matrix_check;
 #[path = "common/nand.rs"]
 mod nand;
 #[path = "common/pump.rs"]
@@ -19,7 +21,8 @@ mod pump;
 mod testset_index3;
 
 use dpc_core::linear_solver::NalgebraLu;
-use dpc_core::{bdf, radau, ImplicitDae, MatrixSink};
+use dpc_core::{bdf, radau, ImplicitDae};
+use matrix_check::matrix_error;
 use nand::*;
 use pump::*;
 use testset_index3::scd;
@@ -108,63 +111,6 @@ fn pump_run(tol: f64, radau: bool) -> Result<Vec<f64>, String> {
     }
 }
 
-/// Dense `dF/dy + c dF/dy'` of `dae` at `(t, y, yp)`.
-fn dense_matrix<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64], c: f64) -> Vec<Vec<f64>> {
-    struct Dense(Vec<Vec<f64>>);
-    impl MatrixSink for Dense {
-        fn rows(&self) -> usize {
-            self.0.len()
-        }
-        fn cols(&self) -> usize {
-            self.0.len()
-        }
-        fn set(&mut self, r: usize, k: usize, v: f64) {
-            self.0[r][k] = v;
-        }
-        fn add(&mut self, r: usize, k: usize, v: f64) {
-            self.0[r][k] += v;
-        }
-        fn fill_zero(&mut self) {
-            self.0.iter_mut().for_each(|r| r.fill(0.0));
-        }
-    }
-    let n = dae.dimension();
-    let mut m = Dense(vec![vec![0.0; n]; n]);
-    dae.iteration_matrix(t, y, yp, c, &mut m);
-    m.0
-}
-
-/// The largest difference between `dae`'s iteration matrix and a central difference quotient
-/// of its residual (in `y` and `y'` together, `y'` moving `c` times as far), relative to the
-/// largest entry of its row.
-fn matrix_error<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64], c: f64) -> f64 {
-    let n = dae.dimension();
-    let m = dense_matrix(dae, t, y, yp, c);
-    let mut worst = 0.0f64;
-    let (mut up, mut down) = (vec![0.0; n], vec![0.0; n]);
-    let mut dq = vec![vec![0.0; n]; n];
-    for j in 0..n {
-        let h = 1e-6 * y[j].abs().max(1e-6);
-        let (mut y1, mut p1, mut y2, mut p2) = (y.to_vec(), yp.to_vec(), y.to_vec(), yp.to_vec());
-        y1[j] += h;
-        p1[j] += c * h;
-        y2[j] -= h;
-        p2[j] -= c * h;
-        dae.residual(t, &y1, &p1, &mut up);
-        dae.residual(t, &y2, &p2, &mut down);
-        for i in 0..n {
-            dq[i][j] = (up[i] - down[i]) / (2.0 * h);
-        }
-    }
-    for i in 0..n {
-        let scale = (0..n).map(|j| dq[i][j].abs()).fold(0.0, f64::max);
-        for j in 0..n {
-            worst = worst.max((m[i][j] - dq[i][j]).abs() / scale);
-        }
-    }
-    worst
-}
-
 #[test]
 fn nand_start_is_consistent_and_matrix_matches_differences() {
     let (y0, yp0) = Nand::initial();
@@ -181,7 +127,7 @@ fn nand_start_is_consistent_and_matrix_matches_differences() {
     y[4] = 4.2;
     let yp: [f64; 14] = std::array::from_fn(|j| 0.1 * (j as f64 - 6.0));
     for (t, y) in [(0.0, moved), (7.5, y), (17.5, moved)] {
-        let e = matrix_error(&Nand, t, &y, &yp, 1e3);
+        let e = matrix_error(&Nand, (t, &y, &yp), 1e3, (1e-6, 1e-6));
         assert!(e < 1e-6, "t = {t}: relative error {e:e}");
     }
 }
@@ -233,7 +179,7 @@ fn pump_start_is_consistent_and_matrix_matches_differences() {
         y[5] = u1;
         y[6] = u2;
         y[7] = u3;
-        let e = matrix_error(&Pump, 55e-9, &y, &yp0, 1e9);
+        let e = matrix_error(&Pump, (55e-9, &y, &yp0), 1e9, (1e-6, 1e-6));
         assert!(e < 1e-6, "U = ({u1}, {u2}, {u3}): relative error {e:e}");
     }
 }
