@@ -59,9 +59,11 @@ mod standard_dae;
 mod testset_index1;
 #[path = "../tests/common/testset_index3.rs"]
 mod testset_index3;
+#[path = "../tests/common/two_bit_adder.rs"]
+mod two_bit_adder;
 
 use dpc_core::bdf::{self, Bdf, HigherIndexControl, Tolerance};
-use dpc_core::linear_solver::{FaerDenseLu, LinearSolver, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, FaerLu, LinearSolver, NalgebraLu};
 use dpc_core::radau::{self, Radau};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
@@ -156,11 +158,12 @@ enum Problem {
     SliderCrank,
     Nand,
     Pump,
+    TwoBitAdder,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 14] = [
+    const ALL: [Self; 15] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -175,6 +178,7 @@ impl Problem {
         Self::SliderCrank,
         Self::Nand,
         Self::Pump,
+        Self::TwoBitAdder,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -194,6 +198,7 @@ impl Problem {
             Self::SliderCrank => "slider crank (index 2; y1..y7)",
             Self::Nand => "NAND gate (index 0, C(y); y5)",
             Self::Pump => "charge pump (index 2; y1)",
+            Self::TwoBitAdder => "two bit adding unit (index 1; S0, S1, C)",
         }
     }
 }
@@ -207,6 +212,8 @@ enum Code {
     /// 4 to 6: IDA and diffsol's two rows.
     BdfFaer = 7,
     BdfDetect,
+    RadauSparse,
+    BdfSparse,
 }
 
 impl Code {
@@ -217,6 +224,8 @@ impl Code {
             Self::BdfScale => "dpc BDF (Scale)",
             Self::BdfFaer => "dpc BDF (FaerDenseLu)",
             Self::BdfDetect => "dpc BDF (Stabilised::detect of the index-3 form)",
+            Self::RadauSparse => "dpc Radau (FaerLu: sparse)",
+            Self::BdfSparse => "dpc BDF (FaerLu: sparse)",
         }
     }
 }
@@ -720,6 +729,7 @@ fn main() {
         });
         slider_crank_rows(k, tol, &scalar);
         circuit_rows(k, tol);
+        two_bit_adder_rows(k, tol);
     }
 }
 
@@ -739,6 +749,91 @@ fn slider_crank_rows(k: i32, tol: f64, scalar: &bdf::Options) {
             || {
                 let index = crank_index();
                 indexed_run::<24, _>(code, SliderCrank, start, index, tol, scalar, CRANK_T_END)
+            },
+        );
+    }
+}
+
+/// `dae` by Radau or the BDF with the linear solver `ls` from `t = 0` through the stop times
+/// `breaks` (the last is the end), continuing across each, and its work.
+fn piecewise_with<L: LinearSolver, D: ImplicitDae>(
+    radau: bool,
+    dae: D,
+    ls: L,
+    (y0, yp0): (&[f64], &[f64]),
+    tol: f64,
+    breaks: &[f64],
+) -> Result<Run, String> {
+    let mut y = vec![0.0; ls.dimension()];
+    if radau {
+        let opts = radau::Options::with_tolerances(tol, tol);
+        let mut s = Radau::new(dae, ls, opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
+        for &tb in breaks {
+            s.set_stop_time(tb).map_err(|e| e.to_string())?;
+            s.solve_to(tb, &mut y, None).map_err(|e| e.to_string())?;
+        }
+        let st = s.stats();
+        Ok(Run {
+            steps: st.steps,
+            error_test_failures: st.error_test_failures,
+            newton_failures: st.newton_failures,
+            jacobians: st.jacobian_evaluations,
+            y,
+        })
+    } else {
+        let opts = bdf::Options::with_tolerances(tol, tol);
+        let mut s = Bdf::new(dae, ls, opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
+        for &tb in breaks {
+            s.set_stop_time(tb).map_err(|e| e.to_string())?;
+            s.solve_to(tb, &mut y, None).map_err(|e| e.to_string())?;
+        }
+        let st = s.stats();
+        Ok(Run {
+            steps: st.steps,
+            error_test_failures: st.error_test_failures,
+            newton_failures: st.newton_failures,
+            jacobians: st.jacobian_evaluations,
+            y,
+        })
+    }
+}
+
+/// The two bit adding unit's rows at `rtol = atol = tol` (label `1e-k`), from corner to corner
+/// of its inputs, scored on the outputs `S0, S1, C`: Radau and the BDF with faer's LU as
+/// [`FaerLu::for_dae`] chooses it from the declared pattern (sparse), and the BDF with faer's
+/// dense LU.
+fn two_bit_adder_rows(k: i32, tol: f64) {
+    use two_bit_adder::{tba_breaks, tba_full_reference, TwoBitAdder, TBA_N, TBA_REF, TBA_SCORED};
+    let dae = TwoBitAdder::new();
+    let (y0, yp0) = dae.initial();
+    let breaks = tba_breaks();
+    let reference = tba_full_reference(&TBA_REF);
+    for code in [Code::RadauSparse, Code::BdfSparse, Code::BdfFaer] {
+        row(
+            Problem::TwoBitAdder,
+            k,
+            code,
+            &reference,
+            &TBA_SCORED,
+            || {
+                let start = (&y0[..], &yp0[..]);
+                let dae = dae.clone();
+                match code {
+                    Code::BdfFaer => {
+                        piecewise_with(false, dae, FaerDenseLu::new(TBA_N), start, tol, &breaks)
+                    }
+                    _ => {
+                        let ls = FaerLu::for_dae(&dae);
+                        piecewise_with(
+                            matches!(code, Code::RadauSparse),
+                            dae,
+                            ls,
+                            start,
+                            tol,
+                            &breaks,
+                        )
+                    }
+                }
             },
         );
     }
