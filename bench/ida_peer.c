@@ -37,6 +37,9 @@
  * excluded from the error test, scored on y1: the same equations and exact Jacobians as
  * dpc-core/tests/common/nand.rs and pump.rs, integrated from corner to corner of the input
  * pulses (IDASetStopTime at each, continuing).
+ * The Test Set's two bit adding unit (tba.f, 350 unknowns y = (q, U), index 1) to t = 320, scored
+ * on its outputs y224, y305, y323: the netlist and exact Jacobian of
+ * dpc-core/tests/common/two_bit_adder.rs, from corner to corner of its inputs (every 5).
  * rtol = atol = 1e-k except for Robertson and the charge pump; k = 4, 6, 8. A failed solve is printed as such, with
  * IDA's return flag and the time it stopped at. Times: the thread's CPU time per solve, the
  * mean over repetitions filling at least 0.3 s (at least 3).

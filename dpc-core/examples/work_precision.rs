@@ -26,6 +26,10 @@
 //!   to `t = 80`, scored on `y5` as the Test Set's drivers do) and charge pump (9 unknowns,
 //!   index 2, to `t = 1.2e-6`, the Test Set driver's `atol` (`1e-6 rtol` on the charges), `y9`
 //!   of index 2 excluded, scored on `y1`), each run from corner to corner of its input pulses,
+//! * the Test Set's two bit adding unit (350 unknowns, index 1, constant mass matrix, to
+//!   `t = 320`, scored on the outputs `S0, S1, C`), run from corner to corner of its inputs by
+//!   Radau and the BDF with faer's LU as `FaerLu::for_dae` picks it (sparse) and by the BDF with
+//!   faer's dense LU,
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
