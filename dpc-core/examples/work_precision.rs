@@ -251,18 +251,29 @@ impl Code {
 
 /// `fn $name::<N, D>(dae, (y0, yp0), opts, breaks)`: `$solver` with the stack LU of size `N`
 /// from `t = 0` through the stop times `breaks` (the last is the end; the input pulses' corners
-/// of the NAND gate and the charge pump), continuing across each, and its work.
+/// of the NAND gate, the charge pump and the two bit adding unit), continuing across each, and
+/// its work; `$with` the same with a given linear solver.
 macro_rules! piecewise_run {
-    ($name:ident, $solver:ident, $options:ty) => {
+    ($name:ident, $with:ident, $solver:ident, $options:ty) => {
         fn $name<const N: usize, D: ImplicitDae>(
             dae: D,
+            y0: (&[f64], &[f64]),
+            opts: $options,
+            breaks: &[f64],
+        ) -> Result<Run, String> {
+            $with(dae, NalgebraLu::<N>::new(), y0, opts, breaks)
+        }
+
+        /// As the function without a linear solver, with `ls`.
+        fn $with<L: LinearSolver, D: ImplicitDae>(
+            dae: D,
+            ls: L,
             (y0, yp0): (&[f64], &[f64]),
             opts: $options,
             breaks: &[f64],
         ) -> Result<Run, String> {
-            let mut s = $solver::new(dae, NalgebraLu::<N>::new(), opts, 0.0, y0, yp0)
-                .map_err(|e| e.to_string())?;
-            let mut y = vec![0.0; N];
+            let mut y = vec![0.0; ls.dimension()];
+            let mut s = $solver::new(dae, ls, opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
             for &tb in breaks {
                 s.set_stop_time(tb).map_err(|e| e.to_string())?;
                 s.solve_to(tb, &mut y, None).map_err(|e| e.to_string())?;
@@ -279,8 +290,8 @@ macro_rules! piecewise_run {
     };
 }
 
-piecewise_run!(bdf_piecewise, Bdf, bdf::Options);
-piecewise_run!(radau_piecewise, Radau, radau::Options);
+piecewise_run!(bdf_piecewise, bdf_piecewise_with, Bdf, bdf::Options);
+piecewise_run!(radau_piecewise, radau_piecewise_with, Radau, radau::Options);
 
 /// The rows of the NAND gate (`rtol = atol = tol`) and the charge pump (`rtol = tol`, the Test
 /// Set driver's `atol`, `y9` of index 2 excluded) at `rtol = 1e-k`, by Radau and the BDF.
@@ -820,50 +831,6 @@ fn water_tube_rows(k: i32, tol: f64) {
     }
 }
 
-/// `dae` by Radau or the BDF with the linear solver `ls` from `t = 0` through the stop times
-/// `breaks` (the last is the end), continuing across each, and its work.
-fn piecewise_with<L: LinearSolver, D: ImplicitDae>(
-    radau: bool,
-    dae: D,
-    ls: L,
-    (y0, yp0): (&[f64], &[f64]),
-    tol: f64,
-    breaks: &[f64],
-) -> Result<Run, String> {
-    let mut y = vec![0.0; ls.dimension()];
-    if radau {
-        let opts = radau::Options::with_tolerances(tol, tol);
-        let mut s = Radau::new(dae, ls, opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
-        for &tb in breaks {
-            s.set_stop_time(tb).map_err(|e| e.to_string())?;
-            s.solve_to(tb, &mut y, None).map_err(|e| e.to_string())?;
-        }
-        let st = s.stats();
-        Ok(Run {
-            steps: st.steps,
-            error_test_failures: st.error_test_failures,
-            newton_failures: st.newton_failures,
-            jacobians: st.jacobian_evaluations,
-            y,
-        })
-    } else {
-        let opts = bdf::Options::with_tolerances(tol, tol);
-        let mut s = Bdf::new(dae, ls, opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
-        for &tb in breaks {
-            s.set_stop_time(tb).map_err(|e| e.to_string())?;
-            s.solve_to(tb, &mut y, None).map_err(|e| e.to_string())?;
-        }
-        let st = s.stats();
-        Ok(Run {
-            steps: st.steps,
-            error_test_failures: st.error_test_failures,
-            newton_failures: st.newton_failures,
-            jacobians: st.jacobian_evaluations,
-            y,
-        })
-    }
-}
-
 /// The two bit adding unit's rows at `rtol = atol = tol` (label `1e-k`), from corner to corner
 /// of its inputs, scored on the outputs `S0, S1, C`: Radau and the BDF with faer's LU as
 /// [`FaerLu::for_dae`] chooses it from the declared pattern (sparse), and the BDF with faer's
@@ -890,20 +857,22 @@ fn two_bit_adder_rows(k: i32, tol: f64) {
             || {
                 let start = (&y0[..], &yp0[..]);
                 let dae = dae.clone();
+                let (radau_opts, bdf_opts) = (
+                    radau::Options::with_tolerances(tol, tol),
+                    bdf::Options::with_tolerances(tol, tol),
+                );
                 match code {
                     Code::BdfFaer => {
-                        piecewise_with(false, dae, FaerDenseLu::new(TBA_N), start, tol, &breaks)
+                        let ls = FaerDenseLu::new(TBA_N);
+                        bdf_piecewise_with(dae, ls, start, bdf_opts, &breaks)
+                    }
+                    Code::RadauSparse => {
+                        let ls = FaerLu::for_dae(&dae);
+                        radau_piecewise_with(dae, ls, start, radau_opts, &breaks)
                     }
                     _ => {
                         let ls = FaerLu::for_dae(&dae);
-                        piecewise_with(
-                            matches!(code, Code::RadauSparse),
-                            dae,
-                            ls,
-                            start,
-                            tol,
-                            &breaks,
-                        )
+                        bdf_piecewise_with(dae, ls, start, bdf_opts, &breaks)
                     }
                 }
             },
