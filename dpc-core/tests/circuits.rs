@@ -25,15 +25,7 @@ use dpc_core::{bdf, radau, ImplicitDae};
 use matrix_check::matrix_error;
 use nand::*;
 use pump::*;
-use testset_index3::scd;
-
-/// The Test Set's measure over tolerance jitter: the median of `digits(tol * f)` over
-/// `f = 0.9, 1, 1.1`.
-fn median_over_jitter(tol: f64, digits: impl Fn(f64) -> f64) -> f64 {
-    let mut d = [0.9, 1.0, 1.1].map(|f| digits(tol * f));
-    d.sort_by(f64::total_cmp);
-    d[1]
-}
+use testset_index3::median_scd_over_jitter as digits;
 
 /// `$name::<N, D>(dae, (y0, yp0), opts, breaks)`: `$solver` from `t = 0` through the stop
 /// times `breaks` (the last is the end), continuing across each: `(y(end), statistics)`, or the
@@ -182,23 +174,6 @@ fn pump_start_is_consistent_and_matrix_matches_differences() {
         let e = matrix_error(&Pump, (55e-9, &y, &yp0), 1e9, (1e-6, 1e-6));
         assert!(e < 1e-6, "U = ({u1}, {u2}, {u3}): relative error {e:e}");
     }
-}
-
-/// Median scd over the jitter of `run` scored on `scored` against `reference`; a failed run
-/// scores minus infinity.
-fn digits(
-    tol: f64,
-    run: impl Fn(f64) -> Result<Vec<f64>, String>,
-    reference: &[f64],
-    scored: &[usize],
-) -> f64 {
-    median_over_jitter(tol, |t| match run(t) {
-        Ok(y) => scd(&y, reference, scored),
-        Err(e) => {
-            println!("  tol {t:e}: {e}");
-            f64::NEG_INFINITY
-        }
-    })
 }
 
 #[test]

@@ -6,12 +6,15 @@
 
 #[path = "common/fekete.rs"]
 mod fekete;
+#[path = "common/testset_index3.rs"]
+mod testset_index3;
 
 use dpc_core::bdf::{Bdf, Options, Stats};
 use dpc_core::linear_solver::FaerDenseLu;
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
 use fekete::*;
+use testset_index3::median_over_jitter;
 
 /// `dae` by the BDF from `(y0, yp0)` at `t = 0` to [`FEKETE_T_SHORT`] at `rtol = atol = tol`,
 /// `index` per unknown: (y(t_end), stats).
@@ -42,13 +45,6 @@ fn bdf_run_to<D: ImplicitDae>(
     let mut y = vec![0.0; n];
     bdf.solve_to(t_end, &mut y, None).unwrap();
     (y, bdf.stats())
-}
-
-/// The Test Set's measure: the median of `digits(tol * f)` over the jitter `f = 0.9, 1, 1.1`.
-fn median_over_jitter(tol: f64, digits: impl Fn(f64) -> f64) -> f64 {
-    let mut d = [0.9, 1.0, 1.1].map(|f| digits(tol * f));
-    d.sort_by(f64::total_cmp);
-    d[1]
 }
 
 /// Largest difference between `dae`'s iteration matrix at `(y, yp, c)` and central differences

@@ -18,7 +18,7 @@ use dpc_core::linear_solver::NalgebraLu;
 use dpc_core::radau::{self, Radau};
 use dpc_core::ImplicitDae;
 use slider_crank::*;
-use testset_index3::scd;
+use testset_index3::{median_over_jitter, scd};
 
 /// The BDF from the Test Set's initial values to [`CRANK_T_END`] at `rtol = atol = tol`, the
 /// accelerations and multipliers (index 2) excluded from the error test: (y(t_end), stats).
@@ -47,13 +47,6 @@ fn radau_run(tol: f64) -> (Vec<f64>, radau::Stats) {
     let mut y = vec![0.0; CRANK_DIM];
     s.solve_to(CRANK_T_END, &mut y, None).unwrap();
     (y, s.stats())
-}
-
-/// The Test Set's measure: the median of `digits(tol * f)` over the jitter `f = 0.9, 1, 1.1`.
-fn median_over_jitter(tol: f64, digits: impl Fn(f64) -> f64) -> f64 {
-    let mut d = [0.9, 1.0, 1.1].map(|f| digits(tol * f));
-    d.sort_by(f64::total_cmp);
-    d[1]
 }
 
 /// The largest violation of the velocity constraints `G(p) v = (0, 0, omega)` at `y`.

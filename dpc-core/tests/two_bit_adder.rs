@@ -18,7 +18,7 @@ use dpc_core::bdf::Bdf;
 use dpc_core::linear_solver::{FaerLu, LinearSolver};
 use dpc_core::radau::Radau;
 use dpc_core::{bdf, radau, ImplicitDae, MatrixSink};
-use testset_index3::scd;
+use testset_index3::median_scd_over_jitter;
 use two_bit_adder::*;
 
 /// `$name(dae, ls, (y0, yp0), opts, breaks)`: `$solver` from `t = 0` through the stop times
@@ -173,23 +173,10 @@ fn matrix_matches_differences_and_pattern() {
     }
 }
 
-/// Median of `digits(tol * f)` over `f = 0.9, 1, 1.1`.
-fn median_over_jitter(tol: f64, digits: impl Fn(f64) -> f64) -> f64 {
-    let mut d = [0.9, 1.0, 1.1].map(|f| digits(tol * f));
-    d.sort_by(f64::total_cmp);
-    d[1]
-}
-
 /// Median scd on the outputs over the jitter; a failed run scores minus infinity.
 fn digits(tol: f64, radau: bool) -> f64 {
     let reference = tba_full_reference(&TBA_REF);
-    median_over_jitter(tol, |t| match run(t, radau, TBA_T_END) {
-        Ok(y) => scd(&y, &reference, &TBA_SCORED),
-        Err(e) => {
-            println!("  tol {t:e}: {e}");
-            f64::NEG_INFINITY
-        }
-    })
+    median_scd_over_jitter(tol, |t| run(t, radau, TBA_T_END), &reference, &TBA_SCORED)
 }
 
 #[test]

@@ -5,6 +5,7 @@
 #![allow(dead_code)]
 
 use super::standard_dae::*;
+pub use super::testset_index3::median_over_jitter;
 use super::testset_index3::{mescd, scd};
 use dpc_core::ImplicitDae;
 
@@ -25,14 +26,6 @@ pub trait Integrator {
         t_end: f64,
         tol: f64,
     ) -> (Vec<f64>, Self::Stats);
-}
-
-/// The Test Set's measure over tolerance jitter: the median of `digits(tol * f)` over
-/// `f = 0.9, 1, 1.1`.
-pub fn median_over_jitter(tol: f64, digits: impl Fn(f64) -> f64) -> f64 {
-    let mut d = [0.9, 1.0, 1.1].map(|f| digits(tol * f));
-    d.sort_by(f64::total_cmp);
-    d[1]
 }
 
 /// Median scd over the jitter at `tol` of Akzo Nobel (all components), HIRES (all) and

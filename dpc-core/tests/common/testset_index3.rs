@@ -24,6 +24,31 @@ pub fn scd(y: &[f64], reference: &[f64], components: &[usize]) -> f64 {
         .log10()
 }
 
+/// The Test Set's measure over tolerance jitter: the median of `digits(tol * f)` over
+/// `f = 0.9, 1, 1.1`.
+pub fn median_over_jitter(tol: f64, digits: impl Fn(f64) -> f64) -> f64 {
+    let mut d = [0.9, 1.0, 1.1].map(|f| digits(tol * f));
+    d.sort_by(f64::total_cmp);
+    d[1]
+}
+
+/// [`median_over_jitter`] of the [`scd`] of `run(tol * f)` on `scored` against `reference`; a
+/// failed run (its message printed) scores minus infinity.
+pub fn median_scd_over_jitter(
+    tol: f64,
+    run: impl Fn(f64) -> Result<Vec<f64>, String>,
+    reference: &[f64],
+    scored: &[usize],
+) -> f64 {
+    median_over_jitter(tol, |t| match run(t) {
+        Ok(y) => scd(&y, reference, scored),
+        Err(e) => {
+            println!("  tol {t:e}: {e}");
+            f64::NEG_INFINITY
+        }
+    })
+}
+
 /// Mixed-error significant correct digits `min_i -log10(|y_i - r_i| / (atol/rtol + |r_i|))`
 /// over `components` (deTestSet's `printpr`).
 pub fn mescd(y: &[f64], reference: &[f64], components: &[usize], rtol: f64, atol: f64) -> f64 {
