@@ -46,6 +46,29 @@ pub trait ImplicitDae {
         self.iteration_matrix(t, y, yp, c, out);
     }
 
+    /// The mass matrix `dF/dy'` alone at `(t, y, y')`, when the DAE can supply it more cheaply
+    /// than a second [`iteration_matrix`](Self::iteration_matrix): write its structurally
+    /// non-zero entries into `out` (zeroed by the caller; [`MatrixSink::set`] or
+    /// [`MatrixSink::add`], within [`iteration_pattern`](Self::iteration_pattern) when one is
+    /// declared) and return `true`. The default supplies nothing and returns `false`.
+    ///
+    /// With it the BDF keeps `dF/dy'` beside the iteration matrix it factorised and, when the
+    /// step size changes `c` beyond the window of the matrix, re-forms `dF/dy + c dF/dy'` from
+    /// the two instead of calling the model (see [`crate::bdf`]); Radau takes `dF/dy'` from
+    /// it instead of a second call of [`iteration_matrix`](Self::iteration_matrix). It must be
+    /// the `c`-part of [`iteration_matrix`](Self::iteration_matrix) exactly: `iteration_matrix`
+    /// at `c` equals `iteration_matrix` at `0` plus `c` times this.
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let _ = (t, y, yp, out);
+        false
+    }
+
     /// The gradients of the position constraints, `dF_g/dy` for each equation `g` that is a
     /// position constraint (an equation `0 = g(t, q)` of the unknowns alone, without `y'`), when
     /// the DAE supplies them exactly: index reduction ([`Stabilised`](crate::stabilised::Stabilised))
@@ -145,6 +168,15 @@ impl<T: ImplicitDae + ?Sized> ImplicitDae for &T {
         out: &mut S,
     ) {
         (**self).residual_and_iteration_matrix(t, y, yp, c, residual, out);
+    }
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        out: &mut S,
+    ) -> bool {
+        (**self).mass_matrix(t, y, yp, out)
     }
     fn constraint_gradient<S: MatrixSink + ?Sized>(&self, t: f64, y: &[f64], out: &mut S) -> bool {
         (**self).constraint_gradient(t, y, out)

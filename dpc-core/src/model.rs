@@ -396,6 +396,27 @@ pub trait DaeModel {
         self.iteration_matrix(t, x, xdot, z, u, c, out);
     }
 
+    /// The mass matrix `dF/dx'` (one row per equation, one column per state) into a zeroed
+    /// sink, when the model supplies it (generated models do): every structural entry written
+    /// once with [`MatrixSink::set`], as [`evaluate`](Self::evaluate) writes `f_xdot`; returns
+    /// `true`. The default supplies nothing and returns `false`. An integrator uses it to
+    /// re-form the iteration matrix at a new `c` without another call of
+    /// [`iteration_matrix`](Self::iteration_matrix) (see
+    /// [`ImplicitDae::mass_matrix`](crate::ImplicitDae::mass_matrix)).
+    #[allow(clippy::too_many_arguments)]
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        x: &[f64],
+        xdot: &[f64],
+        z: &[f64],
+        u: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let _ = (t, x, xdot, z, u, out);
+        false
+    }
+
     /// Outputs `y = h(t, x, z, u)` into `out` (one entry per output).
     fn outputs(&self, t: f64, x: &[f64], z: &[f64], u: &[f64], out: &mut [f64]);
 

@@ -917,6 +917,22 @@ impl<M: DaeModel> ImplicitDae for HeldPlant<'_, M> {
             .residual_and_iteration_matrix(t, x, &yp[..nx], z, &s.u, c, residual, out);
     }
 
+    // `dF/dx'` does not depend on the input's law (the input is a function of `t` and `x`,
+    // never of `x'`), so the model's own serves with or without preliminary feedback.
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let nx = self.model.structure().n_states();
+        let (x, z) = y.split_at(nx);
+        let s = &mut *self.scratch.borrow_mut();
+        self.inputs(t, x, s);
+        self.model.mass_matrix(t, x, &yp[..nx], z, &s.u, out)
+    }
+
     // The position constraints' exact derivatives, when the model supplies them (generated
     // models do). The constraint rows do not contain the input, so it is handed over as last
     // evaluated, not evaluated again at (t, x).

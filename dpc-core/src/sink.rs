@@ -205,6 +205,116 @@ impl MatrixSink for Selection {
     }
 }
 
+/// A matrix over a fixed pattern of entries in compressed columns, written through
+/// [`MatrixSink`]: kept beside another matrix to be added to it later (the BDF keeps `dF/dy'`
+/// to re-form `dF/dy + c dF/dy'` at a new `c`). An entry written outside the pattern is not
+/// stored; [`PatternMatrix::outside`] tells that one was.
+#[derive(Debug, Clone)]
+pub(crate) struct PatternMatrix {
+    rows: usize,
+    cols: usize,
+    /// Column `j`'s entries are `start[j]..start[j + 1]` of `row` and `values`.
+    start: Vec<usize>,
+    /// Row of each entry, increasing within a column.
+    row: Vec<usize>,
+    values: Vec<f64>,
+    outside: bool,
+}
+
+impl PatternMatrix {
+    /// A `rows x cols` matrix over the entries of `pattern` (every entry when `None`), all
+    /// zero. Entries out of range or repeated are ignored.
+    pub fn new(rows: usize, cols: usize, pattern: Option<&[(usize, usize)]>) -> Self {
+        let mut entries: Vec<(usize, usize)> = match pattern {
+            Some(p) => p
+                .iter()
+                .filter(|&&(r, c)| r < rows && c < cols)
+                .map(|&(r, c)| (c, r))
+                .collect(),
+            None => (0..cols)
+                .flat_map(|c| (0..rows).map(move |r| (c, r)))
+                .collect(),
+        };
+        entries.sort_unstable();
+        entries.dedup();
+        let mut start = vec![0; cols + 1];
+        for &(c, _) in &entries {
+            start[c + 1] += 1;
+        }
+        for c in 0..cols {
+            start[c + 1] += start[c];
+        }
+        Self {
+            rows,
+            cols,
+            start,
+            row: entries.iter().map(|&(_, r)| r).collect(),
+            values: vec![0.0; entries.len()],
+            outside: false,
+        }
+    }
+
+    /// Whether an entry outside the pattern was written since the last
+    /// [`fill_zero`](MatrixSink::fill_zero) (its value was dropped).
+    pub fn outside(&self) -> bool {
+        self.outside
+    }
+
+    /// Add `scale` times this matrix to `out` (its non-zero entries, with
+    /// [`MatrixSink::add`]).
+    pub fn add_scaled_to<S: MatrixSink + ?Sized>(&self, scale: f64, out: &mut S) {
+        for c in 0..self.cols {
+            let range = self.start[c]..self.start[c + 1];
+            for (&r, &v) in self.row[range.clone()].iter().zip(&self.values[range]) {
+                if v != 0.0 {
+                    out.add(r, c, scale * v);
+                }
+            }
+        }
+    }
+
+    /// The position of entry `(row, col)` in `values`, if it is in the pattern.
+    #[inline]
+    fn slot(&self, row: usize, col: usize) -> Option<usize> {
+        if col >= self.cols {
+            return None;
+        }
+        let (lo, hi) = (self.start[col], self.start[col + 1]);
+        if hi - lo == self.rows {
+            // A full column: the entry's position is its row.
+            return (row < self.rows).then_some(lo + row);
+        }
+        self.row[lo..hi].binary_search(&row).ok().map(|k| lo + k)
+    }
+}
+
+impl MatrixSink for PatternMatrix {
+    fn rows(&self) -> usize {
+        self.rows
+    }
+    fn cols(&self) -> usize {
+        self.cols
+    }
+    #[inline]
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        match self.slot(row, col) {
+            Some(s) => self.values[s] = value,
+            None => self.outside = true,
+        }
+    }
+    #[inline]
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        match self.slot(row, col) {
+            Some(s) => self.values[s] += value,
+            None => self.outside = true,
+        }
+    }
+    fn fill_zero(&mut self) {
+        self.values.fill(0.0);
+        self.outside = false;
+    }
+}
+
 /// Two sinks written at once: every entry goes to both (a destination and a [`Selection`]
 /// that keeps a few of its entries for the caller, for example).
 pub struct Tee<'a, A: ?Sized, B: ?Sized>(pub &'a mut A, pub &'a mut B);
@@ -247,6 +357,34 @@ mod tests {
         }
         assert_eq!(a[(0, 1)], b[(0, 1)]);
         assert_eq!(a[(1, 0)], b[(1, 0)]);
+    }
+
+    #[test]
+    fn pattern_matrix_adds_its_entries_and_flags_others() {
+        let mut m = PatternMatrix::new(3, 3, Some(&[(0, 0), (2, 1), (1, 1), (2, 1), (5, 0)]));
+        m.set(2, 1, 4.0);
+        m.add(2, 1, 1.0);
+        m.add(0, 0, -2.0);
+        assert!(!m.outside());
+        let mut out = nalgebra::DMatrix::<f64>::from_element(3, 3, 1.0);
+        m.add_scaled_to(0.5, &mut out);
+        let want = nalgebra::DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 3.5, 1.0]);
+        assert_eq!(out, want);
+        m.set(0, 2, 1.0);
+        assert!(m.outside());
+        m.fill_zero();
+        assert!(!m.outside());
+        let mut zero = nalgebra::DMatrix::<f64>::zeros(3, 3);
+        m.add_scaled_to(1.0, &mut zero);
+        assert_eq!(zero, nalgebra::DMatrix::zeros(3, 3));
+        // Without a pattern every entry is kept.
+        let mut full = PatternMatrix::new(2, 3, None);
+        full.set(1, 2, 7.0);
+        full.add(0, 1, 3.0);
+        assert!(!full.outside());
+        let mut out = nalgebra::DMatrix::<f64>::zeros(2, 3);
+        full.add_scaled_to(2.0, &mut out);
+        assert_eq!(out, nalgebra::DMatrix::from_row_slice(2, 3, &[0.0, 6.0, 0.0, 0.0, 0.0, 14.0]));
     }
 
     #[test]

@@ -26,6 +26,8 @@ struct DaeTapes {
     evaluate: Tape,
     iteration: Tape,
     iteration_pattern: Vec<(usize, usize)>,
+    /// The entries of `dF/dx'` alone (the mass matrix).
+    mass: Tape,
     outputs: Tape,
     /// The entries of `dh/dx`, `dh/dz`, `dh/du`.
     output_jacobians: Tape,
@@ -178,6 +180,7 @@ impl DaeTapes {
             evaluate: tape(&d.evaluate_roots())?,
             iteration: tape(&d.iteration.exprs().collect::<Vec<_>>())?,
             iteration_pattern: d.iteration.pattern(),
+            mass: tape(&d.f_xdot.exprs().collect::<Vec<_>>())?,
             outputs: tape(&d.output_exprs())?,
             output_jacobians: tape(&d.output_jacobian_roots())?,
             pattern_h_z: d.h_z.pattern(),
@@ -212,6 +215,7 @@ impl DaeTapes {
             evaluate: tape.clone(),
             iteration: tape.clone(),
             iteration_pattern: Vec::new(),
+            mass: tape.clone(),
             outputs: tape.clone(),
             output_jacobians: tape,
             pattern_h_z: Vec::new(),
@@ -254,6 +258,11 @@ impl DaeTapes {
     fn iteration_matrix<S: MatrixSink + ?Sized>(&self, args: &Args<'_>, out: &mut S) {
         self.iteration
             .eval(args, |v| write(v, 0, &self.iteration_pattern, out));
+    }
+
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, args: &Args<'_>, out: &mut S) {
+        self.mass
+            .eval(args, |v| write(v, 0, &self.structure.pattern_f_xdot, out));
     }
 
     fn outputs(&self, args: &Args<'_>, out: &mut [f64]) {
@@ -645,6 +654,27 @@ macro_rules! dae_model_methods {
                 ..Args::model(&self.params.values, self.w())
             };
             self.tapes().iteration_matrix(&a, out);
+        }
+
+        fn mass_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            t: f64,
+            x: &[f64],
+            xdot: &[f64],
+            z: &[f64],
+            u: &[f64],
+            out: &mut S,
+        ) -> bool {
+            let a = Args {
+                t,
+                x,
+                xdot,
+                z,
+                u,
+                ..Args::model(&self.params.values, self.w())
+            };
+            self.tapes().mass_matrix(&a, out);
+            true
         }
 
         fn outputs(&self, t: f64, x: &[f64], z: &[f64], u: &[f64], out: &mut [f64]) {

@@ -110,6 +110,12 @@ pub fn emit_dae_type(
         &ty.iteration.exprs().collect::<Vec<_>>(),
         &[out(quote!(__values), iteration_count, false)],
     );
+    let (mass_forward, mass_count) = sink_forwarding(&[(quote!(__out), f_xdot)]);
+    let mass_values = code(
+        "mass",
+        &f_xdot.exprs().collect::<Vec<_>>(),
+        &[out(quote!(__values), mass_count, false)],
+    );
     let outputs_code = code("outputs", &outputs, &[out(quote!(__out), ny, true)]);
     let (output_jac_forward, output_jac_count) = sink_forwarding(&[
         (quote!(__h_x), h_x),
@@ -361,6 +367,11 @@ pub fn emit_dae_type(
             }
 
             #[inline(never)]
+            fn __mass_values(&self, __t: f64, __x: &[f64], __xdot: &[f64], __z: &[f64], __u: &[f64], __values: &mut [f64; #mass_count]) {
+                #mass_values
+            }
+
+            #[inline(never)]
             fn __residual_and_iteration_values(&self, __t: f64, __x: &[f64], __xdot: &[f64], __z: &[f64], __u: &[f64], __c: f64, __residual: &mut [f64], __values: &mut [f64; #fused_count]) {
                 #fused_values
             }
@@ -547,6 +558,21 @@ pub fn emit_dae_type(
                 let mut __values = [0.0_f64; #fused_count];
                 self.__residual_and_iteration_values(__t, __x, __xdot, __z, __u, __c, __residual, &mut __values);
                 #fused_forward
+            }
+
+            fn mass_matrix<__S: ::dpc::core::MatrixSink + ?Sized>(
+                &self,
+                __t: f64,
+                __x: &[f64],
+                __xdot: &[f64],
+                __z: &[f64],
+                __u: &[f64],
+                __out: &mut __S,
+            ) -> bool {
+                let mut __values = [0.0_f64; #mass_count];
+                self.__mass_values(__t, __x, __xdot, __z, __u, &mut __values);
+                #mass_forward
+                true
             }
 
             fn outputs(&self, __t: f64, __x: &[f64], __z: &[f64], __u: &[f64], __out: &mut [f64]) {

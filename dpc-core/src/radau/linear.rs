@@ -9,11 +9,12 @@
 //! * the complex `n x n` matrix `E_2 = J + ((alpha - i beta)/h) M`, factorised by a dense
 //!   complex partial-pivoting LU (faer) whose storage is allocated once.
 //!
-//! `J` and `M` are obtained from the model's single entry point `iteration_matrix(t, y, y', c)
-//! = J + c M` with `c = 0` and `c = 1` (`M = (J + M) - J`), and kept in dense storage so that a
-//! change of `h` only refactorises, without evaluating the Jacobian again (as RADAU5 does).
-//! The subtraction is exact where `J` has no entry; where both have one the error is a round-off
-//! of `|J_ij|`, the size of the round-off of the matrix entry `J_ij + c M_ij` itself.
+//! `J` is the model's `iteration_matrix(t, y, y', c) = J + c M` at `c = 0`; `M` its
+//! [`ImplicitDae::mass_matrix`] when the model supplies one, else the same entry point at
+//! `c = 1` less `J` (`M = (J + M) - J`). Both are kept in dense storage so that a change of `h`
+//! only refactorises, without evaluating the Jacobian again (as RADAU5 does). The subtraction
+//! is exact where `J` has no entry; where both have one the error is a round-off of `|J_ij|`,
+//! the size of the round-off of the matrix entry `J_ij + c M_ij` itself.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
@@ -285,16 +286,21 @@ impl<L: LinearSolver> StageMatrices<L> {
         }
     }
 
-    /// Evaluate `J = dF/dy` and `M = dF/dy'` at `(t, y, yp)`.
+    /// Evaluate `J = dF/dy` and `M = dF/dy'` at `(t, y, yp)`: `M` from the model's
+    /// [`ImplicitDae::mass_matrix`] when it supplies one, else as the difference of the
+    /// iteration matrices at `c = 1` and `c = 0`.
     pub fn evaluate<D: ImplicitDae>(&mut self, dae: &D, t: f64, y: &[f64], yp: &[f64]) {
         self.jy.fill_zero();
         dae.iteration_matrix(t, y, yp, 0.0, &mut self.jy);
         self.jyp.fill_zero();
-        dae.iteration_matrix(t, y, yp, 1.0, &mut self.jyp);
-        let n = self.jy.nrows();
-        for j in 0..n {
-            for i in 0..n {
-                self.jyp[(i, j)] -= self.jy[(i, j)];
+        if !dae.mass_matrix(t, y, yp, &mut self.jyp) {
+            self.jyp.fill_zero();
+            dae.iteration_matrix(t, y, yp, 1.0, &mut self.jyp);
+            let n = self.jy.nrows();
+            for j in 0..n {
+                for i in 0..n {
+                    self.jyp[(i, j)] -= self.jy[(i, j)];
+                }
             }
         }
         self.have_jacobian = true;

@@ -14,8 +14,9 @@ pub struct Stats {
     pub newton_iterations: usize,
     /// Residual evaluations (three per Newton iteration, one or two per error estimate).
     pub residual_evaluations: usize,
-    /// Jacobian evaluations (each is two calls of `iteration_matrix`, giving `dF/dy` and
-    /// `dF/dy'`).
+    /// Jacobian evaluations (each gives `dF/dy` and `dF/dy'`: a call of `iteration_matrix`
+    /// and one of `mass_matrix`, or two of `iteration_matrix` when the model supplies no
+    /// `mass_matrix`).
     pub jacobian_evaluations: usize,
     /// Factorisations of the stage matrices (each one real and one complex LU).
     pub factorisations: usize,

@@ -376,6 +376,12 @@ impl ImplicitDae for Nand {
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
         out.copy_from_slice(&Self::residual_array(t, y, yp));
     }
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, y: &[f64], _: &[f64], m: &mut S) -> bool {
+        for (a, b, cap) in Self::capacitors(y) {
+            stamp(m, a, b, cap);
+        }
+        true
+    }
     fn iteration_matrix<S: MatrixSink + ?Sized>(
         &self,
         t: f64,

@@ -365,6 +365,12 @@ impl ImplicitDae for SliderCrank {
             }
         }
     }
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for i in 0..14 {
+            m.set(i, i, 1.0);
+        }
+        true
+    }
     fn is_differential(&self, i: usize) -> bool {
         i < CRANK_DIFFERENTIAL
     }

@@ -428,4 +428,18 @@ impl ImplicitDae for Wheelset {
             }
         }
     }
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, y: &[f64], _: &[f64], m: &mut S) -> bool {
+        let (sip, cop) = y[4].sin_cos();
+        for i in 0..5 {
+            m.add(i, i, 1.0);
+        }
+        for i in 5..8 {
+            m.add(i, i, MR);
+        }
+        m.add(8, 8, LI2 * cop);
+        m.add(9, 9, LI2);
+        m.add(10, 8, LI1 * sip);
+        m.add(10, 10, LI1);
+        true
+    }
 }
