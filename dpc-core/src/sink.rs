@@ -368,7 +368,8 @@ mod tests {
         assert!(!m.outside());
         let mut out = nalgebra::DMatrix::<f64>::from_element(3, 3, 1.0);
         m.add_scaled_to(0.5, &mut out);
-        let want = nalgebra::DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 3.5, 1.0]);
+        let want =
+            nalgebra::DMatrix::from_row_slice(3, 3, &[0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 3.5, 1.0]);
         assert_eq!(out, want);
         m.set(0, 2, 1.0);
         assert!(m.outside());
@@ -384,7 +385,10 @@ mod tests {
         assert!(!full.outside());
         let mut out = nalgebra::DMatrix::<f64>::zeros(2, 3);
         full.add_scaled_to(2.0, &mut out);
-        assert_eq!(out, nalgebra::DMatrix::from_row_slice(2, 3, &[0.0, 6.0, 0.0, 0.0, 0.0, 14.0]));
+        assert_eq!(
+            out,
+            nalgebra::DMatrix::from_row_slice(2, 3, &[0.0, 6.0, 0.0, 0.0, 0.0, 14.0])
+        );
     }
 
     #[test]
