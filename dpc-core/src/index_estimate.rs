@@ -237,9 +237,12 @@ pub fn unknown_indices<D: ImplicitDae + ?Sized>(
 
 /// The unknowns [`unknown_indices`] finds of index 2 or higher at `(t, y, y')`, by name
 /// ([`ImplicitDae::unknown_name`]) with their index; empty when every unknown has index 1 or
-/// the estimate is not available there (an error of [`unknown_indices`]). The integrators call
-/// it when a step fails on a DAE declared with every unknown of index 1, to name the likely
-/// cause (`BdfError::UndeclaredIndex`, `RadauError::UndeclaredIndex`).
+/// the estimate is not available there (an error of [`unknown_indices`]). When a step fails on
+/// a DAE declared with every unknown of index 1, the integrators read the estimate at the
+/// failure point and at the integration's start: unknowns of higher index at both are named
+/// as the likely cause (`BdfError::UndeclaredIndex`, `RadauError::UndeclaredIndex`), a higher
+/// reading at the failure point only is a nearly singular point of the DAE
+/// (`BdfError::SingularPoint`, `RadauError::SingularPoint`).
 pub fn higher_index_unknowns<D: ImplicitDae + ?Sized>(
     dae: &D,
     t: f64,
@@ -256,6 +259,107 @@ pub fn higher_index_unknowns<D: ImplicitDae + ?Sized>(
                 .collect()
         })
         .unwrap_or_default()
+}
+
+/// The point an integration started from (at `new` or `reinit`), kept so that a failure can
+/// be compared with it ([`diagnose_failure`]): allocated once with the integrator, copied at
+/// a restart, read only on an error path.
+#[derive(Debug, Clone)]
+pub(crate) struct StartPoint {
+    t: f64,
+    y: Vec<f64>,
+    yp: Vec<f64>,
+}
+
+impl StartPoint {
+    /// The start `(t, y, y')`.
+    pub(crate) fn new(t: f64, y: &[f64], yp: &[f64]) -> Self {
+        Self {
+            t,
+            y: y.to_vec(),
+            yp: yp.to_vec(),
+        }
+    }
+
+    /// A new start of the same dimension, without allocating.
+    pub(crate) fn set(&mut self, t: f64, y: &[f64], yp: &[f64]) {
+        self.t = t;
+        self.y.copy_from_slice(y);
+        self.yp.copy_from_slice(yp);
+    }
+}
+
+/// What [`diagnose_failure`] finds for a step failure of a DAE declared with every unknown
+/// of index at most 1.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum FailureDiagnosis {
+    /// Nothing to add: the failure point reads every unknown as of index 1, or the estimate
+    /// is not available there or at the start.
+    None,
+    /// Unknowns of index 2 or 3 at the failure point that read so at the start too (with
+    /// their index at the failure point): a model of higher index than declared.
+    Undeclared(Vec<(String, u8)>),
+    /// Unknowns that read index 2 or 3 at the failure point while the start read every
+    /// unknown as of index 1: the DAE nearly loses regularity there (a near-singular
+    /// algebraic part reads like a higher index over the decades of `c` the estimate
+    /// samples).
+    OnlyHere {
+        /// Time of the start the estimate was compared with.
+        t_start: f64,
+        /// The unknowns read of index 2 or 3 at the failure point, with their index.
+        unknowns: Vec<(String, u8)>,
+    },
+}
+
+/// The cause to add to a step failure at `(t, y, y')` of `dae`, declared with every unknown
+/// of index at most 1, that started at `start`: the estimate of [`unknown_indices`] at the
+/// failure point, confirmed at the start. A DAE of undeclared higher index reads so all along
+/// its solution (the index estimate's unknowns are the same at both points); a DAE of index 1
+/// whose algebraic part becomes nearly singular where it fails (a capacitance or mass that
+/// nearly vanishes, an impasse point) reads index 2 there only, and declaring that index
+/// would not help: that case is told apart ([`FailureDiagnosis::OnlyHere`]) rather than
+/// reported as an undeclared index. Costs the estimate at both points (decompositions of
+/// `n x n` matrices); meant for the integrators' error paths only.
+pub(crate) fn diagnose_failure<D: ImplicitDae + ?Sized>(
+    dae: &D,
+    start: &StartPoint,
+    (t, y, yp): (f64, &[f64], &[f64]),
+) -> FailureDiagnosis {
+    let Ok(here) = unknown_indices(dae, t, y, yp) else {
+        return FailureDiagnosis::None;
+    };
+    if here.iter().all(|&m| m <= 1) {
+        return FailureDiagnosis::None;
+    }
+    let named = |keep: &dyn Fn(usize) -> bool| -> Vec<(String, u8)> {
+        (0..here.len())
+            .filter(|&i| here[i] > 1 && keep(i))
+            .map(|i| (dae.unknown_name(i), here[i]))
+            .collect()
+    };
+    let at_start = if (start.t, &start.y[..], &start.yp[..]) == (t, y, yp) {
+        Ok(here.clone())
+    } else {
+        unknown_indices(dae, start.t, &start.y, &start.yp)
+    };
+    match at_start {
+        // No reading at the start: no confirmation, and no diagnosis rather than a doubtful one.
+        Err(_) => FailureDiagnosis::None,
+        Ok(s) if s.iter().all(|&m| m <= 1) => FailureDiagnosis::OnlyHere {
+            t_start: start.t,
+            unknowns: named(&|_| true),
+        },
+        Ok(s) => {
+            let confirmed = named(&|i| s[i] > 1);
+            if confirmed.is_empty() {
+                // Higher-index unknowns at both points, but different ones: the start's
+                // reading does not confirm these.
+                FailureDiagnosis::None
+            } else {
+                FailureDiagnosis::Undeclared(confirmed)
+            }
+        }
+    }
 }
 
 /// [`unknown_indices`] at the one point `(t, y, y')`.

@@ -132,10 +132,12 @@ pub enum BdfError {
     },
     /// A step failed ([`BdfError::NewtonFailed`], [`BdfError::ErrorTestFailed`],
     /// [`BdfError::TooManySteps`]) on a DAE whose [`super::Options::index`] gives every
-    /// unknown index at most 1 (the default), while its iteration matrix at the last point
-    /// reached shows unknowns of index 2 or 3 ([`crate::index_estimate::unknown_indices`]):
+    /// unknown index at most 1 (the default), while its iteration matrix shows unknowns of
+    /// index 2 or 3 at the last point reached and at the integration's start
+    /// ([`crate::index_estimate::unknown_indices`]; those read so at both points are named):
     /// the likely cause, since the error test and Newton's test then hold those unknowns to a
-    /// tolerance they cannot meet as `h` shrinks.
+    /// tolerance they cannot meet as `h` shrinks. Where only the last point reads them so,
+    /// the error is [`BdfError::SingularPoint`].
     #[error(
         "{source}; at t = {} the DAE has unknowns of higher index than `Options::index` \
          declares (every unknown of index 1): {}; declare them in `index`, or integrate with \
@@ -148,6 +150,38 @@ pub enum BdfError {
         /// Time of the last point reached, where the index was estimated.
         t: f64,
         /// The unknowns estimated of index 2 or 3 there, by name, with their index.
+        unknowns: Vec<(String, u8)>,
+        /// The failure itself.
+        #[source]
+        source: Box<BdfError>,
+    },
+    /// A step failed ([`BdfError::NewtonFailed`], [`BdfError::ErrorTestFailed`],
+    /// [`BdfError::TooManySteps`]) on a DAE whose [`super::Options::index`] gives every
+    /// unknown index at most 1, at a point where the iteration matrix reads some unknowns as of
+    /// index 2 or 3 while at the integration's start it read every unknown as of index 1
+    /// ([`crate::index_estimate::unknown_indices`] at both points): not a model of undeclared
+    /// index ([`BdfError::UndeclaredIndex`]) but one whose algebraic part is nearly singular
+    /// where it failed (a capacitance, mass or gain that nearly vanishes, an impasse point
+    /// where the solution ends, branches of the model that meet), which reads like a higher
+    /// index over the decades of `c` the estimate samples.
+    #[error(
+        "{source}; at t = {} the iteration matrix reads {} as of higher index, while at the \
+         start (t = {}) every unknown read index 1: the DAE's algebraic part is nearly \
+         singular there (a capacitance, mass or gain that nearly vanishes, or a point where \
+         the solution cannot continue), which declaring an index does not remove; look at \
+         the model near t = {}",
+        Time(*t),
+        unknowns.iter().map(|(u, m)| format!("`{u}` (index {m})")).collect::<Vec<_>>().join(", "),
+        Time(*t_start),
+        Time(*t)
+    )]
+    SingularPoint {
+        /// Time of the last point reached, where the index was estimated.
+        t: f64,
+        /// Time of the integration's start (the last `new` or `reinit`), where every unknown
+        /// read index 1.
+        t_start: f64,
+        /// The unknowns read of index 2 or 3 at `t`, by name, with that reading.
         unknowns: Vec<(String, u8)>,
         /// The failure itself.
         #[source]

@@ -96,6 +96,9 @@ pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
     corrector: Corrector<L>,
     /// The work done.
     stats: Stats,
+    /// Where the current integration started, for the diagnosis of a failure
+    /// ([`Bdf::with_index_diagnosis`]).
+    start: crate::index_estimate::StartPoint,
 }
 
 /// The method's state (names follow IDA): the current time, step and order, the history
@@ -260,6 +263,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             corrector,
             stats,
             opts,
+            start: crate::index_estimate::StartPoint::new(t0, y0, yp0),
         })
     }
 
@@ -310,6 +314,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.state.tstop = None;
         self.corrector.reset();
         self.state.steps_at_start = self.stats.steps;
+        self.start.set(t0, y0, yp0);
         Ok(())
     }
 
@@ -503,11 +508,15 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         Ok(self.state.tn)
     }
 
-    /// `e`, or [`BdfError::UndeclaredIndex`] wrapping it when it is a failure to step
-    /// (Newton, the error test, too many steps) of a DAE declared with every unknown of index
-    /// at most 1 whose iteration matrix at the last point reached shows unknowns of index 2 or
-    /// 3. Runs only on that error path (it allocates and decomposes the matrix a few times).
+    /// `e`, or, when it is a failure to step (Newton, the error test, too many steps) of a
+    /// DAE declared with every unknown of index at most 1 whose iteration matrix at the last
+    /// point reached shows unknowns of index 2 or 3, `e` wrapped in
+    /// [`BdfError::UndeclaredIndex`] (the start of the integration reads them so too) or
+    /// [`BdfError::SingularPoint`] (it read every unknown as of index 1):
+    /// [`crate::index_estimate::diagnose_failure`]. Runs only on that error path (it
+    /// allocates and decomposes the matrix a few times).
     fn with_index_diagnosis(&self, e: BdfError) -> BdfError {
+        use crate::index_estimate::{diagnose_failure, FailureDiagnosis};
         let stepping = matches!(
             e,
             BdfError::NewtonFailed { .. }
@@ -522,14 +531,19 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         if self.interpolate(t, &mut y, Some(&mut yp)).is_err() {
             return e;
         }
-        let unknowns = crate::index_estimate::higher_index_unknowns(&self.dae, t, &y, &yp);
-        if unknowns.is_empty() {
-            return e;
-        }
-        BdfError::UndeclaredIndex {
-            t,
-            unknowns,
-            source: Box::new(e),
+        match diagnose_failure(&self.dae, &self.start, (t, &y, &yp)) {
+            FailureDiagnosis::None => e,
+            FailureDiagnosis::Undeclared(unknowns) => BdfError::UndeclaredIndex {
+                t,
+                unknowns,
+                source: Box::new(e),
+            },
+            FailureDiagnosis::OnlyHere { t_start, unknowns } => BdfError::SingularPoint {
+                t,
+                t_start,
+                unknowns,
+                source: Box::new(e),
+            },
         }
     }
 

@@ -152,6 +152,9 @@ pub struct Radau<D: ImplicitDae, L: LinearSolver> {
     est: EstimateWork,
     w: Vec<f64>,
     stats: Stats,
+    /// Where the current integration started, for the diagnosis of a failure
+    /// ([`Radau::with_index_diagnosis`]).
+    start: crate::index_estimate::StartPoint,
 }
 
 impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
@@ -266,6 +269,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             w: vec![0.0; n],
             stats,
             opts,
+            start: crate::index_estimate::StartPoint::new(t0, y0, yp0),
         })
     }
 
@@ -339,6 +343,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         self.carried_step = self.h > 0.0;
         self.tstop = None;
         self.steps_at_start = self.stats.steps;
+        self.start.set(t0, y0, yp0);
         self.faccon = 1.0;
         self.theta = 0.0;
         // The Jacobian (and with an unchanged step the factorisations) is kept when the last
@@ -481,10 +486,13 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         Ok(self.t)
     }
 
-    /// `e`, or [`RadauError::UndeclaredIndex`] wrapping it when it is a failure to step of a
-    /// DAE declared with every unknown of index at most 1 whose iteration matrix at the last
-    /// point reached shows unknowns of index 2 or 3. Runs only on that error path.
+    /// `e`, or, when it is a failure to step of a DAE declared with every unknown of index
+    /// at most 1 whose iteration matrix at the last point reached shows unknowns of index 2
+    /// or 3, `e` wrapped in [`RadauError::UndeclaredIndex`] (the start of the integration
+    /// reads them so too) or [`RadauError::SingularPoint`] (it read every unknown as of index
+    /// 1): [`crate::index_estimate::diagnose_failure`]. Runs only on that error path.
     fn with_index_diagnosis(&self, e: RadauError) -> RadauError {
+        use crate::index_estimate::{diagnose_failure, FailureDiagnosis};
         let stepping = matches!(
             e,
             RadauError::StepTooSmall { .. }
@@ -494,15 +502,20 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         if !stepping || self.higher_index {
             return e;
         }
-        let unknowns =
-            crate::index_estimate::higher_index_unknowns(&self.dae, self.t, self.y(), self.yp());
-        if unknowns.is_empty() {
-            return e;
-        }
-        RadauError::UndeclaredIndex {
-            t: self.t,
-            unknowns,
-            source: Box::new(e),
+        let t = self.t;
+        match diagnose_failure(&self.dae, &self.start, (t, self.y(), self.yp())) {
+            FailureDiagnosis::None => e,
+            FailureDiagnosis::Undeclared(unknowns) => RadauError::UndeclaredIndex {
+                t,
+                unknowns,
+                source: Box::new(e),
+            },
+            FailureDiagnosis::OnlyHere { t_start, unknowns } => RadauError::SingularPoint {
+                t,
+                t_start,
+                unknowns,
+                source: Box::new(e),
+            },
         }
     }
 

@@ -9,7 +9,15 @@
 //! 0  = q - g(U)     (the charges, rows 175..350)
 //! ```
 //!
-//! an index-1 DAE with the constant mass matrix `diag(I, 0)` (`dg/dU = C(U)` is regular). The
+//! with the constant mass matrix `diag(I, 0)`. The Test Set calls it index 1, but in this
+//! form (one charge per node as an unknown) it is not index 1 throughout: `dg/dU` is singular.
+//! Thirteen groups of nodes are coupled by capacitances only among themselves (the coupling
+//! node of each ANDOI, NAND and ORANI gate with the bulk nodes around it, the result nodes of
+//! the gates with the inputs of the gates they drive, the series transistors' nodes), so the
+//! charges of a group sum to a constant, `sum q' = sum f(U) = 0` is a hidden constraint, and
+//! the group's common potential is fixed by it alone: 13 directions of index 2 (Hessenberg
+//! form; `W^T f_U V` regular), and 95 node potentials with a part in them, which
+//! [`dpc_core::index_estimate::unknown_indices`] reads as of index 2 (tested). The
 //! five inputs `V1..V4`, `CIN` are trapezoidal pulses whose slopes enter `f` through the gate
 //! capacitances: `f` jumps at every multiple of 5 ([`tba_breaks`]), where the runs stop and
 //! continue.
