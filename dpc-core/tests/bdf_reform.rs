@@ -101,11 +101,7 @@ impl ImplicitDae for Attracted {
 
 /// Integrate to `t = 10` at rtol = atol = 1e-6 with `ls`; the state and the statistics.
 fn run<L: LinearSolver>(dae: Attracted, ls: L) -> ([f64; 2], Stats) {
-    let opts = Options {
-        rtol: 1e-6.into(),
-        atol: 1e-6.into(),
-        ..Options::default()
-    };
+    let opts = Options::with_tolerances(1e-6, 1e-6);
     let y0 = s(0.0);
     let yp0 = sp(0.0);
     let mut bdf = Bdf::new(dae, ls, opts, 0.0, &y0, &yp0).unwrap();
@@ -127,7 +123,10 @@ fn a_supplied_mass_matrix_replaces_model_calls_by_re_formed_matrices() {
     println!("none:        {plain:?}, error {:.2e}", error(&y_plain));
     // Re-formed matrices are factorised without a model call ...
     assert!(kept.factorisations > kept.jacobian_evaluations, "{kept:?}");
-    assert_eq!(plain.factorisations, plain.jacobian_evaluations, "{plain:?}");
+    assert_eq!(
+        plain.factorisations, plain.jacobian_evaluations,
+        "{plain:?}"
+    );
     // ... in place of matrices the model would have formed ...
     assert!(kept.jacobian_evaluations < plain.jacobian_evaluations);
     // ... and the solution is as accurate (both well within 100 tolerance units).
@@ -136,7 +135,10 @@ fn a_supplied_mass_matrix_replaces_model_calls_by_re_formed_matrices() {
     let dae = Attracted { mass: Mass::Exact };
     let sparse = FaerSparseLu::new(2, &dae.iteration_pattern().unwrap()).unwrap();
     let (y_sparse, sparse) = run(dae, sparse);
-    assert!(sparse.factorisations > sparse.jacobian_evaluations, "{sparse:?}");
+    assert!(
+        sparse.factorisations > sparse.jacobian_evaluations,
+        "{sparse:?}"
+    );
     assert!(error(&y_sparse) < 1e-4);
 }
 
