@@ -48,7 +48,9 @@
 //! derivatives, or three residuals and an iteration matrix without them (a residual before the
 //! first iteration matrix: one more residual, or one more matrix, for `c_j`); per iteration
 //! matrix, the wrapped DAE's iteration matrix, two residuals and the exact derivatives, or
-//! four iteration matrices and a residual without them.
+//! four iteration matrices and a residual without them. Its mass matrix `dF/dy'` is the
+//! wrapped DAE's, when that supplies one ([`ImplicitDae::mass_matrix`]; the stabilisation adds
+//! no `y'`), at the cost of the wrapped one.
 //!
 //! ```
 //! use dpc_core::stabilised::Stabilised;
@@ -661,6 +663,25 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         }
         self.constraint_curvature(t, y, yp, exact, sc, out);
         sc.coef_held = true;
+    }
+
+    /// The wrapped DAE's `dF/dy'` ([`ImplicitDae::mass_matrix`]) in its rows and columns, when
+    /// it supplies one (`false` otherwise): the stabilisation adds nothing to `dF/dy'`. The
+    /// multipliers' terms `c_j G_aj mu_a` have no `y'`, and the hidden constraints read the
+    /// velocities `phi_j = q_j' - F_i / c_j`, which do not depend on `y'` since a kinematic row
+    /// is `F_i = c_j (q_j' - phi_j)` (its `dF_i/dy'` is `c_j` at `q_j'` alone): in
+    /// [`iteration_matrix`](ImplicitDae::iteration_matrix) the hidden rows' `c`-terms, `c G_aj`
+    /// at `q_j` and `-c G_aj dF_i/dy'_k / c_j` along the kinematic row, cancel. Costs the
+    /// wrapped DAE's mass matrix only (no residual, no constraint derivatives).
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        out: &mut S,
+    ) -> bool {
+        let n = self.dae.dimension();
+        self.dae.mass_matrix(t, &y[..n], &yp[..n], out)
     }
 
     fn is_differential(&self, i: usize) -> bool {

@@ -1,8 +1,8 @@
 //! DAEs from the literature with exact solutions that the other tests do not use, written as a
-//! user would write them (`tests/common/literature.rs`: residual, exact iteration matrix, which
-//! unknowns are differential, no constraint derivatives), solved with the documented options
-//! only: Kværnø's fully implicit index-1 problem, Jay's index-2 problem, a particle on a
-//! circular track (index 3) as declared with Radau's index-3 scaling and through
+//! user would write them (`tests/common/literature.rs`: residual, exact iteration matrix and
+//! mass matrix, which unknowns are differential, no constraint derivatives), solved with the
+//! documented options only: Kværnø's fully implicit index-1 problem, Jay's index-2 problem, a
+//! particle on a circular track (index 3) as declared with Radau's index-3 scaling and through
 //! `Stabilised::detect` with Radau and the BDF, and a knife edge on an inclined plane (a
 //! nonholonomic velocity constraint, index 2).
 //!

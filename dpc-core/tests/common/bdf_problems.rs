@@ -52,6 +52,12 @@ impl ImplicitDae for Robertson {
         m.set(2, 1, 1.0);
         m.set(2, 2, 1.0);
     }
+    /// `diag(1, 1, 0)`.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        m.set(0, 0, 1.0);
+        m.set(1, 1, 1.0);
+        true
+    }
     fn is_differential(&self, i: usize) -> bool {
         i < 2
     }
@@ -120,6 +126,13 @@ impl ImplicitDae for Pendulum {
         m.set(3, 4, y);
         m.set(4, 0, 2.0 * x);
         m.set(4, 1, 2.0 * y);
+    }
+    /// The identity on the positions and velocities.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for i in 0..4 {
+            m.set(i, i, 1.0);
+        }
+        true
     }
     /// The constraint `x^2 + y^2 - L^2`: gradient `(2x, 2y)`, no time dependence, curvature
     /// `2 (u, v)` along the velocities `(u, v)`.
@@ -280,6 +293,19 @@ impl ImplicitDae for Heat {
             mat.set(i, i, c + 2.0 * k);
             mat.set(i, i + 1, -k);
         }
+    }
+    /// The identity on the interior nodes (the boundary rows are algebraic).
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        _: &[f64],
+        _: &[f64],
+        mat: &mut S,
+    ) -> bool {
+        for i in 1..self.m {
+            mat.set(i, i, 1.0);
+        }
+        true
     }
     fn is_differential(&self, i: usize) -> bool {
         i > 0 && i < self.m

@@ -378,6 +378,13 @@ impl ImplicitDae for Fekete {
             }
         }
     }
+    /// The identity on `p` and `q` (the constraint rows have no derivatives).
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for r in 0..FEKETE_DIFFERENTIAL {
+            m.set(r, r, 1.0);
+        }
+        true
+    }
     fn is_differential(&self, i: usize) -> bool {
         i < FEKETE_DIFFERENTIAL
     }
@@ -448,6 +455,13 @@ impl ImplicitDae for FeketeIndex3 {
                 m.set(120 + i, r, 2.0 * p[r]);
             }
         }
+    }
+    /// The identity on `p` and `q`, as [`Fekete`]'s.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for r in 0..FEKETE_DIFFERENTIAL {
+            m.set(r, r, 1.0);
+        }
+        true
     }
     /// `d(|p_i|^2 - 1)/dp_i = 2 p_i`.
     fn constraint_gradient<S: MatrixSink + ?Sized>(&self, _: f64, y: &[f64], m: &mut S) -> bool {

@@ -1,7 +1,7 @@
 //! DAEs from the literature with exact solutions, written as a user would write them (residual,
-//! exact iteration matrix, which unknowns are differential; no constraint derivatives): shared by
-//! `tests/literature_daes.rs`. Each fixture has `exact(t) -> (y, y')`, checked against its
-//! residual there before any integration is scored against it.
+//! exact iteration matrix and mass matrix, which unknowns are differential; no constraint
+//! derivatives): shared by `tests/literature_daes.rs`. Each fixture has `exact(t) -> (y, y')`,
+//! checked against its residual there before any integration is scored against it.
 //!
 //! * [`Kvaerno`]: Kværnø's nonlinear, fully implicit index-1 problem (A. Kværnø, "Runge-Kutta
 //!   methods applied to fully implicit differential-algebraic equations of index 1", Math.
@@ -88,6 +88,20 @@ impl ImplicitDae for Kvaerno {
         m.set(1, 0, s2 - 64.0 * t * t * e * y[1]);
         m.set(1, 1, s2 - 64.0 * t * t * e * y[0]);
     }
+    /// `d/dy'` of the first row (it depends on `y'` itself: `sin(2 y1') y2'^2` and
+    /// `2 (sin^2(y1') + cos^2(y2)) y2'`); the second row has no derivatives.
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        y: &[f64],
+        yp: &[f64],
+        m: &mut S,
+    ) -> bool {
+        let bracket = yp[0].sin().powi(2) + y[1].cos().powi(2);
+        m.set(0, 0, (2.0 * yp[0]).sin() * yp[1] * yp[1]);
+        m.set(0, 1, 2.0 * bracket * yp[1]);
+        true
+    }
 }
 
 /// Jay's index-2 problem (BIT 1993, Example 7), unknowns `(y1, y2, z)`:
@@ -156,6 +170,12 @@ impl ImplicitDae for Jay {
         m.set(1, 2, 3.0 * y2 * y2);
         m.set(2, 0, 2.0 * y1 * y2);
         m.set(2, 1, y1 * y1);
+    }
+    /// `diag(1, 1, 0)`.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        m.set(0, 0, 1.0);
+        m.set(1, 1, 1.0);
+        true
     }
     fn is_differential(&self, i: usize) -> bool {
         i < 2
@@ -230,6 +250,13 @@ impl ImplicitDae for CircularTrack {
         m.set(3, 4, -yy);
         m.set(4, 0, 2.0 * x);
         m.set(4, 1, 2.0 * yy);
+    }
+    /// The identity on the positions and velocities.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for i in 0..4 {
+            m.set(i, i, 1.0);
+        }
+        true
     }
     fn is_differential(&self, i: usize) -> bool {
         i < 4
@@ -330,6 +357,13 @@ impl ImplicitDae for KnifeEdge {
         m.set(6, 3, sn);
         m.set(6, 4, -cs);
     }
+    /// The identity on the six differential unknowns.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for i in 0..6 {
+            m.set(i, i, 1.0);
+        }
+        true
+    }
     fn is_differential(&self, i: usize) -> bool {
         i < 6
     }
@@ -380,5 +414,11 @@ impl ImplicitDae for Bcp {
         m.set(0, 1, self.eta * t);
         m.set(1, 0, c);
         m.set(1, 1, c * self.eta * t + 1.0 + self.eta);
+    }
+    /// The second row's `(1, eta t)`.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, t: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        m.set(1, 0, 1.0);
+        m.set(1, 1, self.eta * t);
+        true
     }
 }

@@ -247,4 +247,13 @@ impl ImplicitDae for Pump {
             }
         }
     }
+    /// The constant `M`: `y1'`, `y2' + y3'`, `y4' + y5'` in the first three rows.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        m.set(0, 0, 1.0);
+        m.set(1, 1, 1.0);
+        m.set(1, 2, 1.0);
+        m.set(2, 3, 1.0);
+        m.set(2, 4, 1.0);
+        true
+    }
 }

@@ -152,6 +152,13 @@ impl ImplicitDae for ChemAkzo {
             }
         }
     }
+    /// `M = diag(1, 1, 1, 1, 1, 0)`.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for r in 0..5 {
+            m.set(r, r, 1.0);
+        }
+        true
+    }
 }
 
 /// HIRES (Test Set `hires.f`; Schaefer 1975, Hairer & Wanner): the "high irradiance responses"
@@ -258,6 +265,13 @@ impl ImplicitDae for Hires {
             m.add(r, k, -v);
         }
     }
+    /// The identity (an ODE).
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for i in 0..8 {
+            m.set(i, i, 1.0);
+        }
+        true
+    }
 }
 
 /// Ascher and Petzold's linear index-2 problem (after their book, Computer Methods for ODEs and
@@ -325,5 +339,11 @@ impl ImplicitDae for AscherPetzold {
         m.set(1, 2, -(a - 1.0));
         m.set(2, 0, 2.0 + t);
         m.set(2, 1, t * t - 4.0);
+    }
+    /// `diag(1, 1, 0)`.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        m.set(0, 0, 1.0);
+        m.set(1, 1, 1.0);
+        true
     }
 }

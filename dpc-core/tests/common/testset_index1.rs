@@ -173,6 +173,13 @@ impl ImplicitDae for TransistorAmplifier {
             m.add(r, col, -v);
         }
     }
+    /// The constant capacitance matrix ([`Self::mass_entries`]).
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for (r, col, v) in Self::mass_entries() {
+            m.add(r, col, v);
+        }
+        true
+    }
     fn unknown_name(&self, i: usize) -> String {
         format!("U{}", i + 1)
     }

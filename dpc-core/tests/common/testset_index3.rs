@@ -479,6 +479,14 @@ impl ImplicitDae for Andrews {
             }
         }
     }
+    /// The identity on the positions and velocities (`q' = v`, `v' = w`; the dynamic and
+    /// constraint rows have no derivatives).
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for i in 0..14 {
+            m.set(i, i, 1.0);
+        }
+        true
+    }
     /// The constraint rows `y22..y27` of the iteration matrix, written by hand.
     fn constraint_gradient<S: MatrixSink + ?Sized>(&self, _: f64, y: &[f64], out: &mut S) -> bool {
         write_rows(21, &Self::constraint_jacobian(&y[0..7]), out);
@@ -658,6 +666,15 @@ impl ImplicitDae for CarAxis {
         m.set(7, 1, 2.0 * l2);
         m.set(7, 9, 2.0 * (yl - yr));
         self.constraint_gradient(t, y, m);
+    }
+    /// `diag(1, 1, 1, 1, k, k, k, k, 0, 0)`.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        let k = self.k();
+        for i in 0..4 {
+            m.set(i, i, 1.0);
+            m.set(i + 4, i + 4, k);
+        }
+        true
     }
     /// The constraint rows `y9`, `y10` of the iteration matrix.
     fn constraint_gradient<S: MatrixSink + ?Sized>(&self, t: f64, y: &[f64], m: &mut S) -> bool {

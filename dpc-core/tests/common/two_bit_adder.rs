@@ -833,6 +833,14 @@ impl ImplicitDae for TwoBitAdder {
         });
     }
 
+    /// The constant `diag(I, 0)`: the charges' derivatives in the current rows.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for i in 0..NODES {
+            m.add(i, i, 1.0);
+        }
+        true
+    }
+
     fn is_differential(&self, i: usize) -> bool {
         i < NODES
     }

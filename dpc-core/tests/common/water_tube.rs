@@ -309,4 +309,14 @@ impl ImplicitDae for WaterTube {
         m.set(pressure(5), pressure(5), c * C);
         m.set(pressure(8), pressure(8), c * C);
     }
+
+    /// The constant diagonal `M`: `V` on the flows, `C` on `p5`, `p8`.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        for e in 0..PIPES.len() {
+            m.set(e, e, V);
+        }
+        m.set(pressure(5), pressure(5), C);
+        m.set(pressure(8), pressure(8), C);
+        true
+    }
 }
