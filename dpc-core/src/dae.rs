@@ -52,12 +52,11 @@ pub trait ImplicitDae {
     /// [`MatrixSink::add`], within [`iteration_pattern`](Self::iteration_pattern) when one is
     /// declared) and return `true`. The default supplies nothing and returns `false`.
     ///
-    /// With it the BDF keeps `dF/dy'` beside the iteration matrix it factorised and, when the
-    /// step size changes `c` beyond the window of the matrix, re-forms `dF/dy + c dF/dy'` from
-    /// the two instead of calling the model (see [`crate::bdf`]); Radau takes `dF/dy'` from
-    /// it instead of a second call of [`iteration_matrix`](Self::iteration_matrix). It must be
-    /// the `c`-part of [`iteration_matrix`](Self::iteration_matrix) exactly: `iteration_matrix`
-    /// at `c` equals `iteration_matrix` at `0` plus `c` times this.
+    /// Radau, which keeps `dF/dy` and `dF/dy'` apart, takes `dF/dy'` from it instead of a
+    /// second call of [`iteration_matrix`](Self::iteration_matrix) (half a Jacobian's cost
+    /// when the matrix is formed by differences). It must be the `c`-part of
+    /// [`iteration_matrix`](Self::iteration_matrix) exactly: `iteration_matrix` at `c` equals
+    /// `iteration_matrix` at `0` plus `c` times this.
     fn mass_matrix<S: MatrixSink + ?Sized>(
         &self,
         t: f64,

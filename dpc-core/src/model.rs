@@ -399,9 +399,8 @@ pub trait DaeModel {
     /// The mass matrix `dF/dx'` (one row per equation, one column per state) into a zeroed
     /// sink, when the model supplies it (generated models do): every structural entry written
     /// once with [`MatrixSink::set`], as [`evaluate`](Self::evaluate) writes `f_xdot`; returns
-    /// `true`. The default supplies nothing and returns `false`. An integrator uses it to
-    /// re-form the iteration matrix at a new `c` without another call of
-    /// [`iteration_matrix`](Self::iteration_matrix) (see
+    /// `true`. The default supplies nothing and returns `false`. Radau takes `dF/dy'` from it
+    /// instead of a second call of [`iteration_matrix`](Self::iteration_matrix) (see
     /// [`ImplicitDae::mass_matrix`](crate::ImplicitDae::mass_matrix)).
     #[allow(clippy::too_many_arguments)]
     fn mass_matrix<S: MatrixSink + ?Sized>(

@@ -20,7 +20,6 @@ use crate::newton::{
     first_non_finite, wrms, Convergence, Corrected, Iterate, NewtonFailure, NewtonSystem,
     NewtonWorkspace, Verdict,
 };
-use crate::sink::PatternMatrix;
 use crate::{ImplicitDae, MatrixSink};
 
 /// What the iteration matrix was formed with, and the rate estimate carried between steps.
@@ -174,65 +173,9 @@ pub(crate) struct Corrector<L: LinearSolver> {
     pub ee: Vec<f64>,
     /// Scratch: `y' + e` for the filtered error estimate.
     pub yp_e: Vec<f64>,
-    /// `dF/dy'` at the point of the last matrix formed from the model, when the model
-    /// supplies it ([`ImplicitDae::mass_matrix`]); see [`KeptMass`].
-    pub mass: KeptMass,
     /// The fallback weights of Newton's test (see [`RateTest::fallback`]), set with the
     /// weights when [`NewtonProblem::fallback`] is.
     pub w_scaled: Vec<f64>,
-}
-
-/// `dF/dy'` kept from the point of the last iteration matrix formed from the model, so that
-/// a change of `cj` beyond the matrix's window re-forms `dF/dy + cj dF/dy'` by adding
-/// `(cj - cj_factored) dF/dy'` to the matrix held by the linear solver (which keeps it apart
-/// from its factors) instead of calling the model: a factorisation without a model call.
-/// The re-formed matrix is exact at the old point for the new `cj` (IDA's stale matrix is
-/// wrong in both), so it is used only while that point is recent (`MAX_REFORM_AGE`).
-pub(crate) struct KeptMass {
-    /// Storage over the model's pattern; `None` when the model does not supply `dF/dy'`.
-    pub matrix: Option<PatternMatrix>,
-    /// The kept `dF/dy'` belongs to the matrix the solver holds.
-    pub current: bool,
-    /// Corrector solves since the matrix was formed from the model.
-    pub age: usize,
-}
-
-/// Corrector solves after a matrix formed from the model beyond which a change of `cj` forms
-/// a fresh one rather than re-forming it from the kept `dF/dy'`. A re-formed matrix keeps
-/// `dF/dy` of an older point, and Newton with an older `dF/dy` converges more slowly, meeting
-/// IDA's test (`s |delta| <= 0.33`) with less to spare: on the Test Set's wheelset (index 2,
-/// difference-quotient Jacobian) the median digits at rtol 1e-6 over 15 tolerance factors
-/// fell with the age allowed, 2.87 (never re-formed) / 2.80 / 2.66 / 2.57 / 2.42 at 0 / 5 /
-/// 10 / 20 / 50 solves (CVODE's 50 steps for its saved Jacobian), while the time fell
-/// 63 / 50 / 44 / 37 / 33 ms. Five keeps the Jacobian about as young as IDA's rule keeps it
-/// there (one matrix per 6.7 steps) and the digits within the jitter (docs/integrators.md).
-const MAX_REFORM_AGE: usize = 5;
-
-impl KeptMass {
-    /// Storage for the `dF/dy'` of `dae` when it supplies one at `(t, y, y')` (probed there).
-    pub fn probe<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> Self {
-        let n = dae.dimension();
-        let pattern = dae.iteration_pattern();
-        let mut m = PatternMatrix::new(n, n, pattern.as_deref());
-        let supplied = dae.mass_matrix(t, y, yp, &mut m) && !m.outside();
-        Self {
-            matrix: supplied.then_some(m),
-            current: false,
-            age: 0,
-        }
-    }
-
-    /// Record `dF/dy'` at the point a matrix is being formed at.
-    fn record<D: ImplicitDae>(&mut self, dae: &D, t: f64, y: &[f64], yp: &[f64]) {
-        self.age = 0;
-        self.current = match &mut self.matrix {
-            Some(m) => {
-                m.fill_zero();
-                dae.mass_matrix(t, y, yp, m) && !m.outside()
-            }
-            None => false,
-        };
-    }
 }
 
 /// The corrector's system at one step: the iterate `y` with `y' = y'_pred + cj (y - y_pred)`.
@@ -242,8 +185,6 @@ struct StepSystem<'a, D> {
     cj: f64,
     /// `cj` of the factorised matrix (set when the system forms one).
     cj_factored: &'a mut f64,
-    /// `dF/dy'` recorded with every matrix the system forms.
-    mass: &'a mut KeptMass,
     y: &'a mut [f64],
     yp: &'a mut [f64],
     ee: &'a mut [f64],
@@ -256,7 +197,6 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
             self.dae
                 .iteration_matrix(self.t, self.y, self.yp, self.cj, m);
             *self.cj_factored = self.cj;
-            self.mass.record(self.dae, self.t, self.y, self.yp);
         }
         if residual {
             self.dae.residual(self.t, self.y, self.yp, res);
@@ -451,9 +391,8 @@ impl<S, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
 
 impl<L: LinearSolver> Corrector<L> {
     /// Work vectors of dimension `n` around the solver `ls`.
-    pub fn new(ls: L, n: usize, mass: KeptMass) -> Self {
+    pub fn new(ls: L, n: usize) -> Self {
         Self {
-            mass,
             ls,
             newton: NewtonWorkspace::new(n),
             jac: JacState::default(),
@@ -471,27 +410,6 @@ impl<L: LinearSolver> Corrector<L> {
     pub fn reset(&mut self) {
         self.jac = JacState::default();
         self.newton.valid = false;
-        self.mass.current = false;
-    }
-
-    /// Re-form the held matrix for `cj` from the kept `dF/dy'` and factorise it, when the kept
-    /// one belongs to it and is recent; `false` when a fresh matrix is needed instead.
-    fn reform(&mut self, cj: f64, stats: &mut Stats) -> bool {
-        let Some(m) = self.mass.matrix.as_ref() else {
-            return false;
-        };
-        if !self.mass.current || !self.newton.valid || self.mass.age > MAX_REFORM_AGE {
-            return false;
-        }
-        m.add_scaled_to(cj - self.jac.cj_factored, self.ls.matrix_mut());
-        stats.factorisations += 1;
-        if self.ls.factor().is_err() {
-            self.newton.valid = false;
-            self.mass.current = false;
-            return false;
-        }
-        self.jac.cj_factored = cj;
-        true
     }
 
     /// Solve for `y`, `yp` (and the correction `ee = y - y_pred`) from the predictor, with
@@ -504,12 +422,10 @@ impl<L: LinearSolver> Corrector<L> {
         p: &NewtonProblem,
     ) -> Result<usize, NewtonFailure> {
         self.jac.start_solve(p.cj);
-        self.mass.age += 1;
-        let outside_window = {
+        let mut fresh = p.force_setup || {
             let r = p.cj / self.jac.cj_factored;
             !(0.6..=1.0 / 0.6).contains(&r)
         };
-        let mut fresh = p.force_setup || (outside_window && !self.reform(p.cj, stats));
         let before = self.newton.counts;
         let outcome = loop {
             self.y.copy_from_slice(&self.y_pred);
@@ -520,7 +436,6 @@ impl<L: LinearSolver> Corrector<L> {
                 t: p.t,
                 cj: p.cj,
                 cj_factored: &mut self.jac.cj_factored,
-                mass: &mut self.mass,
                 y: &mut self.y,
                 yp: &mut self.yp,
                 ee: &mut self.ee,

@@ -25,7 +25,7 @@
 //! digits at 1e-6).
 
 use super::history::History;
-use super::newton::{error_weights, Corrector, KeptMass, NewtonProblem};
+use super::newton::{error_weights, Corrector, NewtonProblem};
 use super::{BdfError, HigherIndexControl, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
@@ -218,8 +218,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 _ => [0.0, 0.0, 1.0, 0.0],
             })
             .collect();
-        let mass = KeptMass::probe(&dae, t0, y0, yp0);
-        let mut corrector = Corrector::new(ls, n, mass);
+        let mut corrector = Corrector::new(ls, n);
         corrector.y.copy_from_slice(y0);
         corrector.yp.copy_from_slice(yp0);
         corrector.newton.res.copy_from_slice(&res);
