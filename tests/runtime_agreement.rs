@@ -220,6 +220,18 @@ fn same_values<A: DaeModel, B: DaeModel>(a: &A, b: &B, p: &Point) {
         m2.as_slice(),
     );
 
+    // The mass matrix alone: the same in both, and `dF/dx'` as `evaluate` writes it.
+    let mut k1 = DMatrix::<f64>::zeros(ne, nx);
+    let mut k2 = DMatrix::<f64>::zeros(ne, nx);
+    assert!(a.mass_matrix(p.t, &p.x, &p.xdot, &p.z, &p.u, &mut k1));
+    assert!(b.mass_matrix(p.t, &p.x, &p.xdot, &p.z, &p.u, &mut k2));
+    agree(&format!("{name} mass matrix"), k1.as_slice(), k2.as_slice());
+    agree(
+        &format!("{name} mass matrix against evaluate's dF/dx'"),
+        k1.as_slice(),
+        a1.as_slice(),
+    );
+
     let mut y1 = vec![0.0; ny];
     let mut y2 = vec![0.0; ny];
     a.outputs(p.t, &p.x, &p.z, &p.u, &mut y1);
