@@ -737,8 +737,12 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 &mut self.dz,
                 &mut self.faccon,
             );
-            let (iterations, theta) = match outcome {
-                NewtonOutcome::Converged { iterations, theta } => (iterations, theta),
+            let (iterations, theta, first_increment) = match outcome {
+                NewtonOutcome::Converged {
+                    iterations,
+                    theta,
+                    first_increment,
+                } => (iterations, theta, first_increment),
                 NewtonOutcome::Failed { factor } => {
                     self.stats.newton_failures += 1;
                     newton_failures += 1;
@@ -809,7 +813,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 }
             };
             if err < 1.0 {
-                self.accept(h, err, iterations, theta, rejected);
+                self.accept(h, err, (iterations, theta, first_increment), rejected);
                 return Ok(());
             }
             self.stats.error_test_failures += 1;
@@ -834,7 +838,15 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         }
     }
 
-    fn accept(&mut self, h: f64, err: f64, iterations: usize, theta: f64, rejected: bool) {
+    /// Take the step of size `h` with error `err` whose Newton iteration ended with
+    /// `(iterations, theta, first_increment)`, and choose the next step size.
+    fn accept(
+        &mut self,
+        h: f64,
+        err: f64,
+        (iterations, theta, first_increment): (usize, f64, f64),
+        rejected: bool,
+    ) {
         self.stats.steps += 1;
         let t_new = match self.tstop {
             Some(ts) if (self.t + h - ts).abs() <= 4.0 * f64::EPSILON * ts.abs().max(h) => ts,
@@ -857,6 +869,14 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         if rejected {
             h_new = h_new.min(h);
         }
+        // Newton's contraction bounds the growth where it, not the error, limits the step.
+        h_new = h_new.min(
+            h * Controller::newton_growth_limit(
+                theta,
+                first_increment,
+                self.opts.max_newton_iterations,
+            ),
+        );
         h_new = h_new.min(self.opts.max_step);
         self.restart_step = h_new;
         let keep_jacobian = theta <= self.opts.jacobian_reuse_rate;
