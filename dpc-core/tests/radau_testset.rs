@@ -136,11 +136,14 @@ fn pendulum(tol: f64, reference: &[f64; 5]) -> (f64, f64, Stats) {
 #[test]
 fn pendulum_index3_matches_independent_reference() {
     let reference = Pendulum::default().reference(THETA0, PENDULUM_T);
-    // Measured digits (x, y / all five): 5.79 / 2.50 at 1e-4, 6.52 / 2.87 at 1e-6, 8.57 / 3.35 at
-    // 1e-8 (51, 88, 173 steps; before Newton's test for higher-index problems was tightened:
-    // 3.98 / 2.71, 5.34 / 3.30, 7.36 / 3.36); the multiplier (index 3) limits "all". Floors
-    // about half a digit below.
-    for (tol, floor, floor_all) in [(1e-4, 5.3, 2.0), (1e-6, 6.0, 2.4), (1e-8, 8.0, 2.8)] {
+    // Measured digits (x, y / all five): 5.03 / 3.10 at 1e-4, 6.57 / 3.30 at 1e-6, 8.57 / 3.35 at
+    // 1e-8 (49, 88, 173 steps); the multiplier (index 3) limits "all". Floors about half a
+    // digit below. Before the step growth was bounded by Newton's predicted convergence
+    // (`Controller::newton_growth_limit`): 5.79 / 2.50 at 1e-4 in 51 steps with 17 Newton
+    // failures (now 9); over ten tolerance factors 0.8 .. 1.25 the median at 1e-4 went from
+    // 5.53 to 5.22 digits (ranges 5.01 .. 6.00 and 4.83 .. 6.26). Before Newton's test for
+    // higher-index problems was tightened: 3.98 / 2.71, 5.34 / 3.30, 7.36 / 3.36.
+    for (tol, floor, floor_all) in [(1e-4, 4.5, 2.0), (1e-6, 6.0, 2.4), (1e-8, 8.0, 2.8)] {
         let (pos, all, s) = pendulum(tol, &reference);
         println!("pendulum tol {tol:e}: {pos:.2} digits (x, y), {all:.2} (all), {s:?}");
         assert!(pos >= floor, "tol {tol}: {pos}");
@@ -285,8 +288,12 @@ fn stabilised_pendulum_keeps_both_constraints() {
         let position = y[0] * y[0] + y[1] * y[1] - 1.0;
         let velocity = y[0] * y[2] + y[1] * y[3];
         println!("pendulum GGL tol {tol:e}: {all:.2} digits (index 3: {index3:.2}), g {position:.1e}, G v {velocity:.1e}, mu {mu:?}, {s:?}");
+        // At 1e-4 the index-3 form's multiplier is nearer since the step growth is bounded
+        // by Newton's predicted convergence (all five: 2.50 -> 3.10, the GGL form 3.89 ->
+        // 3.55): the stabilised form is ahead there by less than half a digit.
+        let margin = if tol < 1e-5 { 0.5 } else { 0.0 };
         assert!(
-            all >= index3 + 0.5,
+            all > index3 + margin,
             "tol {tol}: GGL {all} vs index 3 {index3}"
         );
         assert!(

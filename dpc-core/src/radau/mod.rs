@@ -870,13 +870,14 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             h_new = h_new.min(h);
         }
         // Newton's contraction bounds the growth where it, not the error, limits the step.
-        h_new = h_new.min(
-            h * Controller::newton_growth_limit(
-                theta,
-                first_increment,
-                self.opts.max_newton_iterations,
-            ),
-        );
+        if let Some(r) = Controller::newton_growth_limit(
+            theta,
+            first_increment,
+            self.opts.max_newton_iterations,
+            h_new / h,
+        ) {
+            h_new = h * r;
+        }
         h_new = h_new.min(self.opts.max_step);
         self.restart_step = h_new;
         let keep_jacobian = theta <= self.opts.jacobian_reuse_rate;
