@@ -24,6 +24,11 @@
 //!   integrates (a step that starts at a stop time on a corner of the inputs);
 //! * a diverging Newton iteration cuts the step to where its contraction would be a half
 //!   (between a tenth and RADAU5's half);
+//! * optionally ([`Options::newton_growth_bound`]), after an accepted step the next one grows
+//!   at most to where Newton's own slow-convergence test would still pass, the contraction
+//!   predicted to grow as `h^2` and the first update as `h^4` (on Andrews' index-3 form the
+//!   error estimate proposed steps 2-7 times larger that failed that test about every other
+//!   step);
 //! * the Jacobian is kept while Newton contracts fast (rate at most
 //!   [`Options::jacobian_reuse_rate`]); the step size, and with it the factorisations, is kept
 //!   when the proposed change is small ([`Options::keep_step_window`]).
@@ -870,13 +875,15 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             h_new = h_new.min(h);
         }
         // Newton's contraction bounds the growth where it, not the error, limits the step.
-        if let Some(r) = Controller::newton_growth_limit(
-            theta,
-            first_increment,
-            self.opts.max_newton_iterations,
-            h_new / h,
-        ) {
-            h_new = h * r;
+        if self.opts.newton_growth_bound {
+            if let Some(r) = Controller::newton_growth_limit(
+                theta,
+                first_increment,
+                self.opts.max_newton_iterations,
+                h_new / h,
+            ) {
+                h_new = h * r;
+            }
         }
         h_new = h_new.min(self.opts.max_step);
         self.restart_step = h_new;
