@@ -54,7 +54,7 @@ pub struct Options {
     /// after an accepted step the next one grows at most to where Newton's slow-convergence
     /// test would still pass, with the contraction predicted to grow as `h^2` and the first
     /// update as `h^4` (see `docs/integrators.md`, "Newton failures on the index-3 forms and
-    /// the growth bound"). On Andrews' squeezing mechanism in index-3 form it removes 28-46 %
+    /// the growth bound"). On Andrews' squeezing mechanism in index-3 form it removes 28-47 %
     /// of the Newton failures and 5-18 % of the instructions, on Ascher and Petzold's index-2
     /// problem 7-24 %; not the default because at `rtol = 1e-4` several problems' digits moved
     /// down within their tolerance jitter (the index-3 pendulum 5.54 -> 5.21, median over ten
