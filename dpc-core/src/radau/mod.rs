@@ -24,6 +24,11 @@
 //!   integrates (a step that starts at a stop time on a corner of the inputs);
 //! * a diverging Newton iteration cuts the step to where its contraction would be a half
 //!   (between a tenth and RADAU5's half);
+//! * optionally ([`Options::newton_growth_bound`]), after an accepted step the next one grows
+//!   at most to where Newton's own slow-convergence test would still pass, the contraction
+//!   predicted to grow as `h^2` and the first update as `h^4` (on Andrews' index-3 form the
+//!   error estimate proposed steps 2-7 times larger that failed that test about every other
+//!   step);
 //! * the Jacobian is kept while Newton contracts fast (rate at most
 //!   [`Options::jacobian_reuse_rate`]); the step size, and with it the factorisations, is kept
 //!   when the proposed change is small ([`Options::keep_step_window`]).
@@ -750,8 +755,12 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 &mut self.dz,
                 &mut self.faccon,
             );
-            let (iterations, theta) = match outcome {
-                NewtonOutcome::Converged { iterations, theta } => (iterations, theta),
+            let (iterations, theta, first_increment) = match outcome {
+                NewtonOutcome::Converged {
+                    iterations,
+                    theta,
+                    first_increment,
+                } => (iterations, theta, first_increment),
                 NewtonOutcome::Failed { factor } => {
                     self.stats.newton_failures += 1;
                     newton_failures += 1;
@@ -822,7 +831,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 }
             };
             if err < 1.0 {
-                self.accept(h, err, iterations, theta, rejected);
+                self.accept(h, err, (iterations, theta, first_increment), rejected);
                 return Ok(());
             }
             self.stats.error_test_failures += 1;
@@ -847,7 +856,15 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         }
     }
 
-    fn accept(&mut self, h: f64, err: f64, iterations: usize, theta: f64, rejected: bool) {
+    /// Take the step of size `h` with error `err` whose Newton iteration ended with
+    /// `(iterations, theta, first_increment)`, and choose the next step size.
+    fn accept(
+        &mut self,
+        h: f64,
+        err: f64,
+        (iterations, theta, first_increment): (usize, f64, f64),
+        rejected: bool,
+    ) {
         self.stats.steps += 1;
         let t_new = match self.tstop {
             Some(ts) if (self.t + h - ts).abs() <= 4.0 * f64::EPSILON * ts.abs().max(h) => ts,
@@ -869,6 +886,17 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         let mut h_new = self.controller.accept(&self.opts, h, err, iterations);
         if rejected {
             h_new = h_new.min(h);
+        }
+        // Newton's contraction bounds the growth where it, not the error, limits the step.
+        if self.opts.newton_growth_bound {
+            if let Some(r) = Controller::newton_growth_limit(
+                theta,
+                first_increment,
+                self.opts.max_newton_iterations,
+                h_new / h,
+            ) {
+                h_new = h * r;
+            }
         }
         h_new = h_new.min(self.opts.max_step);
         self.restart_step = h_new;

@@ -69,8 +69,13 @@ impl StageWork {
 /// How one Newton solve ended.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum NewtonOutcome {
-    /// Converged after `iterations` with last contraction estimate `theta`.
-    Converged { iterations: usize, theta: f64 },
+    /// Converged after `iterations` with last contraction estimate `theta`; `first_increment`
+    /// is the norm of the first update in units of the Newton tolerance.
+    Converged {
+        iterations: usize,
+        theta: f64,
+        first_increment: f64,
+    },
     /// Will not converge at this step size: retry with `h * factor`.
     Failed { factor: f64 },
     /// A residual was not finite in this equation: retry with half the step.
@@ -147,6 +152,7 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
     let mut dyno_old = 0.0;
     let mut thq_old = 0.0;
     let mut newt = 0;
+    let mut first_increment = 0.0;
     loop {
         if newt >= nit {
             return NewtonOutcome::Failed { factor: 0.5 };
@@ -206,6 +212,9 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
         if !dyno.is_finite() {
             return NewtonOutcome::Failed { factor: 0.5 };
         }
+        if newt == 1 {
+            first_increment = dyno / p.fnewt;
+        }
         if newt > 1 && newt < nit {
             let thq = dyno / dyno_old;
             theta = if newt == 2 {
@@ -220,7 +229,13 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
                 let dyth = *faccon * dyno * theta.powi(remaining) / p.fnewt;
                 if dyth >= 1.0 {
                     if at_roundoff(sm, tab, p, work, dyno) {
-                        return converged_at_roundoff(tab, p, work, dz, newt, theta);
+                        return converged_at_roundoff(
+                            tab,
+                            p,
+                            work,
+                            dz,
+                            (newt, theta, first_increment),
+                        );
                     }
                     let qnewt = dyth.clamp(1e-4, 20.0);
                     let factor = 0.8 * qnewt.powf(-1.0 / (4.0 + f64::from(remaining)));
@@ -228,7 +243,7 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
                 }
             } else {
                 if at_roundoff(sm, tab, p, work, dyno) {
-                    return converged_at_roundoff(tab, p, work, dz, newt, theta);
+                    return converged_at_roundoff(tab, p, work, dz, (newt, theta, first_increment));
                 }
                 return NewtonOutcome::Failed {
                     factor: divergence_factor(theta),
@@ -246,6 +261,7 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
             return NewtonOutcome::Converged {
                 iterations: newt,
                 theta,
+                first_increment,
             };
         }
     }
@@ -314,8 +330,7 @@ fn converged_at_roundoff(
     p: &StageProblem<'_>,
     work: &mut StageWork,
     dz: &[Vec<f64>; 3],
-    iterations: usize,
-    theta: f64,
+    (iterations, theta, first_increment): (usize, f64, f64),
 ) -> NewtonOutcome {
     for (zi, di) in work.z.iter_mut().zip(dz.iter()) {
         for (a, b) in zi.iter_mut().zip(di) {
@@ -323,7 +338,11 @@ fn converged_at_roundoff(
         }
     }
     stage_derivatives(tab, p.h, &work.z, &mut work.yp);
-    NewtonOutcome::Converged { iterations, theta }
+    NewtonOutcome::Converged {
+        iterations,
+        theta,
+        first_increment,
+    }
 }
 
 #[cfg(test)]
