@@ -48,9 +48,10 @@
 //! derivatives, or three residuals and an iteration matrix without them (a residual before the
 //! first iteration matrix: one more residual, or one more matrix, for `c_j`); per iteration
 //! matrix, the wrapped DAE's iteration matrix, two residuals and the exact derivatives, or
-//! four iteration matrices and a residual without them. Its mass matrix `dF/dy'` is the
-//! wrapped DAE's, when that supplies one ([`ImplicitDae::mass_matrix`]; the stabilisation adds
-//! no `y'`), at the cost of the wrapped one.
+//! four iteration matrices and a residual without them; `c_j` is read off the wrapped DAE's
+//! mass matrix instead when it supplies one ([`ImplicitDae::mass_matrix`]), one residual or one
+//! iteration matrix less. Its own mass matrix `dF/dy'` is the wrapped DAE's (the
+//! stabilisation adds no `y'`), at the cost of the wrapped one.
 //!
 //! ```
 //! use dpc_core::stabilised::Stabilised;
@@ -173,8 +174,8 @@ struct Scratch {
     /// `G` (constraint rows, position columns) and, when `G` comes from the iteration matrix
     /// at `c = 0`, `dF_i/dq_j` of the kinematic rows.
     grad: Selection,
-    /// The same entries of the iteration matrix at `c = 1` (for `c_j` when `G` is not
-    /// supplied).
+    /// The same entries of `dF/dy'` (for `c_j`, when the DAE supplies it) or of the iteration
+    /// matrix at `c = 1` (for `c_j` when neither it nor `G` is supplied).
     grad_c1: Selection,
     /// `c_j = dF_i/dq_j'` per kinematic pair.
     coef: Vec<f64>,
@@ -442,12 +443,20 @@ impl<D: ImplicitDae> Stabilised<D> {
         false
     }
 
-    /// `c_j = dF_i/dq_j'` of the kinematic rows into `sc.coef`, from the iteration matrix at
+    /// `c_j = dF_i/dq_j'` of the kinematic rows into `sc.coef`: from the DAE's `dF/dy'` when it
+    /// supplies one ([`ImplicitDae::mass_matrix`]), else from the iteration matrix at
     /// `c = 1` less the one at `c = 0` already in `sc.grad` (`exact_gradient` false), or, when
     /// `G` was supplied and the iteration matrix not evaluated, from one residual at `y'`
     /// moved along every position (each kinematic row has only its own `q_j'`, linearly;
     /// `sc.res` holds the residual at `(t, y, y')`).
     fn coefficients(&self, t: f64, y: &[f64], yp: &[f64], exact_gradient: bool, sc: &mut Scratch) {
+        sc.grad_c1.fill_zero();
+        if self.dae.mass_matrix(t, y, yp, &mut sc.grad_c1) {
+            for (c, &(j, i)) in sc.coef.iter_mut().zip(&self.kinematic) {
+                *c = sc.grad_c1.get(i, j);
+            }
+            return;
+        }
         if exact_gradient {
             sc.yp_moved.copy_from_slice(yp);
             for &(j, _) in &self.kinematic {
