@@ -220,11 +220,12 @@ pub(crate) fn solve(lu: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
 
 /// The dimension from which [`super::NalgebraLu`] factorises with [`factor_split_fixed`] and
 /// solves with [`solve_split_fixed`]. Below it the full-length updates cost more than the
-/// loops they replace (in 128-bit instructions: the wheel's closed loop, 5 x 5 and 7 x 7
-/// systems, 1.1 % more instructions); from it, in 256-bit ones, they cost less (the NAND
-/// gate's 14 x 14: solves 5.7 M -> 3.1 M instructions, factorisations 4.7 M -> 3.6 M, the run
-/// 9.5 % fewer).
-pub(crate) const SPLIT_FROM: usize = 8;
+/// loops they replace (the wheel's closed loop, 5 x 5 and 7 x 7 systems, 1.1 % more
+/// instructions; per BDF corrector solve, HIRES and the transistor amplifier (8 x 8) 5.5 %
+/// more, the charge pump (9 x 9) 6 % more); at 10 x 10 they are even (the car axis, 1.4 %
+/// fewer), and from there they cost less (the NAND gate's 14 x 14: solves 5.7 M -> 3.1 M
+/// instructions, factorisations 4.7 M -> 3.6 M, the run 9.5 % fewer).
+pub(crate) const SPLIT_FROM: usize = 10;
 
 /// [`solve`] from the factors split by [`split`]: `lower` holds `L` below the diagonal and
 /// zeros on and above it, `upper` holds `U` above the diagonal and zeros on and below it,
