@@ -2,9 +2,10 @@
 //! iteration matrix: `J(c) = J(0) + c M` entry by entry, relative to the row's largest term,
 //! for `c = 1` and `c = 1e3`, at the fixture's initial point and at a point moved by a small
 //! pseudo-random amount (fixed seed; `tests/common/matrix_check.rs`), within its iteration
-//! pattern when it declares one. The integrators rely on it: the BDF re-forms `J + c M` at a
-//! new `c` from the kept `M`, Radau takes `M` from it. The stabilised forms of the index-3
-//! fixtures (`Stabilised`, which forwards the wrapped DAE's) are checked the same way, with
+//! pattern when it declares one. Radau relies on it (it takes `M` from it instead of a second
+//! iteration matrix), and so does `Stabilised` (the kinematic rows' `c_j`). The stabilised
+//! forms of the index-3 fixtures (`Stabilised`, which forwards the wrapped DAE's) are checked
+//! the same way, with
 //! exact constraint derivatives (Andrews, the car axis, the pendulum, Fekete) and without them
 //! (the circular track through `Stabilised::detect`).
 
@@ -50,9 +51,9 @@ fn check<D: ImplicitDae>(name: &str, dae: &D, t: f64, y: &[f64], yp: &[f64]) {
 
 /// [`check`] on `dae`'s stabilised form at the stabilised `(y, mu = 0)`, within `(1 + c)`
 /// times [`MASS_TOL`]: the hidden velocity constraints' `c`-terms in `J(c)`, `c G_aj` and
-/// `-c G_aj dF_i/dy'_j / c_j`, cancel (their `dF/dy'` is zero) up to the rounding of `c_j`,
-/// which `Stabilised` takes from a difference of residuals (a few ulps away from the exact
-/// `dF_i/dy'_j`): terms `c` times as large as the `G_aj` in the velocity columns of the row.
+/// `-c G_aj dF_i/dy'_j / c_j`, cancel (their `dF/dy'` is zero) up to rounding: terms `c`
+/// times as large as the `G_aj` in the velocity columns of the row (and a few ulps more where
+/// `Stabilised` takes `c_j` from a difference of residuals, for a DAE without a mass matrix).
 fn check_stabilised<D: ImplicitDae>(name: &str, s: &Stabilised<D>, t: f64, y: &[f64], yp: &[f64]) {
     let (ys, yps) = s.extend(y, yp);
     let worst = check_mass_matrix_within(name, s, (t, &ys, &yps), |c| (1.0 + c) * MASS_TOL);
