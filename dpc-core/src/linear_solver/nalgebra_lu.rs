@@ -68,7 +68,7 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
                 &mut self.diag,
             )
         } else {
-            unblocked::factor(self.lu.as_mut_slice(), N, &mut self.pivots)
+            unblocked::factor_columns::<N>(&mut self.lu.data.0, &mut self.pivots)
         };
         if let Err(SingularPivot { column }) = factored {
             let m = &self.matrix;

@@ -4,9 +4,10 @@
 //! elimination (Golub & Van Loan, *Matrix Computations*, Algorithm 3.4.1) on a contiguous
 //! column-major array beats a blocked factorisation, whose set-up and dispatch cost more than
 //! the arithmetic at these sizes. Both [`super::NalgebraLu`] and [`super::FaerDenseLu`] (up to
-//! [`UNBLOCKED_MAX_DIMENSION`]) factorise with [`factor`] and solve with [`solve`];
-//! [`super::NalgebraLu`] from [`SPLIT_FROM`] on with the same elimination in full-length
-//! column updates ([`factor_split_fixed`], [`solve_split_fixed`]). None allocates.
+//! [`UNBLOCKED_MAX_DIMENSION`]) factorise with [`factor`] and solve with [`solve`]: below
+//! [`SPLIT_FROM`] with its steps unrolled ([`factor_columns`]), [`super::NalgebraLu`] from
+//! [`SPLIT_FROM`] on with the same elimination in full-length column updates
+//! ([`factor_split_fixed`], [`solve_split_fixed`]). None allocates.
 
 /// Largest dimension for which [`super::FaerDenseLu`] uses this unblocked LU instead of
 /// faer's blocked one ([`super::NalgebraLu`] always uses it).
@@ -182,6 +183,97 @@ fn factor_by(
     Ok(())
 }
 
+/// [`factor`] for a compile-time `N` below [`SPLIT_FROM`] on an array of `N` columns: the
+/// same elimination, pivots, test of a numerically zero pivot and factors (the same operations
+/// in the same order, so the same numbers), with every step `k` inlined with `k` a literal, so
+/// that all loop bounds are constants and the compiler unrolls the short loops that [`factor`]
+/// runs through iterator set-up. The charge pump's 9 x 9 factorisation: 3 340 -> 1 300
+/// instructions, its BDF run 8 % less time; from [`SPLIT_FROM`] on, the split elimination
+/// takes less time (the NAND gate's 14 x 14 unrolled: 26 % fewer instructions but 1 % more
+/// time, the slider crank's 24 x 24 likewise).
+///
+/// # Errors
+/// As [`factor`].
+#[inline(always)]
+pub(crate) fn factor_columns<const N: usize>(
+    a: &mut [[f64; N]; N],
+    pivots: &mut [usize; N],
+) -> Result<(), SingularPivot> {
+    if a.iter()
+        .flatten()
+        .fold(false, |bad, v| bad | !v.is_finite())
+    {
+        let first = a.iter().flatten().position(|v| !v.is_finite()).unwrap_or(0);
+        return Err(SingularPivot { column: first / N });
+    }
+    let round_off = SINGULAR_PIVOT_EPSILONS * N as f64 * f64::EPSILON;
+    macro_rules! steps {
+        ($($k:literal)*) => {
+            $(if $k < N {
+                elimination_step::<N>(a, pivots, $k, round_off)?;
+            })*
+        };
+    }
+    steps!(0 1 2 3 4 5 6 7 8);
+    // Beyond the literal steps (not used by NalgebraLu, which splits from SPLIT_FROM on).
+    for k in 9..N {
+        elimination_step::<N>(a, pivots, k, round_off)?;
+    }
+    Ok(())
+}
+
+/// Step `k` of [`factor_columns`]: the pivot, the interchange, the test, the multipliers and
+/// the update of the columns right of `k`. Index loops on purpose: with `k` a literal their
+/// bounds are constants, which is what lets them unroll.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn elimination_step<const N: usize>(
+    a: &mut [[f64; N]; N],
+    pivots: &mut [usize; N],
+    k: usize,
+    round_off: f64,
+) -> Result<(), SingularPivot> {
+    let mut pivot_row = k;
+    let mut best = a[k][k].abs();
+    for i in k + 1..N {
+        let v = a[k][i].abs();
+        if v > best {
+            best = v;
+            pivot_row = i;
+        }
+    }
+    pivots[k] = pivot_row;
+    if pivot_row != k {
+        for col in a.iter_mut() {
+            col.swap(k, pivot_row);
+        }
+    }
+    // The terms l_km u_mk that were subtracted from the pivot's original entry.
+    let mut subtracted = 0.0;
+    for m in 0..k {
+        subtracted += (a[m][k] * a[k][m]).abs();
+    }
+    let regular = best.is_finite() && best > round_off * (best + subtracted);
+    if !regular {
+        return Err(SingularPivot { column: k });
+    }
+    let (left, right) = a.split_at_mut(k + 1);
+    let col_k = &mut left[k];
+    let d = 1.0 / col_k[k];
+    for i in k + 1..N {
+        col_k[i] *= d;
+    }
+    for col in right.iter_mut() {
+        let akj = col[k];
+        if akj != 0.0 {
+            for i in k + 1..N {
+                col[i] -= col_k[i] * akj;
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Overwrite `b` with the solution of `A x = b` from a factorisation by [`factor`].
 ///
 /// # Panics
@@ -329,14 +421,28 @@ pub(crate) fn factor_dispatched(
     pivots: &mut [usize],
 ) -> Result<(), SingularPivot> {
     macro_rules! sizes {
-        ($($k:literal)*) => {
+        ($($c:literal)*; $($k:literal)*) => {
             match n {
+                $($c => factor_slice::<$c>(a, pivots),)*
                 $($k => factor(a, $k, pivots),)*
                 _ => factor(a, n, pivots),
             }
         };
     }
-    sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    // Below SPLIT_FROM the unrolled elimination of the fixed-size solver, above it the loops.
+    sizes!(1 2 3 4 5 6 7 8 9; 10 11 12 13 14 15 16)
+}
+
+/// [`factor_columns`] on the first `N * N` entries of a column-major slice.
+///
+/// # Panics
+/// If `a` is shorter than `N * N` or `pivots` shorter than `N` (a caller's sizing bug).
+#[inline(always)]
+fn factor_slice<const N: usize>(a: &mut [f64], pivots: &mut [usize]) -> Result<(), SingularPivot> {
+    let (columns, _) = a[..N * N].as_chunks_mut::<N>();
+    let columns: &mut [[f64; N]; N] = columns.try_into().expect("N columns of N entries");
+    let pivots: &mut [usize; N] = (&mut pivots[..N]).try_into().expect("N pivots");
+    factor_columns(columns, pivots)
 }
 
 /// [`solve`] with `n` turned into a constant, as [`factor_dispatched`].
@@ -456,6 +562,58 @@ mod tests {
         let got = factor_split_fixed::<N>(&mut a, &mut pivots, &mut upper, &mut diag);
         assert!(want.is_err());
         assert_eq!(got, want);
+    }
+
+    /// `factor_slice::<N>` against `factor` on the leading `N x N` block of `random_12()`:
+    /// the same factors and pivots bit for bit, and the same error on a singular matrix.
+    fn unrolled_equals_generic<const N: usize>() {
+        let full = random_12();
+        let a: Vec<f64> = (0..N * N).map(|k| full[(k / N) * 12 + k % N]).collect();
+        let (mut want, mut got) = (a.clone(), a.clone());
+        let (mut want_pivots, mut got_pivots) = ([0; N], [0; N]);
+        let want_result = factor(&mut want, N, &mut want_pivots);
+        let got_result = factor_slice::<N>(&mut got, &mut got_pivots);
+        assert_eq!(got_result, want_result, "N = {N}");
+        assert_eq!(got_pivots, want_pivots, "N = {N}");
+        assert!(
+            got.iter()
+                .zip(&want)
+                .all(|(g, w)| g.to_bits() == w.to_bits()),
+            "N = {N}"
+        );
+        if N > 2 {
+            // The last column a copy of the first: the vanishing pivot's column, as `factor`.
+            let mut singular = a.clone();
+            for i in 0..N {
+                singular[(N - 1) * N + i] = a[i];
+            }
+            let mut generic = singular.clone();
+            let want = factor(&mut generic, N, &mut want_pivots);
+            assert!(want.is_err(), "N = {N}");
+            assert_eq!(factor_slice::<N>(&mut singular, &mut got_pivots), want);
+        }
+    }
+
+    #[test]
+    fn the_unrolled_factorisation_equals_the_generic_one() {
+        // Every size it serves (through `factor_dispatched` and NalgebraLu), and one beyond
+        // its literal steps.
+        unrolled_equals_generic::<1>();
+        unrolled_equals_generic::<2>();
+        unrolled_equals_generic::<3>();
+        unrolled_equals_generic::<4>();
+        unrolled_equals_generic::<5>();
+        unrolled_equals_generic::<6>();
+        unrolled_equals_generic::<7>();
+        unrolled_equals_generic::<8>();
+        unrolled_equals_generic::<9>();
+        unrolled_equals_generic::<11>();
+        let mut a = random_12()[..81].to_vec();
+        a[4 * 9 + 7] = f64::INFINITY;
+        assert_eq!(
+            factor_slice::<9>(&mut a, &mut [0; 9]),
+            Err(SingularPivot { column: 4 })
+        );
     }
 
     #[test]
