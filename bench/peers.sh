@@ -43,3 +43,38 @@ done
 echo "| problem | rtol | code | steps | error-test failures | Newton failures | Jacobians | scd | time [ms] |"
 echo "|---|---|---|---|---|---|---|---|---|"
 sort -s -t $'\t' -k1,1 "$rows" | cut -f2-
+# dpc's time as a fraction of the peers' and the digits it gains, per problem and tolerance
+# (from the rows above; "fails" where that code failed, empty where it was not run).
+echo
+echo "| problem | rtol | dpc BDF / IDA | dpc Radau / IDA | dpc BDF / diffsol | scd dpc BDF - IDA |"
+echo "|---|---|---|---|---|---|"
+sort -s -t $'\t' -k1,1 "$rows" | cut -f2- | awk -F'|' '
+    function trim(s) { gsub(/^ +| +$/, "", s); return s }
+    function code(c) {
+        if (c == "dpc BDF") return "bdf"
+        if (c == "dpc Radau") return "radau"
+        if (c ~ /^IDA/) return "ida"
+        if (c ~ /^diffsol/ && c !~ /given/) return "diffsol"
+        return ""
+    }
+    function ratio(a, b) {
+        if (!((key, a) in ms) || !((key, b) in ms)) return ""
+        if (ms[key, a] == "" ) return "fails"
+        if (ms[key, b] == "") return (b == "ida" ? "IDA" : b) " fails"
+        return sprintf("%.2f", ms[key, a] / ms[key, b])
+    }
+    {
+        k = trim($2) " | " trim($3); c = code(trim($4))
+        if (c == "") next
+        if (!(k in seen)) { seen[k] = 1; order[++n] = k }
+        ms[k, c] = trim($10); scd[k, c] = trim($9)
+    }
+    END {
+        for (i = 1; i <= n; i++) {
+            key = order[i]
+            d = ""
+            if (scd[key, "bdf"] != "" && scd[key, "ida"] != "")
+                d = sprintf("%+.2f", scd[key, "bdf"] - scd[key, "ida"])
+            printf "| %s | %s | %s | %s | %s |\n", key, ratio("bdf", "ida"), ratio("radau", "ida"), ratio("bdf", "diffsol"), d
+        }
+    }'
