@@ -35,6 +35,10 @@
 //!   `t = 320`, scored on the outputs `S0, S1, C`), run from corner to corner of its inputs by
 //!   Radau and the BDF with faer's LU as `FaerLu::for_dae` picks it (sparse) and by the BDF with
 //!   faer's dense LU,
+//! * the Test Set's stiff ODEs written as `F = y' - f(t, y)` (`tests/common/stiff_odes.rs`):
+//!   Van der Pol (`eps = 1e-6`, to `t = 2`), OREGO (to `t = 360`), Pollution (20 unknowns, to
+//!   `t = 60`) and the ring modulator (15 unknowns, to `t = 1e-3`), all components scored, by
+//!   Radau and the BDF,
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
@@ -64,6 +68,8 @@ mod pump;
 mod slider_crank;
 #[path = "../tests/common/standard_dae.rs"]
 mod standard_dae;
+#[path = "../tests/common/stiff_odes.rs"]
+mod stiff_odes;
 #[path = "../tests/common/testset_index1.rs"]
 mod testset_index1;
 #[path = "../tests/common/testset_index3.rs"]
@@ -174,11 +180,16 @@ enum Problem {
     WaterTube,
     Wheelset,
     TwoBitAdder,
+    // The Test Set's stiff ODEs (`stiff_ode_rows`).
+    VanDerPol,
+    Orego,
+    Pollution,
+    RingModulator,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 17] = [
+    const ALL: [Self; 21] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -196,6 +207,10 @@ impl Problem {
         Self::WaterTube,
         Self::Wheelset,
         Self::TwoBitAdder,
+        Self::VanDerPol,
+        Self::Orego,
+        Self::Pollution,
+        Self::RingModulator,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -218,6 +233,10 @@ impl Problem {
             Self::WaterTube => "water tube (index 2; all)",
             Self::Wheelset => "wheelset (index 2; all)",
             Self::TwoBitAdder => "two bit adding unit (index 1; S0, S1, C)",
+            Self::VanDerPol => "Van der Pol, eps = 1e-6 (ODE; all)",
+            Self::Orego => "OREGO (ODE; all)",
+            Self::Pollution => "Pollution (ODE; all)",
+            Self::RingModulator => "ring modulator (ODE; all)",
         }
     }
 }
@@ -766,6 +785,7 @@ fn main() {
         water_tube_rows(k, tol);
         wheelset_rows(k, tol, &scalar);
         two_bit_adder_rows(k, tol);
+        stiff_ode_rows(k, tol);
     }
 }
 
@@ -929,4 +949,43 @@ fn wheelset_rows(k: i32, tol: f64, scalar: &bdf::Options) {
             indexed_run::<WHEEL_DIM, _>(code, Wheelset, start, index, tol, scalar, WHEEL_T_END)
         });
     }
+}
+
+/// The rows of the Test Set's stiff ODEs (`F = y' - f(t, y)`, identity mass matrix) at
+/// `rtol = atol = tol` (label `1e-k`), all components scored: Radau and the BDF, both allowed
+/// 10^6 steps as IDA and diffsol are in their peers (the ring modulator takes 1.7 10^5 steps at
+/// 1e-6 and 3.6 10^5 at 1e-8 in IDA, beyond the default 10^5).
+fn stiff_ode_rows(k: i32, tol: f64) {
+    use stiff_odes::{Ode, Orego, Pollution, RingModulator, StiffOde, VanDerPol};
+    fn rows<P: StiffOde + Copy, const N: usize>(problem: Problem, p: P, k: i32, tol: f64) {
+        let dae = Ode(p);
+        let (y0, yp0) = dae.initial();
+        let reference = p.reference();
+        let all: Vec<usize> = (0..N).collect();
+        for code in [Code::Radau, Code::Bdf] {
+            row(problem, k, code, &reference, &all, || {
+                let start = (&y0[..], &yp0[..]);
+                match code {
+                    Code::Radau => {
+                        let opts = radau::Options {
+                            max_steps: 1_000_000,
+                            ..radau::Options::with_tolerances(tol, tol)
+                        };
+                        radau_run::<N, _>(dae, start, opts, P::T_END)
+                    }
+                    _ => {
+                        let opts = bdf::Options {
+                            max_steps: 1_000_000,
+                            ..bdf::Options::with_tolerances(tol, tol)
+                        };
+                        bdf_run::<N, _>(dae, start, opts, P::T_END)
+                    }
+                }
+            });
+        }
+    }
+    rows::<_, 2>(Problem::VanDerPol, VanDerPol, k, tol);
+    rows::<_, 3>(Problem::Orego, Orego, k, tol);
+    rows::<_, 20>(Problem::Pollution, Pollution, k, tol);
+    rows::<_, 15>(Problem::RingModulator, RingModulator, k, tol);
 }

@@ -6,6 +6,7 @@
 //! ```sh
 //! bash bench/peers.sh diffsol           # or, from bench/diffsol_peer:
 //! cargo run --release
+//! cargo run --release -- 1.1 OREGO      # rtol = atol = 1.1e-k, the rows of one problem
 //! ```
 //!
 //! diffsol takes `M y' = phi(t, y)` with a constant mass matrix `M`. Robertson, the transistor
@@ -49,6 +50,11 @@
 //! both ways at 1e-4 and 1e-6 with the fixture's exact Jacobian entries: diffsol's
 //! initialisation fails on it ("LU solve failed"); from the consistent `(y0, y0')` it runs at
 //! 1e-4. At 1e-8 dpc-core's BDF and IDA fail, and it is not run.
+//!
+//! The Test Set's stiff ODEs (rows 18-21: Van der Pol with `eps = 1e-6`, OREGO, Pollution, the
+//! ring modulator; `dpc-core/tests/common/stiff_odes.rs`) are given as diffsol intends an ODE:
+//! `y' = f(t, y)` without a mass matrix, with the fixtures' exact Jacobians `df/dy`, at
+//! `rtol = atol = tol`.
 
 #[path = "../../../dpc-core/tests/common/bdf_problems.rs"]
 mod bdf_problems;
@@ -58,6 +64,8 @@ mod peer_table;
 mod pump;
 #[path = "../../../dpc-core/tests/common/standard_dae.rs"]
 mod standard_dae;
+#[path = "../../../dpc-core/tests/common/stiff_odes.rs"]
+mod stiff_odes;
 #[path = "../../../dpc-core/tests/common/testset_index1.rs"]
 mod testset_index1;
 #[path = "../../../dpc-core/tests/common/testset_index3.rs"]
@@ -74,7 +82,7 @@ use diffsol::{
 };
 use dpc_core::ImplicitDae;
 use nalgebra::DMatrix;
-use peer_table::{row, Run};
+use peer_table::Run;
 use standard_dae::{ChemAkzo, Hires, AKZO_REF, AKZO_T_END, HIRES_REF, HIRES_T_END};
 use std::cell::RefCell;
 use testset_index1::{TransistorAmplifier, TRANSAMP_REF, TRANSAMP_T_END};
@@ -378,6 +386,33 @@ fn hires(tol: f64) -> Result<Run, String> {
     finish(solver, HIRES_T_END, 8)
 }
 
+/// A stiff ODE of the Test Set (`stiff_odes.rs`) as diffsol's `y' = f(t, y)` with its exact
+/// Jacobian, at `rtol = atol = tol`, to its interval's end.
+fn stiff_ode<P: stiff_odes::StiffOde + Copy + 'static>(p: P, tol: f64) -> Result<Run, String> {
+    let n = P::N;
+    let y0 = p.y0();
+    let problem = OdeBuilder::<M>::new()
+        .rtol(tol)
+        .atol(vec![tol; n])
+        .rhs_implicit(
+            move |y: &[f64], _p: &[f64], t: f64, out: &mut [f64]| p.f(t, y, out),
+            move |y: &[f64], _p: &[f64], t: f64, v: &[f64], out: &mut [f64]| {
+                out.fill(0.0);
+                p.jacobian(t, y, |r, c, a| out[r] += a * v[c]);
+            },
+        )
+        .init(
+            move |_p: &[f64], _t: f64, y: &mut [f64]| y.copy_from_slice(&y0),
+            n,
+        )
+        .build()
+        .map_err(|e| e.to_string())?;
+    let solver = problem
+        .bdf::<NalgebraLU<f64>>()
+        .map_err(|e| e.to_string())?;
+    finish(solver, P::T_END, n)
+}
+
 /// `dF/dy` of `dae` at `(t, y)` (the iteration matrix at `c = 0`), cached for the last point:
 /// diffsol asks for `d phi / d y` one column at a time.
 struct JacobianCache {
@@ -563,6 +598,23 @@ fn two_bit_adder(tol: f64, given: bool) -> Result<Run, String> {
     finish_breaks(solver, &tba_breaks(), TBA_N)
 }
 
+/// [`peer_table::row`], unless the command line's second argument is given and is not part of
+/// the problem's label (`diffsol-peer 1 OREGO`: the OREGO rows alone).
+fn row(
+    key: (u8, &str),
+    k: i32,
+    code: (u8, &str),
+    score: impl Fn(&[f64]) -> f64,
+    solve: impl Fn() -> Result<Run, String>,
+) {
+    if let Some(only) = std::env::args().nth(2) {
+        if !key.1.contains(only.as_str()) {
+            return;
+        }
+    }
+    peer_table::row(key, k, code, score, solve);
+}
+
 const CODE: (u8, &str) = (5, "diffsol 0.19 BDF");
 const CODE_GIVEN: (u8, &str) = (6, "diffsol 0.19 BDF (y0' given)");
 
@@ -696,5 +748,31 @@ fn main() {
                 );
             }
         }
+        stiff_ode_rows(k, tol);
     }
+}
+
+/// The rows of the Test Set's stiff ODEs (18-21 of dpc-core's table), all components scored.
+fn stiff_ode_rows(k: i32, tol: f64) {
+    use stiff_odes::{Orego, Pollution, RingModulator, StiffOde, VanDerPol};
+    fn one<P: StiffOde + Copy + 'static>(key: (u8, &str), p: P, k: i32, tol: f64) {
+        let reference = p.reference();
+        let all: Vec<usize> = (0..P::N).collect();
+        row(
+            key,
+            k,
+            CODE,
+            |y| scd(y, &reference, &all),
+            || stiff_ode(p, tol),
+        );
+    }
+    one(
+        (18, "Van der Pol, eps = 1e-6 (ODE; all)"),
+        VanDerPol,
+        k,
+        tol,
+    );
+    one((19, "OREGO (ODE; all)"), Orego, k, tol);
+    one((20, "Pollution (ODE; all)"), Pollution, k, tol);
+    one((21, "ring modulator (ODE; all)"), RingModulator, k, tol);
 }
