@@ -64,7 +64,7 @@
 //!   curved in it, needs it smaller: Robertson's `y2` (of order `1e-5`, `3e7 y2^2` in its
 //!   residual) with the default perturbs `y2` by `1.5e-8`, an error of `0.45` in an entry of
 //!   `1e4` that the iteration matrix's near-singular direction at large steps (`c ~ 1e-10`)
-//!   turns into a Newton contraction above 1: 38 444 steps for 452 with the exact matrix at
+//!   turns into a Newton contraction near 1: 38 444 steps for 452 with the exact matrix at
 //!   `rtol = 1e-4`, and no correct digit. [`with_absolute_tolerance`](DifferenceQuotients::with_absolute_tolerance)
 //!   sets IDA's floor from the `atol` given to the integrator;
 //!   [`with_typical`](DifferenceQuotients::with_typical) sets the magnitudes directly;
@@ -82,10 +82,9 @@
 //!   any step an accurate integration takes.
 //!
 //! The increment has the sign of `y'_j` (IDA: of `h y'_j`), so the perturbed point lies on
-//! the side the solution moves to (a residual defined only up to where the solution goes, a
-//! `sqrt(1 - y)` as `y` rises to 1, is then not evaluated beyond it sooner than the solution
-//! itself gets there), and is rounded to `(y_j + inc_j) - y_j` so the step divided by is the
-//! step taken.
+//! the side the solution moves to, which the next steps evaluate anyway; the other side may be
+//! outside the residual's domain when the solution leaves a boundary (a `sqrt(y)` as `y` rises
+//! from 0). It is rounded to `(y_j + inc_j) - y_j` so the step divided by is the step taken.
 //!
 //! [`central`](DifferenceQuotients::central) differences, `(F(+) - F(-)) / (2 inc_j)` with
 //! `inc_j = eps^(1/3)` times the scale, leave about two thirds of the residual's digits

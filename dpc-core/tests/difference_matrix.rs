@@ -9,6 +9,8 @@
 mod bdf_problems;
 #[path = "common/counting_allocator.rs"]
 mod counting_allocator;
+#[path = "common/differenced.rs"]
+mod differenced;
 #[path = "common/matrix_check.rs"]
 mod matrix_check;
 #[path = "common/testset_index1.rs"]
@@ -23,6 +25,7 @@ mod water_tube;
 use std::cell::Cell;
 
 use bdf_problems::{robertson_atol, significant_digits, Robertson, ROBERTSON_REF};
+use differenced::Differenced;
 use dpc_core::bdf::{self, Bdf, Tolerance};
 use dpc_core::difference::{DifferenceQuotients, Prepared};
 use dpc_core::linear_solver::{FaerDenseLu, FaerLu, NalgebraLu};
@@ -36,53 +39,6 @@ use testset_index3::{
 };
 use two_bit_adder::TwoBitAdder;
 use water_tube::WaterTube;
-
-/// A fixture with its Jacobian hidden, as a user who ported only `F` writes it: the iteration
-/// matrix by differences in one line, no mass matrix, the pattern when `declare_pattern`.
-struct Differenced<D> {
-    dae: D,
-    differences: DifferenceQuotients,
-    declare_pattern: bool,
-}
-
-impl<D: ImplicitDae> Differenced<D> {
-    fn new(dae: D, differences: DifferenceQuotients) -> Self {
-        Self {
-            dae,
-            differences,
-            declare_pattern: true,
-        }
-    }
-}
-
-impl<D: ImplicitDae> ImplicitDae for Differenced<D> {
-    fn dimension(&self) -> usize {
-        self.dae.dimension()
-    }
-    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-        self.dae.residual(t, y, yp, out);
-    }
-    fn iteration_matrix<S: MatrixSink + ?Sized>(
-        &self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        c: f64,
-        out: &mut S,
-    ) {
-        self.differences.iteration_matrix(self, t, y, yp, c, out);
-    }
-    fn is_differential(&self, i: usize) -> bool {
-        self.dae.is_differential(i)
-    }
-    fn iteration_pattern(&self) -> Option<Vec<(usize, usize)>> {
-        if self.declare_pattern {
-            self.dae.iteration_pattern()
-        } else {
-            None
-        }
-    }
-}
 
 /// Robertson's difference quotients with IDA's floor, the absolute tolerances of the run at
 /// `rtol` (`y2` is of order `1e-5`, far from the default typical magnitude 1).
@@ -678,6 +634,10 @@ fn a_non_finite_residual_at_a_perturbed_point_is_a_non_finite_entry() {
     let y = 1.0 - 1e-10;
     dq.iteration_matrix(&ToTheEdge, 0.0, &[y], &[(1e-10f64).sqrt()], 5.0, &mut m);
     assert!(!m[(0, 0)].is_finite(), "{}", m[(0, 0)]);
+    // At y = 1 - 1e-10 moving down (y' < 0) the perturbed point stays inside: finite.
+    m.fill_zero();
+    dq.iteration_matrix(&ToTheEdge, 0.0, &[y], &[-1e-5], 5.0, &mut m);
+    assert!(m[(0, 0)].is_finite(), "{}", m[(0, 0)]);
     // Away from the edge the entry is c + 1 / (2 sqrt(1 - y)).
     m.fill_zero();
     dq.iteration_matrix(&ToTheEdge, 0.0, &[0.75], &[0.5], 5.0, &mut m);
