@@ -40,7 +40,11 @@
 //!   `t = 60`) and the ring modulator (15 unknowns, to `t = 1e-3`), all components scored, by
 //!   Radau and the BDF,
 //!
-//! at `rtol = atol = 1e-4, 1e-6, 1e-8`. Every line is a row prefixed by a sort key and a tab;
+//! at `rtol = atol = 1e-4, 1e-6, 1e-8`; and the BDF with the iteration matrix by the library's
+//! difference quotients ([`dpc_core::difference`], rows "difference quotients") on Robertson
+//! (IDA's floor from its `atol`), the transistor amplifier and the two bit adding unit (columns
+//! grouped by its pattern, faer's sparse LU), the peers of IDA's own difference quotients
+//! (`ida_peer dq:`). Every line is a row prefixed by a sort key and a tab;
 //! `bench/peers.sh` merges it with SUNDIALS IDA's rows (`bench/ida_peer.c`) and diffsol's
 //! (`bench/diffsol_peer`).
 //!
@@ -54,6 +58,8 @@
 //! label): the Test Set's measure is the median over small jitters such as `0.9, 1, 1.1`, and
 //! the BDF's work on the transistor amplifier is a chaotic function of the tolerance.
 
+#[path = "../tests/common/differenced.rs"]
+mod differenced;
 #[path = "../tests/common/fekete.rs"]
 mod fekete;
 #[path = "../tests/common/nand.rs"]
@@ -255,6 +261,14 @@ enum Code {
     /// The BDF with faer's sparse LU and the unknowns the index estimate reads as of index 2
     /// at the start declared in `Options::index` (the two bit adding unit).
     BdfSparseDeclared,
+    /// The BDF with the iteration matrix by [`dpc_core::difference`] (13: IDA's own
+    /// difference quotients, `ida_peer dq:`).
+    BdfDifferences = 12,
+    /// The BDF with faer's sparse LU and grouped difference quotients.
+    BdfSparseDifferences = 14,
+    /// As [`Code::BdfSparseDifferences`], with the index estimate's unknowns of index 2
+    /// declared (as [`Code::BdfSparseDeclared`]).
+    BdfSparseDeclaredDifferences,
 }
 
 impl Code {
@@ -268,6 +282,11 @@ impl Code {
             Self::RadauSparse => "dpc Radau (FaerLu: sparse)",
             Self::BdfSparse => "dpc BDF (FaerLu: sparse)",
             Self::BdfSparseDeclared => "dpc BDF (FaerLu: sparse; index 2 declared)",
+            Self::BdfDifferences => "dpc BDF (difference quotients)",
+            Self::BdfSparseDifferences => "dpc BDF (FaerLu: sparse; grouped difference quotients)",
+            Self::BdfSparseDeclaredDifferences => {
+                "dpc BDF (FaerLu: sparse; grouped difference quotients; index 2 declared)"
+            }
         }
     }
 }
@@ -786,6 +805,7 @@ fn main() {
         wheelset_rows(k, tol, &scalar);
         two_bit_adder_rows(k, tol);
         stiff_ode_rows(k, tol);
+        difference_rows(k, tol);
     }
 }
 
@@ -988,4 +1008,104 @@ fn stiff_ode_rows(k: i32, tol: f64) {
     rows::<_, 3>(Problem::Orego, Orego, k, tol);
     rows::<_, 20>(Problem::Pollution, Pollution, k, tol);
     rows::<_, 15>(Problem::RingModulator, RingModulator, k, tol);
+}
+
+/// The rows of the BDF with its iteration matrix by the library's difference quotients
+/// ([`dpc_core::difference`]) at `rtol = atol = tol` (Robertson: its `atol`, also IDA's floor of
+/// the increments; label `1e-k`): Robertson and the transistor amplifier (one residual per
+/// column), and the two bit adding unit (columns grouped by its pattern: 15 groups, 16 residuals per
+/// matrix for 350 columns; faer's sparse LU; as declared and with the index estimate's unknowns of
+/// index 2 declared; not at 1e-8, as its other rows).
+fn difference_rows(k: i32, tol: f64) {
+    use differenced::Differenced;
+    use dpc_core::difference::DifferenceQuotients;
+    let robertson_opts = bdf::Options {
+        rtol: Tolerance::Scalar(tol),
+        atol: Tolerance::Vector(robertson_atol(tol)),
+        ..bdf::Options::default()
+    };
+    row(
+        Problem::Robertson,
+        k,
+        Code::BdfDifferences,
+        &ROBERTSON_REF,
+        &[0, 1, 2],
+        || {
+            let (y0, yp0) = ([1.0, 0.0, 0.0], [-0.04, 0.04, 0.0]);
+            let differences = DifferenceQuotients::new()
+                .with_absolute_tolerance(&robertson_atol(tol))
+                .map_err(|e| e.to_string())?;
+            bdf_run::<3, _>(
+                Differenced::new(Robertson, differences),
+                (&y0, &yp0),
+                robertson_opts.clone(),
+                ROBERTSON_T_END,
+            )
+        },
+    );
+    let (ty0, typ0) = TransistorAmplifier::initial();
+    let all8: Vec<usize> = (0..8).collect();
+    row(
+        Problem::Amplifier,
+        k,
+        Code::BdfDifferences,
+        &TRANSAMP_REF,
+        &all8,
+        || {
+            bdf_run::<8, _>(
+                Differenced::new(TransistorAmplifier, DifferenceQuotients::new()),
+                (&ty0, &typ0),
+                bdf::Options::with_tolerances(tol, tol),
+                TRANSAMP_T_END,
+            )
+        },
+    );
+    if k == 8 {
+        return;
+    }
+    use two_bit_adder::{tba_breaks, tba_full_reference, TwoBitAdder, TBA_REF, TBA_SCORED};
+    let (y0, yp0) = TwoBitAdder::new().initial();
+    let breaks = tba_breaks();
+    let reference = tba_full_reference(&TBA_REF);
+    // As declared by the Test Set (all index 1), and with the unknowns the index estimate
+    // reads as of index 2 declared, the estimate itself from the difference matrices (once,
+    // outside the timed runs, only when the rows are asked for).
+    let asked = std::env::args()
+        .nth(1)
+        .is_none_or(|only| Problem::TwoBitAdder.name().contains(only.as_str()));
+    let declared = if asked {
+        let dae = Differenced::new(TwoBitAdder::new(), DifferenceQuotients::new());
+        dpc_core::index_estimate::unknown_indices(&dae, 0.0, &y0, &yp0)
+            .map_err(|e| eprintln!("two bit adding unit: no index estimate at the start: {e}"))
+            .ok()
+    } else {
+        None
+    };
+    for code in [
+        Code::BdfSparseDifferences,
+        Code::BdfSparseDeclaredDifferences,
+    ] {
+        let index = match (code, &declared) {
+            (Code::BdfSparseDeclaredDifferences, None) => continue,
+            (Code::BdfSparseDeclaredDifferences, Some(d)) => d.clone(),
+            // As declared by the Test Set: every unknown of index 1.
+            _ => Vec::new(),
+        };
+        row(
+            Problem::TwoBitAdder,
+            k,
+            code,
+            &reference,
+            &TBA_SCORED,
+            || {
+                let dae = Differenced::new(TwoBitAdder::new(), DifferenceQuotients::new());
+                let ls = FaerLu::for_dae(&dae);
+                let opts = bdf::Options {
+                    index: index.clone(),
+                    ..bdf::Options::with_tolerances(tol, tol)
+                };
+                bdf_piecewise_with(dae, ls, (&y0, &yp0), opts, &breaks)
+            },
+        );
+    }
 }

@@ -8,6 +8,8 @@
 //!   [`Structure`]: names, dimensions, sparsity);
 //! * [`consistent`]: consistent initial values of index-2/3 plants from given states;
 //! * [`dae`]: the implicit DAE `F(t, y, y') = 0` interface the integrator consumes;
+//! * [`difference`]: its iteration matrix by difference quotients of the residual, for a
+//!   hand-written DAE without a Jacobian (grouped by the DAE's pattern);
 //! * [`design`]: the design chain of a preliminary feedback (trim, linearise, analyse, `K_n`)
 //!   and the check of the relative degrees at the nominal;
 //! * [`error`]: errors shared by the layers (an option out of range);
@@ -31,6 +33,7 @@ pub mod consistent;
 pub mod controller;
 pub mod dae;
 pub mod design;
+pub mod difference;
 pub mod error;
 pub mod index_estimate;
 pub mod linear_analysis;
@@ -48,6 +51,7 @@ pub mod stabilised;
 pub mod tracking;
 
 pub use dae::ImplicitDae;
+pub use difference::DifferenceQuotients;
 pub use error::InvalidOption;
 pub use model::{DaeModel, Structure};
 pub use reference::Reference;
