@@ -1032,8 +1032,7 @@ fn difference_rows(k: i32, tol: f64) {
         &[0, 1, 2],
         || {
             let (y0, yp0) = ([1.0, 0.0, 0.0], [-0.04, 0.04, 0.0]);
-            let differences = DifferenceQuotients::new()
-                .with_absolute_tolerance(&robertson_atol(tol))
+            let differences = DifferenceQuotients::with_absolute_tolerance(&robertson_atol(tol))
                 .map_err(|e| e.to_string())?;
             bdf_run::<3, _>(
                 Differenced::new(Robertson, differences),
@@ -1053,7 +1052,7 @@ fn difference_rows(k: i32, tol: f64) {
         &all8,
         || {
             bdf_run::<8, _>(
-                Differenced::new(TransistorAmplifier, DifferenceQuotients::new()),
+                Differenced::new(TransistorAmplifier, differenced::unit_scale()),
                 (&ty0, &typ0),
                 bdf::Options::with_tolerances(tol, tol),
                 TRANSAMP_T_END,
@@ -1074,7 +1073,7 @@ fn difference_rows(k: i32, tol: f64) {
         .nth(1)
         .is_none_or(|only| Problem::TwoBitAdder.name().contains(only.as_str()));
     let declared = if asked {
-        let dae = Differenced::new(TwoBitAdder::new(), DifferenceQuotients::new());
+        let dae = Differenced::new(TwoBitAdder::new(), differenced::unit_scale());
         dpc_core::index_estimate::unknown_indices(&dae, 0.0, &y0, &yp0)
             .map_err(|e| eprintln!("two bit adding unit: no index estimate at the start: {e}"))
             .ok()
@@ -1098,7 +1097,7 @@ fn difference_rows(k: i32, tol: f64) {
             &reference,
             &TBA_SCORED,
             || {
-                let dae = Differenced::new(TwoBitAdder::new(), DifferenceQuotients::new());
+                let dae = Differenced::new(TwoBitAdder::new(), differenced::unit_scale());
                 let ls = FaerLu::for_dae(&dae);
                 let opts = bdf::Options {
                     index: index.clone(),

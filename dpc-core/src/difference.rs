@@ -34,11 +34,14 @@
 //!     }
 //! }
 //!
-//! let dae = Robertson { differences: DifferenceQuotients::new() };
+//! // Robertson's y2 is of order 1e-5: the increments' floor from the integrator's atol, as IDA.
+//! let atol = [1e-6, 1e-10, 1e-6];
+//! let differences = DifferenceQuotients::with_absolute_tolerance(&atol).expect("positive");
+//! let dae = Robertson { differences };
 //! let mut m = nalgebra::DMatrix::zeros(3, 3);
 //! dae.iteration_matrix(0.0, &[1.0, 0.0, 0.0], &[-0.04, 0.04, 0.0], 10.0, &mut m);
 //! assert!((m[(0, 0)] - (10.0 + 0.04)).abs() < 1e-6);
-//! assert_eq!(m[(2, 1)], 1.0);
+//! assert!((m[(2, 1)] - 1.0).abs() < 1e-5); // y1 + y2 + y3 - 1 loses digits to the 1
 //! ```
 //!
 //! # The increment
@@ -54,15 +57,16 @@
 //!
 //! The scale of unknown `j` is `max(|y_j|, typ_j)`: a relative increment where `y_j` is away
 //! from zero, and `typ_j`, a typical magnitude of the unknown
-//! ([`with_typical`](DifferenceQuotients::with_typical), default 1, as the `typx` of Dennis &
-//! Schnabel), for an unknown at or through zero. IDA uses `max(sqrt(eps) max(|y_j|, |h y'_j|),
+//! ([`with_typical_magnitude`](DifferenceQuotients::with_typical_magnitude) for every unknown,
+//! [`with_typical`](DifferenceQuotients::with_typical) one per unknown, as the `typx` of Dennis &
+//! Schnabel; no default), for an unknown at or through zero. IDA uses `max(sqrt(eps) max(|y_j|, |h y'_j|),
 //! 1 / w_j)` with `w_j` its error weight (`1 / w_j = rtol |y_j| + atol_j`) and `h` the step;
 //! the integrators pass neither to the model, so:
 //!
-//! * `typ_j` stands for `1 / w_j`. The default 1 suits unknowns of order 1 (voltages, angles,
+//! * `typ_j` stands for `1 / w_j`. A magnitude 1 suits unknowns of order 1 (voltages, angles,
 //!   positions in metres). An unknown that is small next to 1, or a residual that is very
 //!   curved in it, needs it smaller: Robertson's `y2` (of order `1e-5`, `3e7 y2^2` in its
-//!   residual) with the default perturbs `y2` by `1.5e-8`, an error of `0.45` in an entry of
+//!   residual) with magnitude 1 perturbs `y2` by `1.5e-8`, an error of `0.45` in an entry of
 //!   `1e4` that the iteration matrix's near-singular direction at large steps (`c ~ 1e-10`)
 //!   turns into a Newton contraction near 1: 38 444 steps for 452 with the exact matrix at
 //!   `rtol = 1e-4`, and no correct digit. [`with_absolute_tolerance`](DifferenceQuotients::with_absolute_tolerance)
@@ -173,8 +177,10 @@ pub struct Prepared {
 /// column grouping.
 pub struct DifferenceQuotients {
     formula: Formula,
-    /// Typical magnitude of each unknown (`None`: 1 for every unknown).
+    /// Typical magnitude of each unknown (`None`: `uniform` for every unknown).
     typical: Option<Vec<f64>>,
+    /// The typical magnitude of every unknown when `typical` is `None`.
+    uniform: f64,
     /// Group columns by the DAE's pattern when it declares one.
     grouping: bool,
     /// The columns' rows and groups, formed on the first call.
@@ -225,12 +231,6 @@ impl Work {
     }
 }
 
-impl Default for DifferenceQuotients {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
 impl Clone for DifferenceQuotients {
     /// The options and the column groups; work vectors of its own.
     fn clone(&self) -> Self {
@@ -241,6 +241,7 @@ impl Clone for DifferenceQuotients {
         Self {
             formula: self.formula,
             typical: self.typical.clone(),
+            uniform: self.uniform,
             grouping: self.grouping,
             layout,
             work: Mutex::new(Work::default()),
@@ -253,6 +254,7 @@ impl std::fmt::Debug for DifferenceQuotients {
         f.debug_struct("DifferenceQuotients")
             .field("formula", &self.formula)
             .field("typical", &self.typical)
+            .field("uniform", &self.uniform)
             .field("grouping", &self.grouping)
             .field("groups", &self.layout.get().map(Layout::groups))
             .finish_non_exhaustive()
@@ -260,16 +262,33 @@ impl std::fmt::Debug for DifferenceQuotients {
 }
 
 impl DifferenceQuotients {
-    /// Forward differences, typical magnitude 1 for every unknown, columns grouped by the DAE's
-    /// [`iteration_pattern`](ImplicitDae::iteration_pattern) when it declares one.
-    pub fn new() -> Self {
-        Self {
+    /// Forward differences with the typical magnitude `magnitude` for every unknown, columns
+    /// grouped by the DAE's [`iteration_pattern`](ImplicitDae::iteration_pattern) when it
+    /// declares one. For unknowns of that order (or larger); an unknown much smaller than it
+    /// (Robertson's `y2`, of order `1e-5`, with `magnitude = 1`) gets increments too large for
+    /// its rows: give the integrator's absolute tolerances instead
+    /// ([`with_absolute_tolerance`](Self::with_absolute_tolerance)) or one magnitude per
+    /// unknown ([`with_typical`](Self::with_typical)). There is no default: no one magnitude
+    /// suits every model.
+    ///
+    /// # Errors
+    /// [`InvalidOption`] named `typical` when `magnitude` is not positive and finite.
+    pub fn with_typical_magnitude(magnitude: f64) -> Result<Self, InvalidOption> {
+        if !(magnitude.is_finite() && magnitude > 0.0) {
+            return Err(InvalidOption::new(
+                "typical",
+                magnitude,
+                "positive and finite",
+            ));
+        }
+        Ok(Self {
             formula: Formula::Forward,
             typical: None,
+            uniform: magnitude,
             grouping: true,
             layout: OnceLock::new(),
             work: Mutex::new(Work::default()),
-        }
+        })
     }
 
     /// Central differences instead of forward ones (twice the residuals, more digits).
@@ -295,14 +314,18 @@ impl DifferenceQuotients {
     /// The typical magnitude of each unknown, the smallest scale its increment is taken
     /// relative to (see the module documentation); one per unknown.
     ///
+    /// Forward differences, columns grouped as in
+    /// [`with_typical_magnitude`](Self::with_typical_magnitude).
+    ///
     /// # Errors
     /// [`InvalidOption`] named `typical` when a magnitude is not positive and finite.
-    pub fn with_typical(mut self, typical: Vec<f64>) -> Result<Self, InvalidOption> {
+    pub fn with_typical(typical: Vec<f64>) -> Result<Self, InvalidOption> {
         if let Some(&bad) = typical.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
             return Err(InvalidOption::new("typical", bad, "positive and finite"));
         }
-        self.typical = Some(typical);
-        Ok(self)
+        let mut dq = Self::with_typical_magnitude(1.0)?;
+        dq.typical = Some(typical);
+        Ok(dq)
     }
 
     /// IDA's floor of the increment: the absolute tolerances `atol` given to the integrator
@@ -315,12 +338,12 @@ impl DifferenceQuotients {
     ///
     /// # Errors
     /// [`InvalidOption`] named `atol` when a tolerance is not positive and finite.
-    pub fn with_absolute_tolerance(self, atol: &[f64]) -> Result<Self, InvalidOption> {
+    pub fn with_absolute_tolerance(atol: &[f64]) -> Result<Self, InvalidOption> {
         if let Some(&bad) = atol.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
             return Err(InvalidOption::new("atol", bad, "positive and finite"));
         }
         let root = f64::EPSILON.sqrt();
-        self.with_typical(atol.iter().map(|a| a / root).collect())
+        Self::with_typical(atol.iter().map(|a| a / root).collect())
     }
 
     /// Form the column groups for `dae` now (the first
@@ -526,7 +549,7 @@ impl DifferenceQuotients {
             Formula::Central => f64::EPSILON.cbrt(),
         };
         for j in 0..inc.len() {
-            let typ = typical.get(j).copied().unwrap_or(1.0);
+            let typ = typical.get(j).copied().unwrap_or(self.uniform);
             let h = factor * y[j].abs().max(typ);
             inc[j] = if yp[j] < 0.0 { -h } else { h };
         }
@@ -723,10 +746,12 @@ mod tests {
     #[test]
     fn a_tridiagonal_pattern_takes_three_groups_and_dense_ones_match() {
         let dae = Tridiagonal(12);
-        let grouped = DifferenceQuotients::new();
+        let grouped = DifferenceQuotients::with_typical_magnitude(1.0).expect("positive");
         let p = grouped.prepare(&dae).expect("prepared");
         assert_eq!((p.groups, p.residuals_per_matrix, p.pattern), (3, 4, true));
-        let plain = DifferenceQuotients::new().ungrouped();
+        let plain = DifferenceQuotients::with_typical_magnitude(1.0)
+            .expect("positive")
+            .ungrouped();
         assert_eq!(plain.prepare(&dae).expect("prepared").groups, 12);
         let y: Vec<f64> = (0..12).map(|i| 0.3 + 0.1 * i as f64).collect();
         let yp: Vec<f64> = (0..12).map(|i| (-1.0f64).powi(i) * 0.5).collect();
@@ -763,22 +788,19 @@ mod tests {
                 Some(vec![(0, 0), (1, 5)])
             }
         }
-        let p = DifferenceQuotients::new().prepare(&Bad).expect("prepared");
+        let p = DifferenceQuotients::with_typical_magnitude(1.0)
+            .expect("positive")
+            .prepare(&Bad)
+            .expect("prepared");
         assert_eq!((p.groups, p.pattern), (2, false));
-        assert!(DifferenceQuotients::new()
-            .with_typical(vec![1.0, 0.0])
-            .is_err());
-        let three = DifferenceQuotients::new()
-            .with_typical(vec![1.0; 3])
-            .expect("valid");
+        assert!(DifferenceQuotients::with_typical(vec![1.0, 0.0]).is_err());
+        let three = DifferenceQuotients::with_typical(vec![1.0; 3]).expect("valid");
         assert_eq!(three.prepare(&Bad).map_err(|e| e.name), Err("typical"));
     }
 
     #[test]
     fn the_increment_takes_the_sign_of_y_prime_and_not_c() {
-        let dq = DifferenceQuotients::new()
-            .with_typical(vec![1.0, 1.0, 1e-6])
-            .expect("valid");
+        let dq = DifferenceQuotients::with_typical(vec![1.0, 1.0, 1e-6]).expect("valid");
         let mut inc = [0.0; 3];
         dq.increments(
             &[1.0, 1.0, 1e-6],

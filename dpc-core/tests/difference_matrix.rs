@@ -27,7 +27,7 @@ use std::cell::Cell;
 use bdf_problems::{robertson_atol, significant_digits, Robertson, ROBERTSON_REF};
 use differenced::Differenced;
 use dpc_core::bdf::{self, Bdf, Tolerance};
-use dpc_core::difference::{DifferenceQuotients, Prepared};
+use dpc_core::difference::{DifferenceQuotients, Formula, Prepared};
 use dpc_core::linear_solver::{FaerDenseLu, FaerLu, NalgebraLu};
 use dpc_core::radau::{self, Radau};
 use dpc_core::{ImplicitDae, MatrixSink};
@@ -43,8 +43,7 @@ use water_tube::WaterTube;
 /// Robertson's difference quotients with IDA's floor, the absolute tolerances of the run at
 /// `rtol` (`y2` is of order `1e-5`, far from the default typical magnitude 1).
 fn robertson_differences(rtol: f64) -> DifferenceQuotients {
-    DifferenceQuotients::new()
-        .with_absolute_tolerance(&robertson_atol(rtol))
+    DifferenceQuotients::with_absolute_tolerance(&robertson_atol(rtol))
         .expect("positive tolerances")
 }
 
@@ -97,8 +96,8 @@ fn differences_match_the_exact_matrices() {
     let check = |name: &str, dae: &dyn Fn(&DifferenceQuotients, f64, usize) -> (f64, f64)| {
         for c in [0.0, 1.0, 1e3, 1e6] {
             for point in 0..2 {
-                let (ef, rounding) = dae(&DifferenceQuotients::new(), c, point);
-                let (ec, _) = dae(&DifferenceQuotients::new().central(), c, point);
+                let (ef, rounding) = dae(&differenced::unit_scale(), c, point);
+                let (ec, _) = dae(&differenced::unit_scale().central(), c, point);
                 let forward_bound = 1000.0 * (eps.sqrt() + rounding / eps.sqrt());
                 let central_bound = 1000.0 * (eps.powf(2.0 / 3.0) + rounding / eps.cbrt());
                 println!(
@@ -143,10 +142,12 @@ fn differences_match_the_exact_matrices() {
     // Robertson: the state after the initial transient as the moved point's base.
     let rob = points(&[0.9, 2e-5, 0.1], &[-0.01, 1e-6, 0.01]);
     check("Robertson", &|dq, c, p| {
-        let typical = dq
-            .clone()
-            .with_absolute_tolerance(&robertson_atol(1e-6))
-            .expect("valid");
+        let floored =
+            DifferenceQuotients::with_absolute_tolerance(&robertson_atol(1e-6)).expect("valid");
+        let typical = match dq.formula() {
+            Formula::Central => floored.central(),
+            Formula::Forward => floored,
+        };
         run(&Robertson, &rob, &typical, c, p)
     });
     let (y, yp) = TransistorAmplifier::initial();
@@ -177,8 +178,8 @@ fn differences_match_the_exact_matrices() {
 #[test]
 fn grouped_and_ungrouped_columns_agree() {
     let tba = TwoBitAdder::new();
-    let grouped = DifferenceQuotients::new();
-    let plain = DifferenceQuotients::new().ungrouped();
+    let grouped = differenced::unit_scale();
+    let plain = differenced::unit_scale().ungrouped();
     let g = grouped.prepare(&tba).expect("prepared");
     let p = plain.prepare(&tba).expect("prepared");
     println!("two bit adder: {g:?}; ungrouped {p:?}");
@@ -243,18 +244,16 @@ fn grouped_and_ungrouped_columns_agree() {
         }
     }
     let water = Patterned(&pattern);
-    let w = DifferenceQuotients::new()
-        .prepare(&water)
-        .expect("prepared");
+    let w = differenced::unit_scale().prepare(&water).expect("prepared");
     println!(
         "water tube: {} entries in the pattern, {w:?}",
         pattern.len()
     );
     assert!(w.groups < n);
-    let (_, a) = both(&water, &DifferenceQuotients::new(), (0.0, &y0, &yp0), 10.0);
+    let (_, a) = both(&water, &differenced::unit_scale(), (0.0, &y0, &yp0), 10.0);
     let (exact, b) = both(
         &water,
-        &DifferenceQuotients::new().ungrouped(),
+        &differenced::unit_scale().ungrouped(),
         (0.0, &y0, &yp0),
         10.0,
     );
@@ -298,8 +297,8 @@ fn a_matrix_costs_the_residuals_it_says() {
     let n = dae.dimension();
     let mut m = DMatrix::zeros(n, n);
     for dq in [
-        DifferenceQuotients::new(),
-        DifferenceQuotients::new().central(),
+        differenced::unit_scale(),
+        differenced::unit_scale().central(),
     ] {
         let Prepared {
             groups,
@@ -485,7 +484,7 @@ fn integrations_with_differences_match_the_exact_matrix() {
             |t| amplifier_bdf(Scaled(TransistorAmplifier), t),
             |t| {
                 amplifier_bdf(
-                    Differenced::new(TransistorAmplifier, DifferenceQuotients::new()),
+                    Differenced::new(TransistorAmplifier, differenced::unit_scale()),
                     t,
                 )
             },
@@ -499,7 +498,7 @@ fn integrations_with_differences_match_the_exact_matrix() {
             tol,
             |t| andrews_radau(Andrews, t),
             |t| andrews_radau(Scaled(Andrews), t),
-            |t| andrews_radau(Differenced::new(Andrews, DifferenceQuotients::new()), t),
+            |t| andrews_radau(Differenced::new(Andrews, differenced::unit_scale()), t),
             radau_steps,
         );
         compare(
@@ -509,7 +508,7 @@ fn integrations_with_differences_match_the_exact_matrix() {
             |t| car_axis_radau(Scaled(CarAxis::default()), t),
             |t| {
                 car_axis_radau(
-                    Differenced::new(CarAxis::default(), DifferenceQuotients::new()),
+                    Differenced::new(CarAxis::default(), differenced::unit_scale()),
                     t,
                 )
             },
@@ -536,7 +535,7 @@ fn the_two_bit_adder_integrates_with_grouped_differences() {
     let (y0, yp0) = tba.initial();
     let (a, sa) = run(TwoBitAdder::new(), &y0, &yp0);
     let (b, sb) = run(
-        Differenced::new(TwoBitAdder::new(), DifferenceQuotients::new()),
+        Differenced::new(TwoBitAdder::new(), differenced::unit_scale()),
         &y0,
         &yp0,
     );
@@ -559,9 +558,9 @@ fn matrices_after_the_first_do_not_allocate() {
     let n = tba.dimension();
     let mut m = DMatrix::zeros(n, n);
     for dq in [
-        DifferenceQuotients::new(),
-        DifferenceQuotients::new().central(),
-        DifferenceQuotients::new().ungrouped(),
+        differenced::unit_scale(),
+        differenced::unit_scale().central(),
+        differenced::unit_scale().ungrouped(),
     ] {
         dq.iteration_matrix(&tba, 0.0, &y, &yp, 1.0, &mut m);
         let mut r = vec![0.0; n];
@@ -629,7 +628,7 @@ impl ImplicitDae for ToTheEdge {
 /// A non-finite residual at a perturbed point is a non-finite entry, never a finite one.
 #[test]
 fn a_non_finite_residual_at_a_perturbed_point_is_a_non_finite_entry() {
-    let dq = DifferenceQuotients::new();
+    let dq = differenced::unit_scale();
     let mut m = DMatrix::zeros(1, 1);
     let y = 1.0 - 1e-10;
     dq.iteration_matrix(&ToTheEdge, 0.0, &[y], &[(1e-10f64).sqrt()], 5.0, &mut m);
@@ -818,7 +817,7 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
     // failed matrix ends in a typed error naming the failed column's unknown.
     let (y0, yp0) = Andrews::initial();
     let dae = AndrewsPoisoned {
-        differences: DifferenceQuotients::new(),
+        differences: differenced::unit_scale(),
         shots: Cell::new(usize::MAX),
     };
     let opts = radau::Options {

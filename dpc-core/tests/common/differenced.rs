@@ -7,6 +7,12 @@
 use dpc_core::difference::DifferenceQuotients;
 use dpc_core::{ImplicitDae, MatrixSink};
 
+/// Forward differences with typical magnitude 1 for every unknown (the fixtures whose unknowns
+/// are of order 1 or larger).
+pub fn unit_scale() -> DifferenceQuotients {
+    DifferenceQuotients::with_typical_magnitude(1.0).expect("a positive magnitude")
+}
+
 /// `dae` with its iteration matrix by `differences`.
 pub struct Differenced<D> {
     /// The fixture (only its residual, pattern and names are used).
