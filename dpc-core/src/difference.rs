@@ -794,6 +794,12 @@ mod tests {
             .expect("prepared");
         assert_eq!((p.groups, p.pattern), (2, false));
         assert!(DifferenceQuotients::with_typical(vec![1.0, 0.0]).is_err());
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let e = DifferenceQuotients::with_typical_magnitude(bad).map(|_| ());
+            assert_eq!(e.map_err(|e| e.name), Err("typical"), "{bad}");
+            let e = DifferenceQuotients::with_absolute_tolerance(&[1e-6, bad]).map(|_| ());
+            assert_eq!(e.map_err(|e| e.name), Err("atol"), "{bad}");
+        }
         let three = DifferenceQuotients::with_typical(vec![1.0; 3]).expect("valid");
         assert_eq!(three.prepare(&Bad).map_err(|e| e.name), Err("typical"));
     }
