@@ -194,6 +194,82 @@ fn complex_factor(a: &mut [c64], n: usize, pivots: &mut [usize]) {
     }
 }
 
+/// [`complex_factor`] for `N` below 10 on an array of `N` columns, every step inlined with `k`
+/// a literal so that all loop bounds are constants and the short loops unroll (as the real
+/// `unblocked::factor_columns`): the same operations in the same order, so the same factors.
+#[inline(always)]
+fn complex_factor_columns<const N: usize>(a: &mut [[c64; N]; N], pivots: &mut [usize; N]) {
+    macro_rules! steps {
+        ($($k:literal)*) => {
+            $(if $k < N && !complex_elimination_step::<N>(a, pivots, $k) {
+                return;
+            })*
+        };
+    }
+    steps!(0 1 2 3 4 5 6 7 8);
+    for k in 9..N {
+        if !complex_elimination_step::<N>(a, pivots, k) {
+            return;
+        }
+    }
+}
+
+/// Step `k` of [`complex_factor_columns`]; `false` at a zero or non-finite pivot (the rest
+/// left, the pivots from `k + 1` on the identity, as [`complex_factor`]). Index loops on
+/// purpose: with `k` a literal their bounds are constants.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn complex_elimination_step<const N: usize>(
+    a: &mut [[c64; N]; N],
+    pivots: &mut [usize; N],
+    k: usize,
+) -> bool {
+    let mut pivot_row = k;
+    let mut best = abs1(a[k][k]);
+    for i in k + 1..N {
+        if abs1(a[k][i]) > best {
+            best = abs1(a[k][i]);
+            pivot_row = i;
+        }
+    }
+    pivots[k] = pivot_row;
+    if !(best > 0.0 && best.is_finite()) {
+        for i in k + 1..N {
+            pivots[i] = i;
+        }
+        return false;
+    }
+    if pivot_row != k {
+        for col in a.iter_mut() {
+            col.swap(k, pivot_row);
+        }
+    }
+    let (left, right) = a.split_at_mut(k + 1);
+    let col_k = &mut left[k];
+    let d = col_k[k].finv();
+    for i in k + 1..N {
+        col_k[i] *= d;
+    }
+    for col in right.iter_mut() {
+        let akj = col[k];
+        if akj != c64::new(0.0, 0.0) {
+            for i in k + 1..N {
+                col[i] -= col_k[i] * akj;
+            }
+        }
+    }
+    true
+}
+
+/// [`complex_factor_columns`] on the first `N * N` entries of a column-major slice.
+#[inline(always)]
+fn complex_factor_slice<const N: usize>(a: &mut [c64], pivots: &mut [usize]) {
+    let (columns, _) = a[..N * N].as_chunks_mut::<N>();
+    let columns: &mut [[c64; N]; N] = columns.try_into().expect("N columns of N entries");
+    let pivots: &mut [usize; N] = (&mut pivots[..N]).try_into().expect("N pivots");
+    complex_factor_columns(columns, pivots);
+}
+
 /// Overwrite `b` with the solution of `A x = b` from [`complex_factor`].
 #[inline(always)]
 fn complex_solve(lu: &[c64], n: usize, pivots: &[usize], b: &mut [c64]) {
@@ -224,14 +300,16 @@ fn complex_solve(lu: &[c64], n: usize, pivots: &[usize], b: &mut [c64]) {
 /// [`complex_factor`] with `n` a constant for each size up to [`UNBLOCKED_MAX_DIMENSION`].
 fn complex_factor_dispatched(a: &mut [c64], n: usize, pivots: &mut [usize]) {
     macro_rules! sizes {
-        ($($k:literal)*) => {
+        ($($c:literal)*; $($k:literal)*) => {
             match n {
+                $($c => complex_factor_slice::<$c>(a, pivots),)*
                 $($k => complex_factor(a, $k, pivots),)*
                 _ => complex_factor(a, n, pivots),
             }
         };
     }
-    sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    // Below 10 the unrolled steps, as the real elimination.
+    sizes!(1 2 3 4 5 6 7 8 9; 10 11 12 13 14 15 16)
 }
 
 /// [`complex_solve`] with `n` a constant, as [`complex_factor_dispatched`].
@@ -394,6 +472,50 @@ impl<L: LinearSolver> StageMatrices<L> {
 mod tests {
     use super::*;
     use crate::linear_solver::NalgebraLu;
+
+    /// `complex_factor_slice::<N>` against `complex_factor` on a random `N x N` complex matrix
+    /// (interchanges included) and on the same with its first column zero (a zero pivot at
+    /// the first step: both stop there, the pivots after it the identity): the same factors
+    /// and pivots, bit for bit.
+    fn unrolled_equals_generic<const N: usize>() {
+        let mut state = 7 + N as u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let a: Vec<c64> = (0..N * N).map(|_| c64::new(next(), next())).collect();
+        let mut zero_column = a.clone();
+        zero_column[..N].fill(c64::new(0.0, 0.0));
+        for a in [a, zero_column] {
+            let (mut want, mut got) = (a.clone(), a.clone());
+            let (mut want_pivots, mut got_pivots) = ([usize::MAX; N], [usize::MAX; N]);
+            complex_factor(&mut want, N, &mut want_pivots);
+            complex_factor_slice::<N>(&mut got, &mut got_pivots);
+            assert_eq!(got_pivots, want_pivots, "N = {N}");
+            for (g, w) in got.iter().zip(&want) {
+                assert!(
+                    g.re.to_bits() == w.re.to_bits() && g.im.to_bits() == w.im.to_bits(),
+                    "N = {N}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_unrolled_complex_factorisation_equals_the_generic_one() {
+        unrolled_equals_generic::<1>();
+        unrolled_equals_generic::<2>();
+        unrolled_equals_generic::<3>();
+        unrolled_equals_generic::<4>();
+        unrolled_equals_generic::<5>();
+        unrolled_equals_generic::<6>();
+        unrolled_equals_generic::<7>();
+        unrolled_equals_generic::<8>();
+        unrolled_equals_generic::<9>();
+        unrolled_equals_generic::<11>();
+    }
 
     /// `F = M y' - K y` with a singular `M`, so `dF/dy' = M`, `dF/dy = -K`.
     struct Linear;
