@@ -1178,8 +1178,8 @@ const LEADING_CHECK_MAX: usize = 256;
 /// evaluated to tell: some unknown declared algebraic ([`ImplicitDae::is_differential`]), or the
 /// smallest diagonal entry of a column-pivoted QR of `dF/dy' = G(1) - G(0)` (of `dF/dy'`
 /// itself when it is diagonal) at most `1e3 n eps` times the largest. A matrix that is not
-/// finite, or a DAE above [`LEADING_CHECK_MAX`] unknowns, counts as singular: an implicit ODE misread as a DAE only keeps the rules every
-/// index-1 problem had before.
+/// finite, or a DAE above [`LEADING_CHECK_MAX`] unknowns, counts as singular: an implicit ODE
+/// misread as a DAE only keeps the rules every index-1 problem had before.
 fn leading_matrix_singular<D: ImplicitDae>(
     dae: &D,
     t: f64,
