@@ -400,8 +400,8 @@ impl<L: LinearSolver> StageMatrices<L> {
         let m = self.ls.matrix_mut();
         m.fill_zero();
         for j in 0..n {
-            for i in 0..n {
-                let (a, b) = (self.jy[(i, j)], self.jyp[(i, j)]);
+            let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
+            for (i, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
                 if a != 0.0 || b != 0.0 {
                     m.set(i, j, a + cr * b);
                 }
@@ -417,9 +417,10 @@ impl<L: LinearSolver> StageMatrices<L> {
             }
         }
         for j in 0..n {
-            for i in 0..n {
-                let (a, b) = (self.jy[(i, j)], self.jyp[(i, j)]);
-                self.complex.matrix[(i, j)] = c64::new(a + ca * b, cb * b);
+            let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
+            let column = self.complex.matrix.col_as_slice_mut(j);
+            for ((e, &a), &b) in column.iter_mut().zip(jy).zip(jyp) {
+                *e = c64::new(a + ca * b, cb * b);
             }
         }
         if let Err(col) = self.complex.factor() {
