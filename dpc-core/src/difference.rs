@@ -114,13 +114,13 @@
 //! # Non-finite residuals
 //!
 //! A residual that is not finite at a perturbed point makes the entries of its rows in the
-//! perturbed columns non-finite (they are written, never skipped or replaced): the integrators
-//! factorise the matrix and read the non-finite pivot as a failed matrix. The BDF retries the
-//! step smaller, with a matrix formed at the new predicted point, which is usually enough
-//! (a [`BdfError::SingularMatrix`](crate::bdf::BdfError::SingularMatrix) when it is not).
-//! Radau forms its matrix at the step's start, which a smaller step does not move: it stops
-//! with [`RadauError::SingularMatrix`](crate::radau::RadauError::SingularMatrix) naming the
-//! unknown of the failed column, after its allowed Newton failures.
+//! perturbed columns non-finite (they are written, never skipped or replaced): the integrators'
+//! linear solvers refuse such a matrix ([`FactorError::NonFinite`](crate::linear_solver::FactorError::NonFinite)).
+//! The BDF retries the step smaller, with a matrix formed at the new predicted point, which is
+//! usually enough (a [`BdfError::NonFiniteMatrix`](crate::bdf::BdfError::NonFiniteMatrix)
+//! naming the entry's equation and unknown when it is not). Radau forms its matrix at the
+//! step's start, which a smaller step does not move: it stops at once with
+//! [`RadauError::NonFiniteMatrix`](crate::radau::RadauError::NonFiniteMatrix).
 //!
 //! # The mass matrix
 //!

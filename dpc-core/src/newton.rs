@@ -33,6 +33,8 @@ pub(crate) enum NewtonFailure {
     Singular(Option<usize>, Option<usize>),
     /// Non-finite residual in this equation.
     NonFinite(usize),
+    /// Non-finite iteration-matrix entry (row, column).
+    NonFiniteMatrix(usize, usize),
     /// Matrix entry outside the declared pattern (row, column): not recoverable.
     OutsidePattern(usize, usize),
     /// A convergence weight `1 / (rtol |v| + atol)` of this component is not positive and
@@ -50,6 +52,7 @@ impl NewtonFailure {
     fn from_factor(e: FactorError) -> Self {
         match e {
             FactorError::Singular { column, row } => Self::Singular(column, row),
+            FactorError::NonFinite { row, col } => Self::NonFiniteMatrix(row, col),
             FactorError::OutsidePattern { row, col } => Self::OutsidePattern(row, col),
         }
     }

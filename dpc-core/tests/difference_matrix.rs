@@ -760,10 +760,44 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
         // tolerance itself; single runs vary by tenths, see the integration test above).
         assert!(d >= 2.8, "{d} (undisturbed {d0})");
     }
+    // Every matrix after t = 1 poisoned: the retries (each at a new predicted point) end in a
+    // typed error naming the entry, not a vanished pivot.
+    let dae = PoisonedOnce::new(usize::MAX);
+    let opts = bdf::Options {
+        rtol: Tolerance::Scalar(rtol),
+        atol: Tolerance::Vector(robertson_atol(rtol)),
+        ..bdf::Options::default()
+    };
+    let mut s = Bdf::new(
+        &dae,
+        NalgebraLu::<3>::new(),
+        opts,
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[-0.04, 0.04, 0.0],
+    )
+    .expect("set up");
+    let mut y = [0.0; 3];
+    match s.solve_to(bdf_problems::ROBERTSON_T_END, &mut y, None) {
+        Err(bdf::BdfError::NonFiniteMatrix {
+            t,
+            equation,
+            unknown,
+        }) => {
+            assert!(t > 1.0, "{t}");
+            assert_eq!(
+                (equation.as_str(), unknown.as_str()),
+                ("equation 0", "y[0]")
+            );
+        }
+        other => panic!("{other:?}"),
+    }
     // Radau: the same, on Andrews' mechanism with its first matrix after t = 0.01 poisoned.
     struct AndrewsPoisoned {
         differences: DifferenceQuotients,
         shots: Cell<usize>,
+        /// Matrices after this time are poisoned.
+        from: f64,
     }
     struct NanBeyond(f64);
     impl ImplicitDae for NanBeyond {
@@ -801,7 +835,7 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
             c: f64,
             out: &mut S,
         ) {
-            if t > 0.01 && self.shots.get() > 0 {
+            if t > self.from && self.shots.get() > 0 {
                 self.shots.set(self.shots.get() - 1);
                 let edge = NanBeyond(y[0]);
                 self.differences.iteration_matrix(&edge, t, y, yp, c, out);
@@ -814,25 +848,63 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
         }
     }
     // Radau forms its matrix at the step's start, which a smaller step does not move: the
-    // failed matrix ends in a typed error naming the failed column's unknown.
+    // first non-finite matrix ends the run at once, in a typed error naming the entry.
     let (y0, yp0) = Andrews::initial();
     let dae = AndrewsPoisoned {
         differences: differenced::unit_scale(),
         shots: Cell::new(usize::MAX),
+        from: 0.01,
     };
     let opts = radau::Options {
         index: andrews_index(),
         ..radau::Options::with_tolerances(1e-6, 1e-6)
     };
-    let mut s = Radau::new(&dae, FaerDenseLu::new(27), opts, 0.0, &y0, &yp0).expect("set up");
+    let mut s =
+        Radau::new(&dae, FaerDenseLu::new(27), opts.clone(), 0.0, &y0, &yp0).expect("set up");
     s.set_stop_time(ANDREWS_T_END).expect("stop time");
     let mut y = [0.0; 27];
+    let before = dae.shots.get();
     match s.solve_to(ANDREWS_T_END, &mut y, None) {
-        Err(radau::RadauError::SingularMatrix { t, unknown, .. }) => {
-            println!("Andrews Radau with NaN matrices from t = 0.01: singular at t = {t}");
+        Err(radau::RadauError::NonFiniteMatrix {
+            t,
+            equation,
+            unknown,
+        }) => {
+            println!("Andrews Radau with NaN matrices from t = 0.01: stopped at t = {t}");
             assert!(t > 0.01);
-            assert_eq!(unknown.as_deref(), Some("y[0]"));
+            // Every residual at a perturbed point is NaN: the first entry is column 0's first.
+            assert_eq!(
+                (equation.as_str(), unknown.as_str()),
+                ("equation 0", "y[0]")
+            );
+            // One Jacobian: its two matrix calls (`c = 0` and `c = 1`, no mass matrix here).
+            assert_eq!(before - dae.shots.get(), 2);
         }
         other => panic!("{other:?}"),
     }
+    // Poisoned from the start: no factorisation of it is tried (none fails), no step is cut.
+    let dae = AndrewsPoisoned {
+        differences: differenced::unit_scale(),
+        shots: Cell::new(usize::MAX),
+        from: f64::NEG_INFINITY,
+    };
+    let mut s = Radau::new(&dae, FaerDenseLu::new(27), opts, 0.0, &y0, &yp0).expect("set up");
+    let result = s.solve_to(ANDREWS_T_END, &mut y, None);
+    assert!(
+        matches!(
+            result,
+            Err(radau::RadauError::NonFiniteMatrix { t: 0.0, .. })
+        ),
+        "{result:?}"
+    );
+    let st = s.stats();
+    assert_eq!(
+        (
+            st.jacobian_evaluations,
+            st.factorisations,
+            st.newton_failures
+        ),
+        (1, 0, 0),
+        "{st:?}"
+    );
 }

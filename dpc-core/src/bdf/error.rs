@@ -73,6 +73,21 @@ pub enum BdfError {
         /// Name of an equation whose row is identically zero, when there is one.
         equation: Option<String>,
     },
+    /// The model's iteration matrix has a NaN or infinite entry, and reducing the step (a
+    /// matrix at another point) did not help: `dF/dy + c dF/dy'` cannot be formed there (for
+    /// a difference-quotient matrix, a residual that is not finite at a perturbed point).
+    #[error(
+        "non-finite iteration-matrix entry at t = {}: the derivative of equation `{equation}` with respect to `{unknown}`",
+        Time(*t)
+    )]
+    NonFiniteMatrix {
+        /// Time of the failure.
+        t: f64,
+        /// Name of the entry's equation (its row).
+        equation: String,
+        /// Name of the entry's unknown (its column).
+        unknown: String,
+    },
     /// The model's residual returned NaN or an infinity.
     #[error("non-finite residual at t = {} in {equation}", Time(*t))]
     NonFiniteResidual {

@@ -94,6 +94,11 @@ impl NewtonFailure {
                 t,
                 equation: equation(i),
             },
+            Self::NonFiniteMatrix(r, c) => BdfError::NonFiniteMatrix {
+                t,
+                equation: equation(r),
+                unknown: unknown(c),
+            },
             Self::OutsidePattern(r, c) => BdfError::OutsidePattern {
                 equation: equation(r),
                 unknown: unknown(c),

@@ -495,8 +495,8 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     ///
     /// # Errors
     /// [`BdfError::NewtonFailed`], [`BdfError::ErrorTestFailed`], [`BdfError::SingularMatrix`],
-    /// [`BdfError::NonFiniteResidual`] when a step cannot be completed even at the minimum
-    /// step size; [`BdfError::InvalidTolerance`] when an error weight becomes non-positive.
+    /// [`BdfError::NonFiniteMatrix`], [`BdfError::NonFiniteResidual`] when a step cannot be
+    /// completed even at the minimum step size; [`BdfError::InvalidTolerance`] when an error weight becomes non-positive.
     pub fn step(&mut self) -> Result<f64, BdfError> {
         if !self.state.h_initialised {
             let t = self.state.tstop.unwrap_or(self.state.tn);

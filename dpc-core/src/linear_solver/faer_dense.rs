@@ -5,7 +5,7 @@ use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
 use faer::{Mat, MatMut, Par};
 
-use super::unblocked::{self, SingularPivot, UNBLOCKED_MAX_DIMENSION};
+use super::unblocked::{self, Breakdown, UNBLOCKED_MAX_DIMENSION};
 use super::{zero_row, FactorError, LinearSolver};
 
 /// Dense `n x n` LU with partial pivoting on a faer [`Mat`], for models whose size is known
@@ -90,9 +90,11 @@ impl LinearSolver for FaerDenseLu {
                 for (j, col) in lu.chunks_exact_mut(n.max(1)).enumerate() {
                     col.copy_from_slice(self.matrix.col_as_slice(j));
                 }
-                unblocked::factor_dispatched(lu, n, pivots)
-                    .err()
-                    .map(|SingularPivot { column }| column)
+                if let Err(e) = unblocked::factor_dispatched(lu, n, pivots) {
+                    let m = &self.matrix;
+                    return Err(e.into_factor_error(n, |i, j| m[(i, j)]));
+                }
+                None
             }
             Factors::Blocked {
                 lu,
@@ -100,6 +102,10 @@ impl LinearSolver for FaerDenseLu {
                 perm_inv,
                 mem,
             } => {
+                let columns = (0..n).flat_map(|j| self.matrix.col_as_slice(j));
+                if let Some(e) = Breakdown::non_finite(columns, n) {
+                    return Err(e.into_factor_error(n, |_, _| 0.0));
+                }
                 lu.copy_from(&self.matrix);
                 factor::lu_in_place(
                     lu.as_mut(),
@@ -219,6 +225,27 @@ mod tests {
             match ls.factor() {
                 Err(FactorError::Singular { row, .. }) => assert_eq!(row, Some(2), "n = {n}"),
                 other => panic!("n = {n}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_non_finite_entry_is_named_on_both_paths() {
+        for n in [4, 9, UNBLOCKED_MAX_DIMENSION + 2] {
+            for bad in [f64::NAN, f64::INFINITY] {
+                let mut ls = FaerDenseLu::new(n);
+                let m = ls.matrix_mut();
+                m.fill_zero();
+                for i in 0..n {
+                    m.set(i, i, 1.0);
+                }
+                m.set(3, 2, bad);
+                match ls.factor() {
+                    Err(FactorError::NonFinite { row, col }) => {
+                        assert_eq!((row, col), (3, 2), "n = {n}")
+                    }
+                    other => panic!("n = {n}: {other:?}"),
+                }
             }
         }
     }

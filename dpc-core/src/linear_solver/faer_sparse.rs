@@ -152,9 +152,9 @@ impl LinearSolver for FaerSparseLu {
         let m = &self.matrix;
         if let Some(v) = m.values.iter().position(|v| !v.is_finite()) {
             let col = m.col_ptr.partition_point(|&p| p <= v) - 1;
-            return Err(FactorError::Singular {
-                column: Some(col),
-                row: None,
+            return Err(FactorError::NonFinite {
+                row: m.row_idx[v],
+                col,
             });
         }
         let zero_row = {
@@ -216,5 +216,26 @@ impl LinearSolver for FaerSparseLu {
             // the integrator's Newton iteration and reported as a failure.
             lu.solve_in_place_with_conj(Conj::No, rhs);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_non_finite_entry_is_named() {
+        // Tridiagonal 5 x 5, the entry (3, 2) NaN.
+        let pattern: Vec<(usize, usize)> = (0..5usize)
+            .flat_map(|i| [(i, i), (i, i.saturating_sub(1)), (i, (i + 1).min(4))])
+            .collect();
+        let mut ls = FaerSparseLu::new(5, &pattern).expect("pattern");
+        let m = ls.matrix_mut();
+        for &(i, j) in &pattern {
+            m.set(i, j, if i == j { 4.0 } else { 1.0 });
+        }
+        ls.factor().expect("regular");
+        ls.matrix_mut().set(3, 2, f64::NAN);
+        assert_eq!(ls.factor(), Err(FactorError::NonFinite { row: 3, col: 2 }));
     }
 }

@@ -53,6 +53,15 @@ pub enum FactorError {
         /// Row (equation) index that is entirely zero, when there is one.
         row: Option<usize>,
     },
+    /// An entry of the matrix is NaN or infinite (the model's matrix at this point cannot be
+    /// factorised; no pivot is to blame). The first such entry found.
+    #[error("entry ({row}, {col}) is not finite")]
+    NonFinite {
+        /// Row (equation) of the entry.
+        row: usize,
+        /// Column (unknown) of the entry.
+        col: usize,
+    },
     /// The model wrote an entry outside the sparsity pattern it declared.
     #[error("entry ({row}, {col}) lies outside the declared sparsity pattern")]
     OutsidePattern {

@@ -2,8 +2,8 @@
 
 use nalgebra::SMatrix;
 
-use super::unblocked::{self, SingularPivot};
-use super::{zero_row, FactorError, LinearSolver};
+use super::unblocked;
+use super::{FactorError, LinearSolver};
 
 /// Dense `N x N` LU with partial (row) pivoting in stack storage.
 ///
@@ -70,12 +70,9 @@ impl<const N: usize> LinearSolver for NalgebraLu<N> {
         } else {
             unblocked::factor_columns::<N>(&mut self.lu.data.0, &mut self.pivots)
         };
-        if let Err(SingularPivot { column }) = factored {
+        if let Err(e) = factored {
             let m = &self.matrix;
-            return Err(FactorError::Singular {
-                column: Some(column),
-                row: zero_row(N, |i, j| m[(i, j)]),
-            });
+            return Err(e.into_factor_error(N, |i, j| m[(i, j)]));
         }
         self.factored = true;
         Ok(())

@@ -18,14 +18,59 @@ pub const UNBLOCKED_MAX_DIMENSION: usize = 16;
 /// tell such a pivot from their round-off.
 const SINGULAR_PIVOT_EPSILONS: f64 = 1.0;
 
-/// The factorisation met a pivot that is zero relative to the norm of what it was computed
-/// from (or a non-finite entry).
+/// Why a factorisation stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("the pivot of column {column} vanishes relative to the largest entry of the matrix")]
-pub(crate) struct SingularPivot {
-    /// The column whose pivot vanished (the first column holding a non-finite entry when the
-    /// matrix has one).
-    pub column: usize,
+pub(crate) enum Breakdown {
+    /// A pivot vanished relative to the norm of what it was computed from (or the elimination
+    /// overflowed).
+    #[error("the pivot of column {column} vanishes relative to the entries it was computed from")]
+    Pivot {
+        /// The column whose pivot vanished.
+        column: usize,
+    },
+    /// An entry of the matrix as given is NaN or infinite (the first in column-major order).
+    #[error("entry ({row}, {column}) is not finite")]
+    NonFinite {
+        /// Its row.
+        row: usize,
+        /// Its column.
+        column: usize,
+    },
+}
+
+impl Breakdown {
+    /// The linear solver's error, with the zero row of the matrix as given (`entry(i, j)`) for
+    /// a vanished pivot.
+    pub(crate) fn into_factor_error(
+        self,
+        n: usize,
+        entry: impl Fn(usize, usize) -> f64,
+    ) -> super::FactorError {
+        match self {
+            Self::Pivot { column } => super::FactorError::Singular {
+                column: Some(column),
+                row: super::zero_row(n, entry),
+            },
+            Self::NonFinite { row, column } => super::FactorError::NonFinite { row, col: column },
+        }
+    }
+
+    /// The first non-finite entry of the `n x n` column-major matrix whose entries `entries`
+    /// iterates, if any.
+    pub(crate) fn non_finite<'a>(
+        mut entries: impl Iterator<Item = &'a f64> + Clone,
+        n: usize,
+    ) -> Option<Self> {
+        // One pass without early exit (it vectorises), the position only when needed.
+        if !entries.clone().fold(false, |bad, v| bad | !v.is_finite()) {
+            return None;
+        }
+        let first = entries.position(|v| !v.is_finite()).unwrap_or(0);
+        Some(Self::NonFinite {
+            row: first % n,
+            column: first / n,
+        })
+    }
 }
 
 /// Factorise the `n x n` column-major matrix in `a` in place as `P A = L U`: `L` unit lower
@@ -41,13 +86,13 @@ pub(crate) struct SingularPivot {
 /// without cancellation) stay regular.
 ///
 /// # Errors
-/// [`SingularPivot`] when a pivot is numerically zero (exactly zero included) or an entry is
+/// [`Breakdown`] when a pivot is numerically zero (exactly zero included) or an entry is
 /// not finite; `a` then holds a partial factorisation.
 ///
 /// # Panics
 /// If `a` is shorter than `n * n` or `pivots` shorter than `n` (a caller's sizing bug).
 #[inline(always)]
-pub(crate) fn factor(a: &mut [f64], n: usize, pivots: &mut [usize]) -> Result<(), SingularPivot> {
+pub(crate) fn factor(a: &mut [f64], n: usize, pivots: &mut [usize]) -> Result<(), Breakdown> {
     factor_by(a, n, pivots, |col_k, right, k| {
         let multipliers = &col_k[k + 1..];
         for col in right.chunks_exact_mut(n) {
@@ -76,7 +121,7 @@ pub(crate) fn factor_split_fixed<const N: usize>(
     pivots: &mut [usize; N],
     upper: &mut [f64],
     diag: &mut [f64; N],
-) -> Result<(), SingularPivot> {
+) -> Result<(), Breakdown> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx") {
         // SAFETY: `factor_split_avx` only requires AVX, which the processor was just found to
@@ -97,7 +142,7 @@ unsafe fn factor_split_avx<const N: usize>(
     pivots: &mut [usize; N],
     upper: &mut [f64],
     diag: &mut [f64; N],
-) -> Result<(), SingularPivot> {
+) -> Result<(), Breakdown> {
     factor_split::<N>(a, pivots, upper, diag)
 }
 
@@ -108,7 +153,7 @@ fn factor_split<const N: usize>(
     pivots: &mut [usize; N],
     upper: &mut [f64],
     diag: &mut [f64; N],
-) -> Result<(), SingularPivot> {
+) -> Result<(), Breakdown> {
     let mut padded = [0.0; N];
     factor_by(a, N, pivots, |col_k, right, k| {
         for (i, m) in padded.iter_mut().enumerate() {
@@ -136,13 +181,11 @@ fn factor_by(
     n: usize,
     pivots: &mut [usize],
     mut eliminate: impl FnMut(&[f64], &mut [f64], usize),
-) -> Result<(), SingularPivot> {
+) -> Result<(), Breakdown> {
     let a = &mut a[..n * n];
     let pivots = &mut pivots[..n];
-    // One pass without early exit (it vectorises), the position only when needed.
-    if a.iter().fold(false, |bad, v| bad | !v.is_finite()) {
-        let first = a.iter().position(|v| !v.is_finite()).unwrap_or(0);
-        return Err(SingularPivot { column: first / n });
+    if let Some(e) = Breakdown::non_finite(a.iter(), n) {
+        return Err(e);
     }
     let round_off = SINGULAR_PIVOT_EPSILONS * n as f64 * f64::EPSILON;
     for k in 0..n {
@@ -172,7 +215,7 @@ fn factor_by(
         // Overflow in the elimination shows as a non-finite pivot or sum.
         let regular = best.is_finite() && best > round_off * (best + subtracted);
         if !regular {
-            return Err(SingularPivot { column: k });
+            return Err(Breakdown::Pivot { column: k });
         }
         let d = 1.0 / col_k[k];
         for v in &mut col_k[k + 1..] {
@@ -198,13 +241,9 @@ fn factor_by(
 pub(crate) fn factor_columns<const N: usize>(
     a: &mut [[f64; N]; N],
     pivots: &mut [usize; N],
-) -> Result<(), SingularPivot> {
-    if a.iter()
-        .flatten()
-        .fold(false, |bad, v| bad | !v.is_finite())
-    {
-        let first = a.iter().flatten().position(|v| !v.is_finite()).unwrap_or(0);
-        return Err(SingularPivot { column: first / N });
+) -> Result<(), Breakdown> {
+    if let Some(e) = Breakdown::non_finite(a.iter().flatten(), N) {
+        return Err(e);
     }
     let round_off = SINGULAR_PIVOT_EPSILONS * N as f64 * f64::EPSILON;
     macro_rules! steps {
@@ -232,7 +271,7 @@ fn elimination_step<const N: usize>(
     pivots: &mut [usize; N],
     k: usize,
     round_off: f64,
-) -> Result<(), SingularPivot> {
+) -> Result<(), Breakdown> {
     let mut pivot_row = k;
     let mut best = a[k][k].abs();
     for i in k + 1..N {
@@ -255,7 +294,7 @@ fn elimination_step<const N: usize>(
     }
     let regular = best.is_finite() && best > round_off * (best + subtracted);
     if !regular {
-        return Err(SingularPivot { column: k });
+        return Err(Breakdown::Pivot { column: k });
     }
     let (left, right) = a.split_at_mut(k + 1);
     let col_k = &mut left[k];
@@ -444,7 +483,7 @@ pub(crate) fn factor_dispatched(
     a: &mut [f64],
     n: usize,
     pivots: &mut [usize],
-) -> Result<(), SingularPivot> {
+) -> Result<(), Breakdown> {
     macro_rules! sizes {
         ($($c:literal)*; $($k:literal)*) => {
             match n {
@@ -463,7 +502,7 @@ pub(crate) fn factor_dispatched(
 /// # Panics
 /// If `a` is shorter than `N * N` or `pivots` shorter than `N` (a caller's sizing bug).
 #[inline(always)]
-fn factor_slice<const N: usize>(a: &mut [f64], pivots: &mut [usize]) -> Result<(), SingularPivot> {
+fn factor_slice<const N: usize>(a: &mut [f64], pivots: &mut [usize]) -> Result<(), Breakdown> {
     let (columns, _) = a[..N * N].as_chunks_mut::<N>();
     let columns: &mut [[f64; N]; N] = columns.try_into().expect("N columns of N entries");
     let pivots: &mut [usize; N] = (&mut pivots[..N]).try_into().expect("N pivots");
@@ -610,7 +649,7 @@ mod tests {
         let mut a = random_12();
         a[5 * N + 2] = f64::NAN;
         let got = factor_split_fixed::<N>(&mut a, &mut pivots, &mut upper, &mut diag);
-        assert_eq!(got, Err(SingularPivot { column: 5 }));
+        assert_eq!(got, Err(Breakdown::NonFinite { row: 2, column: 5 }));
         let mut a = random_12();
         // Column 9 = column 2 + column 4: rank 11.
         for i in 0..N {
@@ -672,7 +711,7 @@ mod tests {
         a[4 * 9 + 7] = f64::INFINITY;
         assert_eq!(
             factor_slice::<9>(&mut a, &mut [0; 9]),
-            Err(SingularPivot { column: 4 })
+            Err(Breakdown::NonFinite { row: 7, column: 4 })
         );
     }
 
@@ -735,12 +774,12 @@ mod tests {
         let mut pivots = [0; 3];
         assert_eq!(
             factor(&mut a, 3, &mut pivots),
-            Err(SingularPivot { column: 2 })
+            Err(Breakdown::Pivot { column: 2 })
         );
         let mut zero_column = column_major(&[&[1.0, 0.0], &[2.0, 0.0]]);
         assert_eq!(
             factor(&mut zero_column, 2, &mut pivots),
-            Err(SingularPivot { column: 1 })
+            Err(Breakdown::Pivot { column: 1 })
         );
     }
 
@@ -786,7 +825,7 @@ mod tests {
         let mut pivots = [0; 2];
         assert_eq!(
             factor(&mut a, 2, &mut pivots),
-            Err(SingularPivot { column: 1 })
+            Err(Breakdown::NonFinite { row: 1, column: 1 })
         );
     }
 

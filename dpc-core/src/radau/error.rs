@@ -99,6 +99,23 @@ pub enum RadauError {
         /// Name of an equation whose row is identically zero, when there is one.
         equation: Option<String>,
     },
+    /// `dF/dy` or `dF/dy'` at the step's start has a NaN or infinite entry (for a
+    /// difference-quotient matrix, a residual that is not finite at a perturbed point):
+    /// reported at once, since Radau forms the matrices at the step's start, which a smaller
+    /// step does not move. Also when the stage matrix formed from finite ones overflowed on
+    /// every step size tried.
+    #[error(
+        "non-finite matrix entry at t = {}: the derivative of equation `{equation}` with respect to `{unknown}`",
+        Time(*t)
+    )]
+    NonFiniteMatrix {
+        /// Start of the step.
+        t: f64,
+        /// Name of the entry's equation (its row).
+        equation: String,
+        /// Name of the entry's unknown (its column).
+        unknown: String,
+    },
     /// The model's residual returned NaN or an infinity, and reducing the step did not help.
     #[error("non-finite residual at t = {} in {equation}", Time(*t))]
     NonFiniteResidual {

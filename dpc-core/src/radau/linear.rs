@@ -325,11 +325,24 @@ fn complex_solve_dispatched(lu: &[c64], n: usize, pivots: &[usize], b: &mut [c64
     sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
+/// A non-finite entry of `J` or `M` as the model gave them: a matrix the step's start point
+/// fixes, which no smaller step changes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct NonFiniteEntry {
+    /// Row (equation).
+    pub row: usize,
+    /// Column (unknown).
+    pub col: usize,
+}
+
 /// Why the stage matrices could not be formed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum SetupFailure {
     /// A singular system: which one, pivot column, zero row.
     Singular(StageSystem, Option<usize>, Option<usize>),
+    /// A non-finite entry of the real stage matrix (row, column) from finite `J` and `M`
+    /// (an overflow of `gamma/h M`).
+    NonFinite(usize, usize),
     /// An entry outside the declared pattern (row, column): not recoverable.
     OutsidePattern(usize, usize),
 }
@@ -367,7 +380,13 @@ impl<L: LinearSolver> StageMatrices<L> {
     /// Evaluate `J = dF/dy` and `M = dF/dy'` at `(t, y, yp)`: `M` from the model's
     /// [`ImplicitDae::mass_matrix`] when it supplies one, else as the difference of the
     /// iteration matrices at `c = 1` and `c = 0`.
-    pub fn evaluate<D: ImplicitDae>(&mut self, dae: &D, t: f64, y: &[f64], yp: &[f64]) {
+    pub fn evaluate<D: ImplicitDae>(
+        &mut self,
+        dae: &D,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<(), NonFiniteEntry> {
         self.jy.fill_zero();
         dae.iteration_matrix(t, y, yp, 0.0, &mut self.jy);
         self.jyp.fill_zero();
@@ -384,6 +403,17 @@ impl<L: LinearSolver> StageMatrices<L> {
         self.have_jacobian = true;
         self.current = true;
         self.factored = false;
+        for j in 0..self.jy.ncols() {
+            let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
+            if let Some(i) = jy
+                .iter()
+                .zip(jyp)
+                .position(|(a, b)| !(a.is_finite() && b.is_finite()))
+            {
+                return Err(NonFiniteEntry { row: i, col: j });
+            }
+        }
+        Ok(())
     }
 
     /// Form and factorise `E_1 = J + (gamma/h) M` and `E_2 = J + ((alpha - i beta)/h) M`.
@@ -411,6 +441,9 @@ impl<L: LinearSolver> StageMatrices<L> {
             Ok(()) => {}
             Err(FactorError::Singular { column, row }) => {
                 return Err(SetupFailure::Singular(StageSystem::Real, column, row));
+            }
+            Err(FactorError::NonFinite { row, col }) => {
+                return Err(SetupFailure::NonFinite(row, col));
             }
             Err(FactorError::OutsidePattern { row, col }) => {
                 return Err(SetupFailure::OutsidePattern(row, col));
@@ -550,7 +583,7 @@ mod tests {
     #[test]
     fn both_systems_solve_what_they_should() {
         let mut sm = StageMatrices::new(NalgebraLu::<3>::new(), 3);
-        sm.evaluate(&Linear, 0.0, &[0.0; 3], &[0.0; 3]);
+        sm.evaluate(&Linear, 0.0, &[0.0; 3], &[0.0; 3]).unwrap();
         let mut mv = [0.0; 3];
         sm.apply_mass(&[1.0, 1.0, 1.0], &mut mv);
         assert_eq!(mv, [3.0, 1.0, 0.0]);

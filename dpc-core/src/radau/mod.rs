@@ -84,7 +84,7 @@ pub use stats::Stats;
 use control::Controller;
 use dense::Collocation;
 use estimate::EstimateWork;
-use linear::{SetupFailure, StageMatrices};
+use linear::{NonFiniteEntry, SetupFailure, StageMatrices};
 use newton::{NewtonOutcome, StageProblem, StageWork};
 use tableau::Tableau;
 
@@ -480,7 +480,8 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     /// # Errors
     /// [`RadauError::StepTooSmall`], [`RadauError::RepeatedFailures`],
     /// [`RadauError::SingularMatrix`], [`RadauError::NonFiniteResidual`] when a step cannot be
-    /// completed; [`RadauError::InvalidTolerance`] when an error weight is not positive.
+    /// completed; [`RadauError::NonFiniteMatrix`] at once when `dF/dy` or `dF/dy'` at the
+    /// step's start has a non-finite entry; [`RadauError::InvalidTolerance`] when an error weight is not positive.
     pub fn step(&mut self) -> Result<f64, RadauError> {
         if self.h == 0.0 {
             let t = self.tstop.unwrap_or(self.t + 1.0);
@@ -662,6 +663,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 unknown: col.map(|c| self.dae.unknown_name(c)),
                 equation: row.map(|r| self.dae.equation_name(r)),
             },
+            SetupFailure::NonFinite(r, c) => RadauError::NonFiniteMatrix {
+                t: self.t,
+                equation: self.dae.equation_name(r),
+                unknown: self.dae.unknown_name(c),
+            },
             SetupFailure::OutsidePattern(r, c) => RadauError::OutsidePattern {
                 equation: self.dae.equation_name(r),
                 unknown: self.dae.unknown_name(c),
@@ -707,9 +713,19 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 });
             }
             if self.need_jacobian && !self.sm.current {
-                self.sm
+                let formed = self
+                    .sm
                     .evaluate(&self.dae, self.start_limit(), &self.y, &self.yp);
                 self.stats.jacobian_evaluations += 1;
+                // `J` and `M` at the step's start: a smaller step would factorise the same
+                // non-finite entries again.
+                if let Err(NonFiniteEntry { row, col }) = formed {
+                    return Err(RadauError::NonFiniteMatrix {
+                        t: self.t,
+                        equation: self.dae.equation_name(row),
+                        unknown: self.dae.unknown_name(col),
+                    });
+                }
             }
             self.update_weights(h)?;
             // A factorisation for a step within round-off of this one serves it (a step cut
