@@ -430,3 +430,55 @@ fn consistent_initialisation_rejects_higher_index() {
         r => panic!("unexpected {r:?}"),
     }
 }
+
+#[test]
+fn consistent_initialisation_without_a_solution_is_a_typed_failure() {
+    // `x' = -x`, `0 = z^2 + 1`: no real `z` solves the constraint; Newton wanders (its
+    // iteration is z -> (z - 1/z) / 2) and the failure carries its work and residual.
+    struct NoRoot;
+    impl ImplicitDae for NoRoot {
+        fn dimension(&self) -> usize {
+            2
+        }
+        fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            out[0] = yp[0] + y[0];
+            out[1] = y[1] * y[1] + 1.0;
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            _: f64,
+            y: &[f64],
+            _: &[f64],
+            c: f64,
+            m: &mut S,
+        ) {
+            m.set(0, 0, 1.0 + c);
+            m.set(1, 1, 2.0 * y[1]);
+        }
+        fn is_differential(&self, i: usize) -> bool {
+            i == 0
+        }
+    }
+    let (mut y, mut yp) = ([1.0, 0.3], [0.0, 0.0]);
+    let r = consistent_initial_values(
+        &NoRoot,
+        &mut NalgebraLu::<2>::new(),
+        &Options::default(),
+        0.0,
+        &mut y,
+        &mut yp,
+    );
+    match r {
+        Err(
+            e @ BdfError::InitialisationFailed {
+                iterations,
+                residual_norm,
+            },
+        ) => {
+            assert!(iterations >= 1, "{e}");
+            assert!(residual_norm >= 1.0, "{e}");
+            assert!(e.to_string().contains("did not converge"), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+}

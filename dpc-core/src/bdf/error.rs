@@ -202,9 +202,17 @@ pub enum BdfError {
         #[source]
         source: Box<BdfError>,
     },
-    /// Consistent initialisation did not converge.
-    #[error("consistent initialisation failed: {0}")]
-    InitialisationFailed(String),
+    /// Consistent initialisation's Newton iteration did not converge.
+    #[error(
+        "consistent initialisation failed: Newton did not converge ({iterations} iterations, residual 2-norm {})",
+        Readable(*residual_norm)
+    )]
+    InitialisationFailed {
+        /// Iterations taken.
+        iterations: usize,
+        /// The 2-norm of the residual at the last iterate.
+        residual_norm: f64,
+    },
 }
 
 impl BdfError {

@@ -102,7 +102,8 @@ impl<S: MatrixSink + ?Sized> MatrixSink for SecondPass<'_, S> {
 /// [`BdfError::DimensionMismatch`]; [`BdfError::SingularMatrix`] naming the unknown and
 /// equation when the Jacobian with respect to `(y'_d, y_a)` is singular (the DAE is not of
 /// index 1 in this split, or an algebraic unknown does not appear); [`BdfError::NonFiniteResidual`];
-/// [`BdfError::InitialisationFailed`] when Newton does not converge in 20 iterations.
+/// [`BdfError::InitialisationFailed`] when Newton diverges or does not converge in 20
+/// iterations.
 pub fn consistent_initial_values<D: ImplicitDae, L: LinearSolver>(
     dae: &D,
     ls: &mut L,
@@ -192,9 +193,10 @@ impl InitWorkspace {
         let fnorm = system.fnorm;
         match outcome {
             Ok(_) => Ok(stats),
-            Err(NewtonFailure::Convergence) => Err(BdfError::InitialisationFailed(format!(
-                "Newton did not converge in {MAX_ITERATIONS} iterations (residual 2-norm {fnorm:e})"
-            ))),
+            Err(NewtonFailure::Convergence) => Err(BdfError::InitialisationFailed {
+                iterations: stats.newton_iterations,
+                residual_norm: fnorm,
+            }),
             Err(NewtonFailure::Singular(column, row)) => Err(BdfError::SingularMatrix {
                 t: t0,
                 unknown: column.map(|c| {
