@@ -306,6 +306,40 @@ fn a_bad_output_step_is_a_typed_error() {
 }
 
 #[test]
+fn a_bad_initial_state_is_a_typed_error_naming_the_state() {
+    let mut dpc = Dpc::new(
+        WheelTracking::default(),
+        WheelReference::default(),
+        NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
+        DpcOptions::default(),
+    )
+    .expect("controller");
+    let opts = ClosedLoopOptions {
+        t_end: 1.0,
+        ..ClosedLoopOptions::default()
+    };
+    let plant = Wheel::default();
+    match simulate(&plant, &mut dpc, &X0[..4], &opts).unwrap_err() {
+        SimulateError::InitialStateLength { expected, found } => {
+            assert_eq!((expected, found), (5, 4))
+        }
+        other => panic!("{other:?}"),
+    }
+    let mut x0 = X0;
+    x0[2] = f64::NAN;
+    let err = simulate(&plant, &mut dpc, &x0, &opts).unwrap_err();
+    let name = plant.structure().states[2].to_string();
+    match &err {
+        SimulateError::NonFiniteInitialState { state, value } => {
+            assert_eq!(state, &name);
+            assert!(value.is_nan());
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(err.to_string().contains(&format!("`{name}`")), "{err}");
+}
+
+#[test]
 fn progress_is_told_of_every_sample() {
     let mut dpc = Dpc::new(
         WheelTracking::default(),

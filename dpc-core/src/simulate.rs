@@ -274,9 +274,22 @@ pub enum SimulateError {
         /// The number of bounds.
         found: usize,
     },
-    /// The initial state has the wrong length or is not finite.
-    #[error("initial state: {0}")]
-    InitialState(String),
+    /// The initial state has the wrong length.
+    #[error("initial state: {found} values given, but the plant has {expected} states")]
+    InitialStateLength {
+        /// The number of states.
+        expected: usize,
+        /// The number of values given.
+        found: usize,
+    },
+    /// A value of the initial state is NaN or infinite.
+    #[error("initial state: `{state}` is {}", Readable(*value))]
+    NonFiniteInitialState {
+        /// The state's name as declared.
+        state: String,
+        /// The value given.
+        value: f64,
+    },
     /// [`Hold::Correction`] needs a controller with a preliminary feedback.
     #[error("hold = correction needs a preliminary feedback")]
     NoPrefeedback,
@@ -1051,10 +1064,17 @@ where
         &opts.tracking_bounds,
         &plant.structure().outputs,
     )?;
-    if x0.len() != nx || x0.iter().any(|v| !v.is_finite()) {
-        return Err(SimulateError::InitialState(format!(
-            "expected {nx} finite values, got {x0:?}"
-        )));
+    if x0.len() != nx {
+        return Err(SimulateError::InitialStateLength {
+            expected: nx,
+            found: x0.len(),
+        });
+    }
+    if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
+        return Err(SimulateError::NonFiniteInitialState {
+            state: plant.structure().states[i].to_string(),
+            value: x0[i],
+        });
     }
     if dpc.model().structure().n_states() != nx {
         return Err(SimulateError::Mismatch {
