@@ -24,6 +24,18 @@ use dpc_models::{
 
 const X0: [f64; 5] = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, -6.0];
 
+/// The wheel's DPC without a preliminary feedback (the tests of the loop's plumbing).
+fn plain_wheel_controller(
+) -> Dpc<WheelTracking, WheelReference, NalgebraLu<{ WheelTracking::N_EQUATIONS }>> {
+    Dpc::new(
+        WheelTracking::default(),
+        WheelReference::default(),
+        NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
+        DpcOptions::default(),
+    )
+    .expect("controller")
+}
+
 /// The paper's wheel with the preliminary feedback about the nominal, `h = 0.05`.
 fn wheel_run(hold: Hold, t_end: f64, output_step: Option<f64>) -> ClosedLoop {
     let mut dpc = Dpc::new(
@@ -272,13 +284,7 @@ fn a_constrained_plant_records_its_motion_between_samples_too() {
 
 #[test]
 fn a_bad_output_step_is_a_typed_error() {
-    let mut dpc = Dpc::new(
-        WheelTracking::default(),
-        WheelReference::default(),
-        NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
-        DpcOptions::default(),
-    )
-    .expect("controller");
+    let mut dpc = plain_wheel_controller();
     for (step, expected) in [
         (0.0, OutputStepProblem::NotPositive),
         (-0.01, OutputStepProblem::NotPositive),
@@ -307,13 +313,7 @@ fn a_bad_output_step_is_a_typed_error() {
 
 #[test]
 fn a_bad_initial_state_is_a_typed_error_naming_the_state() {
-    let mut dpc = Dpc::new(
-        WheelTracking::default(),
-        WheelReference::default(),
-        NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
-        DpcOptions::default(),
-    )
-    .expect("controller");
+    let mut dpc = plain_wheel_controller();
     let opts = ClosedLoopOptions {
         t_end: 1.0,
         ..ClosedLoopOptions::default()
@@ -341,13 +341,7 @@ fn a_bad_initial_state_is_a_typed_error_naming_the_state() {
 
 #[test]
 fn progress_is_told_of_every_sample() {
-    let mut dpc = Dpc::new(
-        WheelTracking::default(),
-        WheelReference::default(),
-        NalgebraLu::<{ WheelTracking::N_EQUATIONS }>::new(),
-        DpcOptions::default(),
-    )
-    .expect("controller");
+    let mut dpc = plain_wheel_controller();
     let opts = ClosedLoopOptions {
         t_end: 0.5,
         ..ClosedLoopOptions::default()

@@ -318,6 +318,17 @@ fn a_matrix_costs_the_residuals_it_says() {
 
 /// Robertson to `t = 1e11` by the BDF at `rtol` with `dae`: (digits, stats).
 fn robertson_bdf<D: ImplicitDae>(dae: D, rtol: f64) -> (f64, bdf::Stats) {
+    let (y, stats) = robertson_run(dae, rtol);
+    let y = y.expect("integrated");
+    (significant_digits(&y, &ROBERTSON_REF, &[0, 1, 2]), stats)
+}
+
+/// Robertson to its end by the BDF at `rtol` (IDA's `atol`): the end value or the error, and
+/// the work.
+fn robertson_run<D: ImplicitDae>(
+    dae: D,
+    rtol: f64,
+) -> (Result<[f64; 3], bdf::BdfError>, bdf::Stats) {
     let opts = bdf::Options {
         rtol: Tolerance::Scalar(rtol),
         atol: Tolerance::Vector(robertson_atol(rtol)),
@@ -335,11 +346,8 @@ fn robertson_bdf<D: ImplicitDae>(dae: D, rtol: f64) -> (f64, bdf::Stats) {
     .expect("set up");
     s.set_stop_time(t_end).expect("stop time");
     let mut y = [0.0; 3];
-    s.solve_to(t_end, &mut y, None).expect("integrated");
-    (
-        significant_digits(&y, &ROBERTSON_REF, &[0, 1, 2]),
-        s.stats(),
-    )
+    let result = s.solve_to(t_end, &mut y, None).map(|_| y);
+    (result, s.stats())
 }
 
 /// The transistor amplifier to `t = 0.2` by the BDF at `rtol = atol = tol`: (digits, stats).
@@ -730,26 +738,7 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
     );
     for shots in [1, 3] {
         let dae = PoisonedOnce::new(shots);
-        let opts = bdf::Options {
-            rtol: Tolerance::Scalar(rtol),
-            atol: Tolerance::Vector(robertson_atol(rtol)),
-            ..bdf::Options::default()
-        };
-        let t_end = bdf_problems::ROBERTSON_T_END;
-        let mut s = Bdf::new(
-            &dae,
-            NalgebraLu::<3>::new(),
-            opts,
-            0.0,
-            &[1.0, 0.0, 0.0],
-            &[-0.04, 0.04, 0.0],
-        )
-        .expect("set up");
-        s.set_stop_time(t_end).expect("stop time");
-        let mut y = [0.0; 3];
-        s.solve_to(t_end, &mut y, None).expect("integrated");
-        let d = significant_digits(&y, &ROBERTSON_REF, &[0, 1, 2]);
-        let st = s.stats();
+        let (d, st) = robertson_bdf(&dae, rtol);
         println!("Robertson with {shots} NaN matrices: {d:.2} {st:?} (undisturbed {d0:.2} {s0:?})");
         assert_eq!(dae.poisoned.get(), shots);
         assert!(
@@ -762,23 +751,7 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
     }
     // Every matrix after t = 1 poisoned: the retries (each at a new predicted point) end in a
     // typed error naming the entry, not a vanished pivot.
-    let dae = PoisonedOnce::new(usize::MAX);
-    let opts = bdf::Options {
-        rtol: Tolerance::Scalar(rtol),
-        atol: Tolerance::Vector(robertson_atol(rtol)),
-        ..bdf::Options::default()
-    };
-    let mut s = Bdf::new(
-        &dae,
-        NalgebraLu::<3>::new(),
-        opts,
-        0.0,
-        &[1.0, 0.0, 0.0],
-        &[-0.04, 0.04, 0.0],
-    )
-    .expect("set up");
-    let mut y = [0.0; 3];
-    match s.solve_to(bdf_problems::ROBERTSON_T_END, &mut y, None) {
+    match robertson_run(PoisonedOnce::new(usize::MAX), rtol).0 {
         Err(bdf::BdfError::NonFiniteMatrix {
             t,
             equation,
