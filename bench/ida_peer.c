@@ -1,5 +1,6 @@
 /*
- * Peer comparison driver: SUNDIALS IDA (dense direct solver) on the problems, tolerances and
+ * Peer comparison driver: SUNDIALS IDA (dense direct solver; band solver on SUNDIALS' own banded
+ * examples) on the problems, tolerances and
  * error-control choices of dpc-core's work-precision table (dpc-core/examples/work_precision.rs).
  * Written for this project; run through bench/peers.sh (or bench/ida_peer.sh for IDA alone).
  * Every line is one row of the merged table, prefixed by a sort key and a tab.
@@ -53,6 +54,14 @@
  * components scored: the same equations and exact Jacobians as
  * dpc-core/tests/common/stiff_odes.rs (ringmod.f's guard against exp overflow, a recoverable
  * error there, is left out in both codes).
+ * SUNDIALS' banded examples written anew from their definitions, with IDA's band matrix and LU
+ * (SUNBandMatrix, SUNLinSol_Band) and the exact banded Jacobians of
+ * dpc-core/tests/common/heat2d.rs and food_web.rs: idaHeat2D_bnd (the heat equation on a 10 x 10
+ * grid, boundary values algebraic, half-bandwidths 10) to t = 0.16, its 64 interior values
+ * scored against the exact semi-discrete solution; idaFoodWeb_bnd (prey and predator on a
+ * 20 x 20 grid, the predators algebraic, half-bandwidths 40) stopping at t = 0.01 and going on
+ * to t = 1, all 800 unknowns at both times scored against bench/ida_peer_food_web_ref.h (the
+ * predators made consistent at the start as the Rust fixture does, outside the timed solves).
  * rtol = atol = 1e-k except for Robertson, the charge pump and the water tube; k = 4, 6, 8.
  * A failed solve is printed as such, with IDA's return flag and the time it stopped at. Times:
  * the thread's CPU time per solve, the mean over repetitions filling at least 0.3 s (at least 3).

@@ -39,6 +39,12 @@
 //!   Van der Pol (`eps = 1e-6`, to `t = 2`), OREGO (to `t = 360`), Pollution (20 unknowns, to
 //!   `t = 60`) and the ring modulator (15 unknowns, to `t = 1e-3`), all components scored, by
 //!   Radau and the BDF,
+//! * SUNDIALS' banded examples written anew: `idaHeat2D_bnd` (the heat equation on a 10 x 10
+//!   grid, 100 unknowns, to `t = 0.16`, the 64 interior values scored against the exact
+//!   semi-discrete solution) and `idaFoodWeb_bnd` (a predator-prey food web on a 20 x 20 grid,
+//!   800 unknowns, stopping at `t = 0.01` and going on to `t = 1`, every unknown at both times
+//!   scored), by Radau and the BDF with the LU [`FaerLu::for_dae`] picks (banded) and by the
+//!   BDF with faer's sparse LU,
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`; and the BDF with the iteration matrix by the library's
 //! difference quotients ([`dpc_core::difference`], rows "difference quotients") on Robertson

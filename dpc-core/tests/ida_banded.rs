@@ -23,7 +23,7 @@ mod testset_index3;
 mod two_bit_adder;
 
 use dpc_core::bdf::Bdf;
-use dpc_core::linear_solver::{FaerLu, LinearSolver};
+use dpc_core::linear_solver::{half_bandwidths, FaerLu, LinearSolver, BAND_MAX_FILL};
 use dpc_core::radau::Radau;
 use dpc_core::{bdf, radau, ImplicitDae};
 use food_web::*;
@@ -230,6 +230,17 @@ fn food_web_reference() {
 /// whose pattern spans the whole matrix.
 #[test]
 fn the_run_time_choice_is_the_band_for_the_examples_only() {
+    // The band's storage over the pattern's entries, against `BAND_MAX_FILL`.
+    fn fill<D: ImplicitDae>(name: &str, dae: &D) {
+        let n = dae.dimension();
+        let p = dae.iteration_pattern().expect("a pattern");
+        let (kl, ku) = half_bandwidths(n, &p).expect("in range");
+        let ratio = (n * (2 * kl + ku + 1)) as f64 / p.len() as f64;
+        println!("{name}: n {n}, kl {kl}, ku {ku}, {} entries, band / entries {ratio:.1} (limit {BAND_MAX_FILL})", p.len());
+    }
+    fill("heat", &Heat2d);
+    fill("food web", &FoodWeb::new());
+    fill("two bit adding unit", &two_bit_adder::TwoBitAdder::new());
     let heat = FaerLu::for_dae(&Heat2d);
     assert!(heat.is_band(), "{heat:?}");
     let web = FaerLu::for_dae(&FoodWeb::new());
