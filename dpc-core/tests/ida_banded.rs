@@ -300,3 +300,28 @@ fn bdf_solves_the_food_web() {
     let d = median_over_jitter(1e-6, web_digits);
     assert!(d >= 5.3, "food web at 1e-6: {d:.2} digits");
 }
+
+/// Radau IIA with `FaerLu::for_dae` (the banded LU; its complex system banded too) on the heat
+/// equation at `1e-6`: the median over the jitter was 5.78 (15 factors 0.80-1.20: 5.61-5.86):
+/// the floor is half a digit below.
+#[test]
+fn radau_solves_the_heat_equation() {
+    let d = median_over_jitter(1e-6, |tol| {
+        let (y0, yp0) = Heat2d::initial();
+        let (y, st) = radau_run(
+            Heat2d,
+            FaerLu::for_dae(&Heat2d),
+            (&y0, &yp0),
+            radau::Options::with_tolerances(tol, tol),
+            HEAT_T_END,
+        )
+        .unwrap_or_else(|e| panic!("heat, Radau, tol {tol:e}: {e}"));
+        let d = scd(&y, &heat_exact(HEAT_T_END), &heat_scored());
+        println!(
+            "heat, Radau, tol {tol:e}: {} steps, {d:.2} digits",
+            st.steps
+        );
+        d
+    });
+    assert!(d >= 5.2, "heat, Radau at 1e-6: {d:.2} digits");
+}

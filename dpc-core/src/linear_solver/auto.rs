@@ -129,6 +129,13 @@ impl LinearSolver for FaerLu {
         }
     }
 
+    fn band(&self) -> Option<(usize, usize)> {
+        match self {
+            Self::Band(b) => b.band(),
+            _ => None,
+        }
+    }
+
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
         match self {
             Self::Dense(d) => d.scaled_row_norms(w, out),

@@ -290,6 +290,10 @@ impl LinearSolver for BandLu {
         }
     }
 
+    fn band(&self) -> Option<(usize, usize)> {
+        Some(self.half_bandwidths())
+    }
+
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
         let m = &self.matrix;
         let lda = m.kl + m.ku + 1;

@@ -94,6 +94,13 @@ pub trait LinearSolver {
     /// Row scales `out_i = max_j |A_ij| / w_j` of the matrix last written, for weights `w`
     /// (the change of equation `i` caused by moving one unknown by one unit `1/w_j`).
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]);
+
+    /// The half-bandwidths `(kl, ku)` the solver's matrix is confined to, when it is banded
+    /// ([`BandLu`]): an integrator with a second system of the same structure (Radau's complex
+    /// one) can then factorise that one in a band too. The default says not banded.
+    fn band(&self) -> Option<(usize, usize)> {
+        None
+    }
 }
 
 /// A mutable borrow of a solver is a solver, so one solver can serve several integrators in
@@ -114,6 +121,9 @@ impl<L: LinearSolver + ?Sized> LinearSolver for &mut L {
     }
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
         (**self).scaled_row_norms(w, out);
+    }
+    fn band(&self) -> Option<(usize, usize)> {
+        (**self).band()
     }
 }
 

@@ -7,7 +7,9 @@
 //! * the real `n x n` matrix `E_1 = J + (gamma/h) M`, factorised by the caller's
 //!   [`LinearSolver`] (fixed-size, dense or sparse), and
 //! * the complex `n x n` matrix `E_2 = J + ((alpha - i beta)/h) M`, factorised by a dense
-//!   complex partial-pivoting LU (faer) whose storage is allocated once.
+//!   complex partial-pivoting LU (faer) whose storage is allocated once, or within the band
+//!   of the real solver when it is banded ([`LinearSolver::band`]; `E_2` has `E_1`'s
+//!   structure).
 //!
 //! `J` is the model's `iteration_matrix(t, y, y', c) = J + c M` at `c = 0`; `M` its
 //! [`ImplicitDae::mass_matrix`] when the model supplies one, else the same entry point at
@@ -21,6 +23,7 @@ use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
 use faer::{c64, Mat, MatMut, Par};
 
+use super::band::ComplexBandLu;
 use super::error::StageSystem;
 use crate::linear_solver::{FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
 use crate::sink::MatrixSink;
@@ -334,12 +337,22 @@ pub(crate) enum SetupFailure {
     OutsidePattern(usize, usize),
 }
 
+/// The complex stage system's LU: dense, or banded when the real solver is
+/// ([`LinearSolver::band`]).
+enum ComplexSolver {
+    Dense(ComplexLu),
+    Band(ComplexBandLu),
+}
+
 /// `J`, `M` and the factorised stage matrices.
 pub(crate) struct StageMatrices<L: LinearSolver> {
     ls: L,
     jy: Mat<f64>,
     jyp: Mat<f64>,
-    complex: ComplexLu,
+    complex: ComplexSolver,
+    /// With a banded solver: the first entry of `J` or `M` outside its band, at the last
+    /// evaluation.
+    outside_band: Option<(usize, usize)>,
     /// A Jacobian has been evaluated (at some earlier step start, possibly stale).
     pub have_jacobian: bool,
     /// The Jacobian was evaluated at the start of the current step.
@@ -352,11 +365,16 @@ pub(crate) struct StageMatrices<L: LinearSolver> {
 
 impl<L: LinearSolver> StageMatrices<L> {
     pub fn new(ls: L, n: usize) -> Self {
+        let complex = match ls.band() {
+            Some((kl, ku)) => ComplexSolver::Band(ComplexBandLu::new(n, kl, ku)),
+            None => ComplexSolver::Dense(ComplexLu::new(n)),
+        };
         Self {
             ls,
             jy: Mat::zeros(n, n),
             jyp: Mat::zeros(n, n),
-            complex: ComplexLu::new(n),
+            complex,
+            outside_band: None,
             have_jacobian: false,
             current: false,
             factored: false,
@@ -381,6 +399,19 @@ impl<L: LinearSolver> StageMatrices<L> {
                 }
             }
         }
+        self.outside_band = None;
+        if let Some((kl, ku)) = self.ls.band() {
+            let n = self.jy.nrows();
+            'columns: for j in 0..n {
+                let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
+                for i in (0..j.saturating_sub(ku)).chain((j + kl + 1).min(n)..n) {
+                    if jy[i] != 0.0 || jyp[i] != 0.0 {
+                        self.outside_band = Some((i, j));
+                        break 'columns;
+                    }
+                }
+            }
+        }
         self.have_jacobian = true;
         self.current = true;
         self.factored = false;
@@ -397,11 +428,22 @@ impl<L: LinearSolver> StageMatrices<L> {
         self.factored = false;
         let n = self.jy.nrows();
         let (cr, ca, cb) = (gamma / h, alpha / h, -beta / h);
+        // Rows of column j that can hold entries: the band's, when the solver has one (an
+        // entry outside it was found when J and M were evaluated).
+        if let Some((row, col)) = self.outside_band {
+            return Err(SetupFailure::OutsidePattern(row, col));
+        }
+        let band = self.ls.band();
         let m = self.ls.matrix_mut();
         m.fill_zero();
         for j in 0..n {
+            let rows = match band {
+                Some((kl, ku)) => j.saturating_sub(ku)..(j + kl + 1).min(n),
+                None => 0..n,
+            };
             let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
-            for (i, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
+            for i in rows {
+                let (a, b) = (jy[i], jyp[i]);
                 if a != 0.0 || b != 0.0 {
                     m.set(i, j, a + cr * b);
                 }
@@ -416,14 +458,35 @@ impl<L: LinearSolver> StageMatrices<L> {
                 return Err(SetupFailure::OutsidePattern(row, col));
             }
         }
-        for j in 0..n {
-            let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
-            let column = self.complex.matrix.col_as_slice_mut(j);
-            for ((e, &a), &b) in column.iter_mut().zip(jy).zip(jyp) {
-                *e = c64::new(a + ca * b, cb * b);
+        let factored = match &mut self.complex {
+            ComplexSolver::Dense(complex) => {
+                for j in 0..n {
+                    let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
+                    let column = complex.matrix.col_as_slice_mut(j);
+                    for ((e, &a), &b) in column.iter_mut().zip(jy).zip(jyp) {
+                        *e = c64::new(a + ca * b, cb * b);
+                    }
+                }
+                complex.factor()
             }
-        }
-        if let Err(col) = self.complex.factor() {
+            ComplexSolver::Band(complex) => {
+                // The real system's band holds every entry of J and M (the real factorisation
+                // above reported any outside it).
+                let (kl, ku) = complex.half_bandwidths();
+                complex.clear();
+                for j in 0..n {
+                    let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
+                    for i in j.saturating_sub(ku)..=(j + kl).min(n - 1) {
+                        let (a, b) = (jy[i], jyp[i]);
+                        if a != 0.0 || b != 0.0 {
+                            complex.set(i, j, c64::new(a + ca * b, cb * b));
+                        }
+                    }
+                }
+                complex.factor().map_err(Some)
+            }
+        };
+        if let Err(col) = factored {
             let (jy, jyp) = (&self.jy, &self.jyp);
             let row = crate::linear_solver::zero_row(n, |i, j| {
                 (jy[(i, j)] + ca * jyp[(i, j)]).abs() + (cb * jyp[(i, j)]).abs()
@@ -442,7 +505,10 @@ impl<L: LinearSolver> StageMatrices<L> {
 
     /// Solve `E_2 x = b` in place.
     pub fn solve_complex(&mut self, b: &mut [c64]) {
-        self.complex.solve_in_place(b);
+        match &mut self.complex {
+            ComplexSolver::Dense(complex) => complex.solve_in_place(b),
+            ComplexSolver::Band(complex) => complex.solve_in_place(b),
+        }
     }
 
     /// `out = 10 eps (|J| |y| + |M| |y'|)`, a bound of the round-off of `F(t, y, y')` (ten
@@ -450,9 +516,14 @@ impl<L: LinearSolver> StageMatrices<L> {
     /// `10 eps / rtol` on Newton's tolerance), with the stored (possibly older) Jacobians.
     pub fn residual_roundoff(&self, y: &[f64], yp: &[f64], out: &mut [f64]) {
         let n = out.len();
+        // A banded J and M have no entry outside the band (the real factorisation checks).
+        let (kl, ku) = match &self.complex {
+            ComplexSolver::Band(complex) => complex.half_bandwidths(),
+            ComplexSolver::Dense(_) => (n, n),
+        };
         for (i, o) in out.iter_mut().enumerate() {
             let mut s = 0.0;
-            for j in 0..n {
+            for j in i.saturating_sub(kl)..(i + ku + 1).min(n) {
                 s += self.jy[(i, j)].abs() * y[j].abs() + self.jyp[(i, j)].abs() * yp[j].abs();
             }
             *o = 10.0 * f64::EPSILON * s;
@@ -549,7 +620,25 @@ mod tests {
 
     #[test]
     fn both_systems_solve_what_they_should() {
-        let mut sm = StageMatrices::new(NalgebraLu::<3>::new(), 3);
+        systems_solve_what_they_should(NalgebraLu::<3>::new());
+        // The banded LU holding the whole matrix: the complex system banded too.
+        systems_solve_what_they_should(crate::linear_solver::BandLu::new(3, 2, 2));
+    }
+
+    /// A banded real solver whose band misses an entry of `J`: the setup reports it.
+    #[test]
+    fn an_entry_outside_the_band_is_reported() {
+        let mut sm = StageMatrices::new(crate::linear_solver::BandLu::new(3, 1, 1), 3);
+        sm.evaluate(&Linear, 0.0, &[0.0; 3], &[0.0; 3]);
+        assert!(matches!(sm.complex, ComplexSolver::Band(_)));
+        assert_eq!(
+            sm.factor(0.1, 3.6, 2.7, 3.05),
+            Err(SetupFailure::OutsidePattern(2, 0))
+        );
+    }
+
+    fn systems_solve_what_they_should<L: LinearSolver>(ls: L) {
+        let mut sm = StageMatrices::new(ls, 3);
         sm.evaluate(&Linear, 0.0, &[0.0; 3], &[0.0; 3]);
         let mut mv = [0.0; 3];
         sm.apply_mass(&[1.0, 1.0, 1.0], &mut mv);
