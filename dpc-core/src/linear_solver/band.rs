@@ -30,6 +30,39 @@ pub struct BandMatrix {
 }
 
 impl BandMatrix {
+    /// An `n x n` zero matrix with half-bandwidths `kl`, `ku` (taken as at most `n - 1`).
+    pub(crate) fn new(n: usize, kl: usize, ku: usize) -> Self {
+        let (kl, ku) = (kl.min(n.saturating_sub(1)), ku.min(n.saturating_sub(1)));
+        Self {
+            n,
+            kl,
+            ku,
+            values: vec![0.0; n * (kl + ku + 1)],
+            outside: None,
+        }
+    }
+
+    /// The first row of column `j` inside the band and the column's entries from there to the
+    /// band's last row in the matrix, contiguous.
+    pub(crate) fn column(&self, j: usize) -> (usize, &[f64]) {
+        let first = j.saturating_sub(self.ku);
+        let last = (j + self.kl).min(self.n - 1);
+        let base = j * (self.kl + self.ku + 1) + self.ku;
+        (first, &self.values[base + first - j..=base + last - j])
+    }
+
+    /// The first non-zero write outside the band since the last [`MatrixSink::fill_zero`].
+    pub(crate) fn outside(&self) -> Option<(usize, usize)> {
+        self.outside
+    }
+
+    /// Subtract `other` (of the same size and band) entry by entry.
+    pub(crate) fn subtract(&mut self, other: &Self) {
+        for (a, b) in self.values.iter_mut().zip(&other.values) {
+            *a -= b;
+        }
+    }
+
     /// The slot of `(row, col)`, when it lies in the band.
     #[inline]
     fn slot(&self, row: usize, col: usize) -> Option<usize> {
@@ -110,15 +143,10 @@ impl BandLu {
     /// A solver for `n x n` systems with entries only within `kl` below and `ku` above the
     /// diagonal (half-bandwidths beyond `n - 1` are taken as `n - 1`).
     pub fn new(n: usize, kl: usize, ku: usize) -> Self {
-        let (kl, ku) = (kl.min(n.saturating_sub(1)), ku.min(n.saturating_sub(1)));
+        let matrix = BandMatrix::new(n, kl, ku);
+        let (kl, ku) = matrix.half_bandwidths();
         Self {
-            matrix: BandMatrix {
-                n,
-                kl,
-                ku,
-                values: vec![0.0; n * (kl + ku + 1)],
-                outside: None,
-            },
+            matrix,
             factors: vec![0.0; n * (2 * kl + ku + 1)],
             pivots: vec![0; n],
             factored: false,

@@ -37,11 +37,6 @@ impl ComplexBandLu {
         }
     }
 
-    /// The half-bandwidths `(kl, ku)`.
-    pub fn half_bandwidths(&self) -> (usize, usize) {
-        (self.kl, self.ku)
-    }
-
     /// Every entry zero (the fill-in rows included), before the band is written with
     /// [`set`](Self::set).
     pub fn clear(&mut self) {

@@ -25,7 +25,7 @@ use faer::{c64, Mat, MatMut, Par};
 
 use super::band::ComplexBandLu;
 use super::error::StageSystem;
-use crate::linear_solver::{FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
+use crate::linear_solver::{BandMatrix, FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
 use crate::sink::MatrixSink;
 use crate::ImplicitDae;
 
@@ -344,11 +344,111 @@ enum ComplexSolver {
     Band(ComplexBandLu),
 }
 
+/// `J` or `M`: dense, or in the real solver's band when it has one (an entry outside the band
+/// is remembered, see [`BandMatrix`]).
+enum Jacobian {
+    Dense(Mat<f64>),
+    Band(BandMatrix),
+}
+
+impl Jacobian {
+    fn new(n: usize, band: Option<(usize, usize)>) -> Self {
+        match band {
+            Some((kl, ku)) => Self::Band(BandMatrix::new(n, kl, ku)),
+            None => Self::Dense(Mat::zeros(n, n)),
+        }
+    }
+
+    /// The first row of column `j` that can hold an entry, and the column from there on (to
+    /// the band's last row).
+    #[inline]
+    fn column(&self, j: usize) -> (usize, &[f64]) {
+        match self {
+            Self::Dense(m) => (0, m.col_as_slice(j)),
+            Self::Band(b) => b.column(j),
+        }
+    }
+
+    /// The entry `(i, j)` (zero outside the band).
+    #[inline]
+    fn get(&self, i: usize, j: usize) -> f64 {
+        match self {
+            Self::Dense(m) => m[(i, j)],
+            Self::Band(b) => b.get(i, j),
+        }
+    }
+
+    /// `self -= other` (the same storage).
+    fn subtract(&mut self, other: &Self) {
+        match (self, other) {
+            (Self::Dense(a), Self::Dense(b)) => {
+                let n = a.nrows();
+                for j in 0..n {
+                    for i in 0..n {
+                        a[(i, j)] -= b[(i, j)];
+                    }
+                }
+            }
+            (Self::Band(a), Self::Band(b)) => a.subtract(b),
+            // Not built so (J and M share their storage kind), but well defined.
+            (a, b) => {
+                let n = a.rows();
+                for j in 0..n {
+                    for i in 0..n {
+                        let v = a.get(i, j) - b.get(i, j);
+                        a.set(i, j, v);
+                    }
+                }
+            }
+        }
+    }
+
+    /// A non-zero entry written outside the band.
+    fn outside(&self) -> Option<(usize, usize)> {
+        match self {
+            Self::Dense(_) => None,
+            Self::Band(b) => b.outside(),
+        }
+    }
+}
+
+impl MatrixSink for Jacobian {
+    fn rows(&self) -> usize {
+        match self {
+            Self::Dense(m) => m.nrows(),
+            Self::Band(b) => b.rows(),
+        }
+    }
+    fn cols(&self) -> usize {
+        self.rows()
+    }
+    #[inline]
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        match self {
+            Self::Dense(m) => m.set(row, col, value),
+            Self::Band(b) => b.set(row, col, value),
+        }
+    }
+    #[inline]
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        match self {
+            Self::Dense(m) => m.add(row, col, value),
+            Self::Band(b) => b.add(row, col, value),
+        }
+    }
+    fn fill_zero(&mut self) {
+        match self {
+            Self::Dense(m) => m.fill_zero(),
+            Self::Band(b) => b.fill_zero(),
+        }
+    }
+}
+
 /// `J`, `M` and the factorised stage matrices.
 pub(crate) struct StageMatrices<L: LinearSolver> {
     ls: L,
-    jy: Mat<f64>,
-    jyp: Mat<f64>,
+    jy: Jacobian,
+    jyp: Jacobian,
     complex: ComplexSolver,
     /// With a banded solver: the first entry of `J` or `M` outside its band, at the last
     /// evaluation.
@@ -365,14 +465,15 @@ pub(crate) struct StageMatrices<L: LinearSolver> {
 
 impl<L: LinearSolver> StageMatrices<L> {
     pub fn new(ls: L, n: usize) -> Self {
-        let complex = match ls.band() {
+        let band = ls.band();
+        let complex = match band {
             Some((kl, ku)) => ComplexSolver::Band(ComplexBandLu::new(n, kl, ku)),
             None => ComplexSolver::Dense(ComplexLu::new(n)),
         };
         Self {
             ls,
-            jy: Mat::zeros(n, n),
-            jyp: Mat::zeros(n, n),
+            jy: Jacobian::new(n, band),
+            jyp: Jacobian::new(n, band),
             complex,
             outside_band: None,
             have_jacobian: false,
@@ -392,26 +493,9 @@ impl<L: LinearSolver> StageMatrices<L> {
         if !dae.mass_matrix(t, y, yp, &mut self.jyp) {
             self.jyp.fill_zero();
             dae.iteration_matrix(t, y, yp, 1.0, &mut self.jyp);
-            let n = self.jy.nrows();
-            for j in 0..n {
-                for i in 0..n {
-                    self.jyp[(i, j)] -= self.jy[(i, j)];
-                }
-            }
+            self.jyp.subtract(&self.jy);
         }
-        self.outside_band = None;
-        if let Some((kl, ku)) = self.ls.band() {
-            let n = self.jy.nrows();
-            'columns: for j in 0..n {
-                let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
-                for i in (0..j.saturating_sub(ku)).chain((j + kl + 1).min(n)..n) {
-                    if jy[i] != 0.0 || jyp[i] != 0.0 {
-                        self.outside_band = Some((i, j));
-                        break 'columns;
-                    }
-                }
-            }
-        }
+        self.outside_band = self.jy.outside().or(self.jyp.outside());
         self.have_jacobian = true;
         self.current = true;
         self.factored = false;
@@ -426,26 +510,20 @@ impl<L: LinearSolver> StageMatrices<L> {
         beta: f64,
     ) -> Result<(), SetupFailure> {
         self.factored = false;
-        let n = self.jy.nrows();
+        let n = self.jy.rows();
         let (cr, ca, cb) = (gamma / h, alpha / h, -beta / h);
         // Rows of column j that can hold entries: the band's, when the solver has one (an
         // entry outside it was found when J and M were evaluated).
         if let Some((row, col)) = self.outside_band {
             return Err(SetupFailure::OutsidePattern(row, col));
         }
-        let band = self.ls.band();
         let m = self.ls.matrix_mut();
         m.fill_zero();
         for j in 0..n {
-            let rows = match band {
-                Some((kl, ku)) => j.saturating_sub(ku)..(j + kl + 1).min(n),
-                None => 0..n,
-            };
-            let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
-            for i in rows {
-                let (a, b) = (jy[i], jyp[i]);
+            let ((first, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+            for (k, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
                 if a != 0.0 || b != 0.0 {
-                    m.set(i, j, a + cr * b);
+                    m.set(first + k, j, a + cr * b);
                 }
             }
         }
@@ -461,7 +539,7 @@ impl<L: LinearSolver> StageMatrices<L> {
         let factored = match &mut self.complex {
             ComplexSolver::Dense(complex) => {
                 for j in 0..n {
-                    let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
+                    let ((_, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
                     let column = complex.matrix.col_as_slice_mut(j);
                     for ((e, &a), &b) in column.iter_mut().zip(jy).zip(jyp) {
                         *e = c64::new(a + ca * b, cb * b);
@@ -472,14 +550,12 @@ impl<L: LinearSolver> StageMatrices<L> {
             ComplexSolver::Band(complex) => {
                 // The real system's band holds every entry of J and M (the real factorisation
                 // above reported any outside it).
-                let (kl, ku) = complex.half_bandwidths();
                 complex.clear();
                 for j in 0..n {
-                    let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
-                    for i in j.saturating_sub(ku)..=(j + kl).min(n - 1) {
-                        let (a, b) = (jy[i], jyp[i]);
+                    let ((first, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+                    for (k, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
                         if a != 0.0 || b != 0.0 {
-                            complex.set(i, j, c64::new(a + ca * b, cb * b));
+                            complex.set(first + k, j, c64::new(a + ca * b, cb * b));
                         }
                     }
                 }
@@ -489,7 +565,7 @@ impl<L: LinearSolver> StageMatrices<L> {
         if let Err(col) = factored {
             let (jy, jyp) = (&self.jy, &self.jyp);
             let row = crate::linear_solver::zero_row(n, |i, j| {
-                (jy[(i, j)] + ca * jyp[(i, j)]).abs() + (cb * jyp[(i, j)]).abs()
+                (jy.get(i, j) + ca * jyp.get(i, j)).abs() + (cb * jyp.get(i, j)).abs()
             });
             return Err(SetupFailure::Singular(StageSystem::Complex, col, row));
         }
@@ -516,17 +592,41 @@ impl<L: LinearSolver> StageMatrices<L> {
     /// `10 eps / rtol` on Newton's tolerance), with the stored (possibly older) Jacobians.
     pub fn residual_roundoff(&self, y: &[f64], yp: &[f64], out: &mut [f64]) {
         let n = out.len();
-        // A banded J and M have no entry outside the band (the real factorisation checks).
-        let (kl, ku) = match &self.complex {
-            ComplexSolver::Band(complex) => complex.half_bandwidths(),
-            ComplexSolver::Dense(_) => (n, n),
-        };
-        for (i, o) in out.iter_mut().enumerate() {
-            let mut s = 0.0;
-            for j in i.saturating_sub(kl)..(i + ku + 1).min(n) {
-                s += self.jy[(i, j)].abs() * y[j].abs() + self.jyp[(i, j)].abs() * yp[j].abs();
+        match (&self.jy, &self.jyp) {
+            (Jacobian::Dense(jy), Jacobian::Dense(jyp)) => {
+                for (i, o) in out.iter_mut().enumerate() {
+                    let mut s = 0.0;
+                    for j in 0..n {
+                        s += jy[(i, j)].abs() * y[j].abs() + jyp[(i, j)].abs() * yp[j].abs();
+                    }
+                    *o = 10.0 * f64::EPSILON * s;
+                }
             }
-            *o = 10.0 * f64::EPSILON * s;
+            (Jacobian::Band(jy), Jacobian::Band(jyp)) => {
+                // Column by column within the band.
+                out.fill(0.0);
+                for j in 0..n {
+                    let ((first, cy), (_, cyp)) = (jy.column(j), jyp.column(j));
+                    let (yj, ypj) = (y[j].abs(), yp[j].abs());
+                    for ((o, a), b) in out[first..].iter_mut().zip(cy).zip(cyp) {
+                        *o += a.abs() * yj + b.abs() * ypj;
+                    }
+                }
+                for o in out.iter_mut() {
+                    *o *= 10.0 * f64::EPSILON;
+                }
+            }
+            // Not built so (J and M share their storage kind), but well defined.
+            (jy, jyp) => {
+                for (i, o) in out.iter_mut().enumerate() {
+                    let s: f64 = (0..n)
+                        .map(|j| {
+                            jy.get(i, j).abs() * y[j].abs() + jyp.get(i, j).abs() * yp[j].abs()
+                        })
+                        .sum();
+                    *o = 10.0 * f64::EPSILON * s;
+                }
+            }
         }
     }
 
@@ -535,7 +635,7 @@ impl<L: LinearSolver> StageMatrices<L> {
     pub fn apply_mass(&self, v: &[f64], out: &mut [f64]) {
         let n = v.len();
         for (i, o) in out.iter_mut().enumerate() {
-            *o = (0..n).map(|j| self.jyp[(i, j)] * v[j]).sum();
+            *o = (0..n).map(|j| self.jyp.get(i, j) * v[j]).sum();
         }
     }
 }
