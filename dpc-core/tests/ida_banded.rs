@@ -5,7 +5,9 @@
 //! differences of the residual, the references (the heat equation's exact semi-discrete
 //! solution against Radau and the BDF at `1e-12`; the food web's by those two runs, the
 //! `#[ignore]`d test that prints it), and the BDF's digits with the linear solver
-//! `FaerLu::for_dae` picks. The tight runs are `#[ignore]`d:
+//! `FaerLu::for_dae` picks (and Radau's on the heat equation). The tight runs and the timing
+//! of the banded against the sparse LU on growing grids (behind `BAND_MAX_FILL`) are
+//! `#[ignore]`d:
 //!
 //! ```sh
 //! cargo test --release -p dpc-core --test ida_banded -- --ignored --nocapture
