@@ -232,7 +232,8 @@ impl ImplicitDae for FoodWeb {
 /// first 800 and the last 800 entries), `(c1, c2)` per grid point in the unknowns' order:
 /// Radau IIA at `rtol = atol = 1e-12` with the banded LU stopping at `WEB_T_SCORED`, the BDF
 /// at the same tolerance agreeing to 12.0 digits at `WEB_T_SCORED` and 15.0 at `WEB_T_END`
-/// (484 and 2 990 steps); recomputed and printed by
+/// (484 and 2 990 steps; Radau with its complex system banded too, as since, takes 482 and
+/// reproduces these to 12.3 and 15.2 digits); recomputed and printed by
 /// `cargo test --release -p dpc-core --test ida_banded -- --ignored --nocapture food_web_reference`
 /// (the same numbers in `bench/ida_peer_food_web_ref.h`).
 #[allow(clippy::excessive_precision, clippy::unreadable_literal)]
