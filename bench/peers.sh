@@ -28,7 +28,8 @@ for code in "${codes[@]}"; do
         fi
         out="${TMPDIR:-/tmp}/ida_peer"
         cc -O2 -o "$out" "$here/ida_peer.c" -lsundials_ida -lsundials_nvecserial \
-            -lsundials_sunmatrixdense -lsundials_sunlinsoldense -lm
+            -lsundials_sunmatrixdense -lsundials_sunlinsoldense \
+            -lsundials_sunmatrixband -lsundials_sunlinsolband -lm
         "$out" >>"$rows"
         ;;
     diffsol)

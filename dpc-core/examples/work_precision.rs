@@ -39,6 +39,12 @@
 //!   Van der Pol (`eps = 1e-6`, to `t = 2`), OREGO (to `t = 360`), Pollution (20 unknowns, to
 //!   `t = 60`) and the ring modulator (15 unknowns, to `t = 1e-3`), all components scored, by
 //!   Radau and the BDF,
+//! * SUNDIALS' banded examples written anew: `idaHeat2D_bnd` (the heat equation on a 10 x 10
+//!   grid, 100 unknowns, to `t = 0.16`, the 64 interior values scored against the exact
+//!   semi-discrete solution) and `idaFoodWeb_bnd` (a predator-prey food web on a 20 x 20 grid,
+//!   800 unknowns, stopping at `t = 0.01` and going on to `t = 1`, every unknown at both times
+//!   scored), by Radau and the BDF with the LU [`FaerLu::for_dae`] picks (banded) and by the
+//!   BDF with faer's sparse LU,
 //!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`; and the BDF with the iteration matrix by the library's
 //! difference quotients ([`dpc_core::difference`], rows "difference quotients") on Robertson
@@ -62,6 +68,10 @@
 mod differenced;
 #[path = "../tests/common/fekete.rs"]
 mod fekete;
+#[path = "../tests/common/food_web.rs"]
+mod food_web;
+#[path = "../tests/common/heat2d.rs"]
+mod heat2d;
 #[path = "../tests/common/nand.rs"]
 mod nand;
 #[path = "../tests/common/peer_table.rs"]
@@ -88,7 +98,7 @@ mod water_tube;
 mod wheelset;
 
 use dpc_core::bdf::{self, Bdf, HigherIndexControl, Tolerance};
-use dpc_core::linear_solver::{FaerDenseLu, FaerLu, LinearSolver, NalgebraLu};
+use dpc_core::linear_solver::{FaerDenseLu, FaerLu, FaerSparseLu, LinearSolver, NalgebraLu};
 use dpc_core::radau::{self, Radau};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::ImplicitDae;
@@ -191,11 +201,14 @@ enum Problem {
     Orego,
     Pollution,
     RingModulator,
+    // SUNDIALS' banded examples (`banded_rows`).
+    Heat,
+    FoodWeb,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 21] = [
+    const ALL: [Self; 23] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -217,6 +230,8 @@ impl Problem {
         Self::Orego,
         Self::Pollution,
         Self::RingModulator,
+        Self::Heat,
+        Self::FoodWeb,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -243,6 +258,8 @@ impl Problem {
             Self::Orego => "OREGO (ODE; all)",
             Self::Pollution => "Pollution (ODE; all)",
             Self::RingModulator => "ring modulator (ODE; all)",
+            Self::Heat => "heat 2-D, idaHeat2D_bnd (index 1; interior)",
+            Self::FoodWeb => "food web, idaFoodWeb_bnd (index 1; all)",
         }
     }
 }
@@ -269,6 +286,9 @@ enum Code {
     /// As [`Code::BdfSparseDifferences`], with the index estimate's unknowns of index 2
     /// declared (as [`Code::BdfSparseDeclared`]).
     BdfSparseDeclaredDifferences,
+    /// The BDF with faer's sparse LU on the declared pattern, where [`FaerLu::for_dae`] picks
+    /// the banded LU (SUNDIALS' banded examples).
+    BdfFaerSparse,
 }
 
 impl Code {
@@ -287,6 +307,7 @@ impl Code {
             Self::BdfSparseDeclaredDifferences => {
                 "dpc BDF (FaerLu: sparse; grouped difference quotients; index 2 declared)"
             }
+            Self::BdfFaerSparse => "dpc BDF (FaerSparseLu)",
         }
     }
 }
@@ -805,6 +826,7 @@ fn main() {
         wheelset_rows(k, tol, &scalar);
         two_bit_adder_rows(k, tol);
         stiff_ode_rows(k, tol);
+        banded_rows(k, tol);
         difference_rows(k, tol);
     }
 }
@@ -1008,6 +1030,87 @@ fn stiff_ode_rows(k: i32, tol: f64) {
     rows::<_, 3>(Problem::Orego, Orego, k, tol);
     rows::<_, 20>(Problem::Pollution, Pollution, k, tol);
     rows::<_, 15>(Problem::RingModulator, RingModulator, k, tol);
+}
+
+/// The rows of SUNDIALS' banded examples written anew (`tests/common/heat2d.rs`: the 2-D heat
+/// equation to `t = 0.16`, the 64 interior values scored against the exact semi-discrete
+/// solution; `tests/common/food_web.rs`: the food web stopping at `t = 0.01` and going on to
+/// `t = 1`, all 800 unknowns at both times scored) at
+/// `rtol = atol = tol` (label `1e-k`): Radau and the BDF, each with the linear solver
+/// [`FaerLu::for_dae`] picks from the declared pattern, as a user would (the banded LU), and
+/// the BDF with faer's sparse LU on the same pattern.
+fn banded_rows(k: i32, tol: f64) {
+    use food_web::{FoodWeb, WEB_REF, WEB_T_END, WEB_T_SCORED};
+    // `$name(web, ls, start, opts)`: `$solver` stopping at `WEB_T_SCORED` and going on to
+    // `WEB_T_END`, the two states one after the other in the run's `y` (as `WEB_REF`).
+    macro_rules! web_run {
+        ($name:ident, $solver:ident, $options:ty) => {
+            fn $name<L: LinearSolver>(
+                web: FoodWeb,
+                ls: L,
+                (y0, yp0): (&[f64], &[f64]),
+                opts: $options,
+            ) -> Result<Run, String> {
+                let n = web.dimension();
+                let mut s = $solver::new(web, ls, opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
+                let mut y = vec![0.0; 2 * n];
+                let (early, end) = y.split_at_mut(n);
+                for (t, y) in [(WEB_T_SCORED, early), (WEB_T_END, end)] {
+                    s.set_stop_time(t).map_err(|e| e.to_string())?;
+                    s.solve_to(t, y, None).map_err(|e| e.to_string())?;
+                }
+                let st = s.stats();
+                Ok(Run {
+                    steps: st.steps,
+                    error_test_failures: st.error_test_failures,
+                    newton_failures: st.newton_failures,
+                    jacobians: st.jacobian_evaluations,
+                    y,
+                })
+            }
+        };
+    }
+    web_run!(bdf_web, Bdf, bdf::Options);
+    web_run!(radau_web, Radau, radau::Options);
+    use heat2d::{heat_exact, heat_scored, Heat2d, HEAT_T_END};
+    let heat_ref = heat_exact(HEAT_T_END);
+    let (hy0, hyp0) = Heat2d::initial();
+    let web = FoodWeb::new();
+    let (wy0, wyp0) = web.initial();
+    let all: Vec<usize> = (0..WEB_REF.len()).collect();
+    for code in [Code::Radau, Code::Bdf, Code::BdfFaerSparse] {
+        let radau_opts = radau::Options::with_tolerances(tol, tol);
+        let sparse = |dae: &dyn Fn() -> Option<Vec<(usize, usize)>>, n: usize| {
+            dae()
+                .ok_or_else(|| "no pattern".to_string())
+                .and_then(|p| FaerSparseLu::new(n, &p).map_err(|e| e.to_string()))
+        };
+        let bdf_opts = bdf::Options::with_tolerances(tol, tol);
+        row(Problem::Heat, k, code, &heat_ref, &heat_scored(), || {
+            let start = (&hy0[..], &hyp0[..]);
+            let ls = FaerLu::for_dae(&Heat2d);
+            match code {
+                Code::Radau => radau_run_with(Heat2d, ls, start, radau_opts.clone(), HEAT_T_END),
+                Code::BdfFaerSparse => {
+                    let ls = sparse(&|| Heat2d.iteration_pattern(), Heat2d.dimension())?;
+                    bdf_run_with(Heat2d, ls, start, bdf_opts.clone(), HEAT_T_END)
+                }
+                _ => bdf_run_with(Heat2d, ls, start, bdf_opts.clone(), HEAT_T_END),
+            }
+        });
+        row(Problem::FoodWeb, k, code, &WEB_REF, &all, || {
+            let start = (&wy0[..], &wyp0[..]);
+            let ls = FaerLu::for_dae(&web);
+            match code {
+                Code::Radau => radau_web(web.clone(), ls, start, radau_opts.clone()),
+                Code::BdfFaerSparse => {
+                    let ls = sparse(&|| web.iteration_pattern(), web.dimension())?;
+                    bdf_web(web.clone(), ls, start, bdf_opts.clone())
+                }
+                _ => bdf_web(web.clone(), ls, start, bdf_opts.clone()),
+            }
+        });
+    }
 }
 
 /// The rows of the BDF with its iteration matrix by the library's difference quotients

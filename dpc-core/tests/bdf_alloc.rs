@@ -6,6 +6,8 @@
 
 #[path = "common/counting_allocator.rs"]
 mod counting_allocator;
+#[path = "common/heat2d.rs"]
+mod heat2d;
 #[path = "common/bdf_problems.rs"]
 mod problems;
 
@@ -103,4 +105,33 @@ fn steps_after_setup_do_not_allocate() {
         f.step().unwrap();
     }
     assert_eq!(allocations() - before, 0);
+}
+
+/// The banded LU (`FaerLu::for_dae` on SUNDIALS' heat example) keeps its factors and
+/// interchanges from construction on: steps, factorisations and solves allocate nothing.
+#[test]
+fn band_steps_do_not_allocate() {
+    use dpc_core::linear_solver::FaerLu;
+    use heat2d::{Heat2d, HEAT_N};
+    let (y0, yp0) = Heat2d::initial();
+    let ls = FaerLu::for_dae(&Heat2d);
+    assert!(ls.is_band());
+    let mut bdf = Bdf::new(
+        Heat2d,
+        ls,
+        Options::with_tolerances(1e-8, 1e-8),
+        0.0,
+        &y0,
+        &yp0,
+    )
+    .unwrap();
+    let mut y = vec![0.0; HEAT_N];
+    bdf.step().unwrap();
+    let before = allocations();
+    for k in 1..=16 {
+        bdf.solve_to(0.01 * f64::from(k), &mut y, None).unwrap();
+    }
+    let st = bdf.stats();
+    assert!(st.steps > 50 && st.factorisations > 5, "{st:?}");
+    assert_eq!(allocations() - before, 0, "{st:?}");
 }

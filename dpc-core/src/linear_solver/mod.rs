@@ -1,7 +1,7 @@
 //! Linear solvers for the BDF iteration matrix `G = dF/dy + (alpha/h) dF/dy'`.
 //!
-//! One trait, [`LinearSolver`], with three implementations chosen by type (and a run-time
-//! choice between the two faer ones):
+//! One trait, [`LinearSolver`], with implementations chosen by type (and a run-time choice
+//! among the faer ones and the banded LU):
 //!
 //! * [`NalgebraLu`]: fixed-size `SMatrix<f64, N, N>` with a partial-pivoting LU on the stack,
 //!   for models generated with compile-time dimensions. Nothing allocates after construction,
@@ -13,20 +13,24 @@
 //! * [`FaerSparseLu`]: faer's sparse LU (symbolic analysis once, from
 //!   [`crate::ImplicitDae::iteration_pattern`], numeric factorisation per Jacobian update).
 //!   Factorisations and solves allocate their scratch memory (faer's high-level sparse API).
-//! * [`FaerLu`]: one of the two faer back ends, chosen at run time by
-//!   [`FaerLu::for_dae`] from the density of the DAE's declared pattern.
+//! * [`BandLu`]: partial-pivoting LU within a band of half-bandwidths `kl`, `ku` (LAPACK's
+//!   `dgbtrf` storage), for discretised PDEs and chains; allocation-free per step.
+//! * [`FaerLu`]: one of the faer back ends or the banded LU, chosen at run time by
+//!   [`FaerLu::for_dae`] from the density and bandwidth of the DAE's declared pattern.
 //!
 //! The integrator writes `G` into [`LinearSolver::matrix_mut`] after zeroing it, calls
 //! [`LinearSolver::factor`], then solves as often as Newton needs with
 //! [`LinearSolver::solve_in_place`].
 
 mod auto;
+mod band;
 mod faer_dense;
 mod faer_sparse;
 mod nalgebra_lu;
 mod unblocked;
 
-pub use auto::{FaerLu, SPARSE_DENSITY, SPARSE_MIN_DIMENSION};
+pub use auto::{FaerLu, BAND_MAX_FILL, SPARSE_DENSITY, SPARSE_MIN_DIMENSION};
+pub use band::{half_bandwidths, BandLu, BandMatrix};
 pub use faer_dense::FaerDenseLu;
 pub use faer_sparse::{FaerSparseLu, PatternMatrix};
 pub use nalgebra_lu::NalgebraLu;
@@ -99,6 +103,13 @@ pub trait LinearSolver {
     /// Row scales `out_i = max_j |A_ij| / w_j` of the matrix last written, for weights `w`
     /// (the change of equation `i` caused by moving one unknown by one unit `1/w_j`).
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]);
+
+    /// The half-bandwidths `(kl, ku)` the solver's matrix is confined to, when it is banded
+    /// ([`BandLu`]): an integrator with a second system of the same structure (Radau's complex
+    /// one) can then factorise that one in a band too. The default says not banded.
+    fn band(&self) -> Option<(usize, usize)> {
+        None
+    }
 }
 
 /// A mutable borrow of a solver is a solver, so one solver can serve several integrators in
@@ -119,6 +130,9 @@ impl<L: LinearSolver + ?Sized> LinearSolver for &mut L {
     }
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
         (**self).scaled_row_norms(w, out);
+    }
+    fn band(&self) -> Option<(usize, usize)> {
+        (**self).band()
     }
 }
 

@@ -7,7 +7,9 @@
 //! * the real `n x n` matrix `E_1 = J + (gamma/h) M`, factorised by the caller's
 //!   [`LinearSolver`] (fixed-size, dense or sparse), and
 //! * the complex `n x n` matrix `E_2 = J + ((alpha - i beta)/h) M`, factorised by a dense
-//!   complex partial-pivoting LU (faer) whose storage is allocated once.
+//!   complex partial-pivoting LU (faer) whose storage is allocated once, or within the band
+//!   of the real solver when it is banded ([`LinearSolver::band`]; `E_2` has `E_1`'s
+//!   structure).
 //!
 //! `J` is the model's `iteration_matrix(t, y, y', c) = J + c M` at `c = 0`; `M` its
 //! [`ImplicitDae::mass_matrix`] when the model supplies one, else the same entry point at
@@ -21,8 +23,9 @@ use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
 use faer::{c64, Mat, MatMut, Par};
 
+use super::band::ComplexBandLu;
 use super::error::StageSystem;
-use crate::linear_solver::{FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
+use crate::linear_solver::{BandMatrix, FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
 use crate::sink::MatrixSink;
 use crate::ImplicitDae;
 
@@ -347,12 +350,122 @@ pub(crate) enum SetupFailure {
     OutsidePattern(usize, usize),
 }
 
+/// The complex stage system's LU: dense, or banded when the real solver is
+/// ([`LinearSolver::band`]).
+enum ComplexSolver {
+    Dense(ComplexLu),
+    Band(ComplexBandLu),
+}
+
+/// `J` or `M`: dense, or in the real solver's band when it has one (an entry outside the band
+/// is remembered, see [`BandMatrix`]).
+enum Jacobian {
+    Dense(Mat<f64>),
+    Band(BandMatrix),
+}
+
+impl Jacobian {
+    fn new(n: usize, band: Option<(usize, usize)>) -> Self {
+        match band {
+            Some((kl, ku)) => Self::Band(BandMatrix::new(n, kl, ku)),
+            None => Self::Dense(Mat::zeros(n, n)),
+        }
+    }
+
+    /// The first row of column `j` that can hold an entry, and the column from there on (to
+    /// the band's last row).
+    #[inline]
+    fn column(&self, j: usize) -> (usize, &[f64]) {
+        match self {
+            Self::Dense(m) => (0, m.col_as_slice(j)),
+            Self::Band(b) => b.column(j),
+        }
+    }
+
+    /// The entry `(i, j)` (zero outside the band).
+    #[inline]
+    fn get(&self, i: usize, j: usize) -> f64 {
+        match self {
+            Self::Dense(m) => m[(i, j)],
+            Self::Band(b) => b.get(i, j),
+        }
+    }
+
+    /// `self -= other` (the same storage).
+    fn subtract(&mut self, other: &Self) {
+        match (self, other) {
+            (Self::Dense(a), Self::Dense(b)) => {
+                let n = a.nrows();
+                for j in 0..n {
+                    for i in 0..n {
+                        a[(i, j)] -= b[(i, j)];
+                    }
+                }
+            }
+            (Self::Band(a), Self::Band(b)) => a.subtract(b),
+            // Not built so (J and M share their storage kind), but well defined.
+            (a, b) => {
+                let n = a.rows();
+                for j in 0..n {
+                    for i in 0..n {
+                        let v = a.get(i, j) - b.get(i, j);
+                        a.set(i, j, v);
+                    }
+                }
+            }
+        }
+    }
+
+    /// A non-zero entry written outside the band.
+    fn outside(&self) -> Option<(usize, usize)> {
+        match self {
+            Self::Dense(_) => None,
+            Self::Band(b) => b.outside(),
+        }
+    }
+}
+
+impl MatrixSink for Jacobian {
+    fn rows(&self) -> usize {
+        match self {
+            Self::Dense(m) => m.nrows(),
+            Self::Band(b) => b.rows(),
+        }
+    }
+    fn cols(&self) -> usize {
+        self.rows()
+    }
+    #[inline]
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        match self {
+            Self::Dense(m) => m.set(row, col, value),
+            Self::Band(b) => b.set(row, col, value),
+        }
+    }
+    #[inline]
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        match self {
+            Self::Dense(m) => m.add(row, col, value),
+            Self::Band(b) => b.add(row, col, value),
+        }
+    }
+    fn fill_zero(&mut self) {
+        match self {
+            Self::Dense(m) => m.fill_zero(),
+            Self::Band(b) => b.fill_zero(),
+        }
+    }
+}
+
 /// `J`, `M` and the factorised stage matrices.
 pub(crate) struct StageMatrices<L: LinearSolver> {
     ls: L,
-    jy: Mat<f64>,
-    jyp: Mat<f64>,
-    complex: ComplexLu,
+    jy: Jacobian,
+    jyp: Jacobian,
+    complex: ComplexSolver,
+    /// With a banded solver: the first entry of `J` or `M` outside its band, at the last
+    /// evaluation.
+    outside_band: Option<(usize, usize)>,
     /// A Jacobian has been evaluated (at some earlier step start, possibly stale).
     pub have_jacobian: bool,
     /// The Jacobian was evaluated at the start of the current step.
@@ -365,11 +478,17 @@ pub(crate) struct StageMatrices<L: LinearSolver> {
 
 impl<L: LinearSolver> StageMatrices<L> {
     pub fn new(ls: L, n: usize) -> Self {
+        let band = ls.band();
+        let complex = match band {
+            Some((kl, ku)) => ComplexSolver::Band(ComplexBandLu::new(n, kl, ku)),
+            None => ComplexSolver::Dense(ComplexLu::new(n)),
+        };
         Self {
             ls,
-            jy: Mat::zeros(n, n),
-            jyp: Mat::zeros(n, n),
-            complex: ComplexLu::new(n),
+            jy: Jacobian::new(n, band),
+            jyp: Jacobian::new(n, band),
+            complex,
+            outside_band: None,
             have_jacobian: false,
             current: false,
             factored: false,
@@ -393,24 +512,23 @@ impl<L: LinearSolver> StageMatrices<L> {
         if !dae.mass_matrix(t, y, yp, &mut self.jyp) {
             self.jyp.fill_zero();
             dae.iteration_matrix(t, y, yp, 1.0, &mut self.jyp);
-            let n = self.jy.nrows();
-            for j in 0..n {
-                for i in 0..n {
-                    self.jyp[(i, j)] -= self.jy[(i, j)];
-                }
-            }
+            self.jyp.subtract(&self.jy);
         }
+        self.outside_band = self.jy.outside().or(self.jyp.outside());
         self.have_jacobian = true;
         self.current = true;
         self.factored = false;
-        for j in 0..self.jy.ncols() {
-            let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
-            if let Some(i) = jy
+        for j in 0..self.jy.cols() {
+            let ((first, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+            if let Some(k) = jy
                 .iter()
                 .zip(jyp)
                 .position(|(a, b)| !(a.is_finite() && b.is_finite()))
             {
-                return Err(NonFiniteEntry { row: i, col: j });
+                return Err(NonFiniteEntry {
+                    row: first + k,
+                    col: j,
+                });
             }
         }
         Ok(())
@@ -425,15 +543,20 @@ impl<L: LinearSolver> StageMatrices<L> {
         beta: f64,
     ) -> Result<(), SetupFailure> {
         self.factored = false;
-        let n = self.jy.nrows();
+        let n = self.jy.rows();
         let (cr, ca, cb) = (gamma / h, alpha / h, -beta / h);
+        // Rows of column j that can hold entries: the band's, when the solver has one (an
+        // entry outside it was found when J and M were evaluated).
+        if let Some((row, col)) = self.outside_band {
+            return Err(SetupFailure::OutsidePattern(row, col));
+        }
         let m = self.ls.matrix_mut();
         m.fill_zero();
         for j in 0..n {
-            let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
-            for (i, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
+            let ((first, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+            for (k, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
                 if a != 0.0 || b != 0.0 {
-                    m.set(i, j, a + cr * b);
+                    m.set(first + k, j, a + cr * b);
                 }
             }
         }
@@ -449,17 +572,36 @@ impl<L: LinearSolver> StageMatrices<L> {
                 return Err(SetupFailure::OutsidePattern(row, col));
             }
         }
-        for j in 0..n {
-            let (jy, jyp) = (self.jy.col_as_slice(j), self.jyp.col_as_slice(j));
-            let column = self.complex.matrix.col_as_slice_mut(j);
-            for ((e, &a), &b) in column.iter_mut().zip(jy).zip(jyp) {
-                *e = c64::new(a + ca * b, cb * b);
+        let factored = match &mut self.complex {
+            ComplexSolver::Dense(complex) => {
+                for j in 0..n {
+                    let ((_, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+                    let column = complex.matrix.col_as_slice_mut(j);
+                    for ((e, &a), &b) in column.iter_mut().zip(jy).zip(jyp) {
+                        *e = c64::new(a + ca * b, cb * b);
+                    }
+                }
+                complex.factor()
             }
-        }
-        if let Err(col) = self.complex.factor() {
+            ComplexSolver::Band(complex) => {
+                // The real system's band holds every entry of J and M (the real factorisation
+                // above reported any outside it).
+                complex.clear();
+                for j in 0..n {
+                    let ((first, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+                    for (k, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
+                        if a != 0.0 || b != 0.0 {
+                            complex.set(first + k, j, c64::new(a + ca * b, cb * b));
+                        }
+                    }
+                }
+                complex.factor().map_err(Some)
+            }
+        };
+        if let Err(col) = factored {
             let (jy, jyp) = (&self.jy, &self.jyp);
             let row = crate::linear_solver::zero_row(n, |i, j| {
-                (jy[(i, j)] + ca * jyp[(i, j)]).abs() + (cb * jyp[(i, j)]).abs()
+                (jy.get(i, j) + ca * jyp.get(i, j)).abs() + (cb * jyp.get(i, j)).abs()
             });
             return Err(SetupFailure::Singular(StageSystem::Complex, col, row));
         }
@@ -475,7 +617,10 @@ impl<L: LinearSolver> StageMatrices<L> {
 
     /// Solve `E_2 x = b` in place.
     pub fn solve_complex(&mut self, b: &mut [c64]) {
-        self.complex.solve_in_place(b);
+        match &mut self.complex {
+            ComplexSolver::Dense(complex) => complex.solve_in_place(b),
+            ComplexSolver::Band(complex) => complex.solve_in_place(b),
+        }
     }
 
     /// `out = 10 eps (|J| |y| + |M| |y'|)`, a bound of the round-off of `F(t, y, y')` (ten
@@ -483,12 +628,41 @@ impl<L: LinearSolver> StageMatrices<L> {
     /// `10 eps / rtol` on Newton's tolerance), with the stored (possibly older) Jacobians.
     pub fn residual_roundoff(&self, y: &[f64], yp: &[f64], out: &mut [f64]) {
         let n = out.len();
-        for (i, o) in out.iter_mut().enumerate() {
-            let mut s = 0.0;
-            for j in 0..n {
-                s += self.jy[(i, j)].abs() * y[j].abs() + self.jyp[(i, j)].abs() * yp[j].abs();
+        match (&self.jy, &self.jyp) {
+            (Jacobian::Dense(jy), Jacobian::Dense(jyp)) => {
+                for (i, o) in out.iter_mut().enumerate() {
+                    let mut s = 0.0;
+                    for j in 0..n {
+                        s += jy[(i, j)].abs() * y[j].abs() + jyp[(i, j)].abs() * yp[j].abs();
+                    }
+                    *o = 10.0 * f64::EPSILON * s;
+                }
             }
-            *o = 10.0 * f64::EPSILON * s;
+            (Jacobian::Band(jy), Jacobian::Band(jyp)) => {
+                // Column by column within the band.
+                out.fill(0.0);
+                for j in 0..n {
+                    let ((first, cy), (_, cyp)) = (jy.column(j), jyp.column(j));
+                    let (yj, ypj) = (y[j].abs(), yp[j].abs());
+                    for ((o, a), b) in out[first..].iter_mut().zip(cy).zip(cyp) {
+                        *o += a.abs() * yj + b.abs() * ypj;
+                    }
+                }
+                for o in out.iter_mut() {
+                    *o *= 10.0 * f64::EPSILON;
+                }
+            }
+            // Not built so (J and M share their storage kind), but well defined.
+            (jy, jyp) => {
+                for (i, o) in out.iter_mut().enumerate() {
+                    let s: f64 = (0..n)
+                        .map(|j| {
+                            jy.get(i, j).abs() * y[j].abs() + jyp.get(i, j).abs() * yp[j].abs()
+                        })
+                        .sum();
+                    *o = 10.0 * f64::EPSILON * s;
+                }
+            }
         }
     }
 
@@ -497,7 +671,7 @@ impl<L: LinearSolver> StageMatrices<L> {
     pub fn apply_mass(&self, v: &[f64], out: &mut [f64]) {
         let n = v.len();
         for (i, o) in out.iter_mut().enumerate() {
-            *o = (0..n).map(|j| self.jyp[(i, j)] * v[j]).sum();
+            *o = (0..n).map(|j| self.jyp.get(i, j) * v[j]).sum();
         }
     }
 }
@@ -582,7 +756,25 @@ mod tests {
 
     #[test]
     fn both_systems_solve_what_they_should() {
-        let mut sm = StageMatrices::new(NalgebraLu::<3>::new(), 3);
+        systems_solve_what_they_should(NalgebraLu::<3>::new());
+        // The banded LU holding the whole matrix: the complex system banded too.
+        systems_solve_what_they_should(crate::linear_solver::BandLu::new(3, 2, 2));
+    }
+
+    /// A banded real solver whose band misses an entry of `J`: the setup reports it.
+    #[test]
+    fn an_entry_outside_the_band_is_reported() {
+        let mut sm = StageMatrices::new(crate::linear_solver::BandLu::new(3, 1, 1), 3);
+        sm.evaluate(&Linear, 0.0, &[0.0; 3], &[0.0; 3]).unwrap();
+        assert!(matches!(sm.complex, ComplexSolver::Band(_)));
+        assert_eq!(
+            sm.factor(0.1, 3.6, 2.7, 3.05),
+            Err(SetupFailure::OutsidePattern(2, 0))
+        );
+    }
+
+    fn systems_solve_what_they_should<L: LinearSolver>(ls: L) {
+        let mut sm = StageMatrices::new(ls, 3);
         sm.evaluate(&Linear, 0.0, &[0.0; 3], &[0.0; 3]).unwrap();
         let mut mv = [0.0; 3];
         sm.apply_mass(&[1.0, 1.0, 1.0], &mut mv);
