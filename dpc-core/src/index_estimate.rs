@@ -281,12 +281,79 @@ impl StartPoint {
         }
     }
 
+    /// The start time.
+    pub(crate) fn t(&self) -> f64 {
+        self.t
+    }
+
     /// A new start of the same dimension, without allocating.
     pub(crate) fn set(&mut self, t: f64, y: &[f64], yp: &[f64]) {
         self.t = t;
         self.y.copy_from_slice(y);
         self.yp.copy_from_slice(yp);
     }
+}
+
+/// How far above its round-off bound an equation's residual at the start must lie for
+/// [`inconsistent_start`] to name it: three decades, so that no rounding of the user's
+/// arithmetic (the bound allows ten roundings of every term) is taken for an inconsistency.
+const INCONSISTENT_FACTOR: f64 = 1e3;
+
+/// An equation the start does not satisfy: [`inconsistent_start`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Inconsistency {
+    /// The equation's index.
+    pub equation: usize,
+    /// Its residual `F_i(t0, y0, y0')`.
+    pub residual: f64,
+    /// Its round-off bound `10 eps sum_j (|dF_i/dy_j| |y_j| + |dF_i/dy'_j| |y'_j|)`.
+    pub bound: f64,
+}
+
+/// The equation whose residual at `start` exceeds its round-off bound by the largest factor,
+/// when that factor is above [`INCONSISTENT_FACTOR`]: initial values that do not satisfy the
+/// DAE (a position off its constraint, say), which an integrator that fails before its first
+/// step names as the cause. `None` when every residual is within the bound's factor, or when a
+/// residual or an iteration matrix at the start is not finite (another error names that).
+/// Costs a residual and two dense iteration matrices; meant for error paths only.
+pub(crate) fn inconsistent_start<D: ImplicitDae + ?Sized>(
+    dae: &D,
+    start: &StartPoint,
+) -> Option<Inconsistency> {
+    let (t, y, yp) = (start.t, &start.y[..], &start.yp[..]);
+    let n = dae.dimension();
+    let mut res = vec![0.0; n];
+    dae.residual(t, y, yp, &mut res);
+    if res.iter().any(|r| !r.is_finite()) {
+        return None;
+    }
+    let j0 = crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0).ok()?;
+    let j1 = crate::dae::dense_iteration_matrix(dae, t, y, yp, 1.0).ok()?;
+    let mut worst: Option<(f64, Inconsistency)> = None;
+    for (i, &r) in res.iter().enumerate() {
+        let bound = 10.0
+            * f64::EPSILON
+            * (0..n)
+                .map(|j| {
+                    j0[(i, j)].abs() * y[j].abs() + (j1[(i, j)] - j0[(i, j)]).abs() * yp[j].abs()
+                })
+                .sum::<f64>();
+        if r.abs() <= INCONSISTENT_FACTOR * bound || r == 0.0 {
+            continue;
+        }
+        let factor = r.abs() / bound;
+        if worst.as_ref().is_none_or(|(f, _)| factor > *f) {
+            worst = Some((
+                factor,
+                Inconsistency {
+                    equation: i,
+                    residual: r,
+                    bound,
+                },
+            ));
+        }
+    }
+    worst.map(|(_, w)| w)
 }
 
 /// What [`diagnose_failure`] finds for a step failure of a DAE declared with every unknown

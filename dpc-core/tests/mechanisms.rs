@@ -548,3 +548,64 @@ fn minimal_odes_by_the_same_codes() {
     odes(&four_bar_case());
     odes(&spherical_case());
 }
+
+#[test]
+fn an_inconsistent_start_is_named() {
+    // The slider crank's crank centre moved by 1e-3 along x, off the crank's pin to the ground
+    // (constraint 0) and its pin to the rod (constraint 2): each code fails before its first
+    // step, and the error says the initial values do not satisfy one of those two equations,
+    // by the name the model gives them.
+    let case = slider_crank_case();
+    let dae = IndexThree(case.mechanism.clone());
+    let (mut y0, yp0) = case.mechanism.initial(&case.start.0, &case.start.1);
+    y0[0] += 1e-3;
+    let named = |message: String, equation: &str| {
+        println!("{message}");
+        assert!(
+            message.contains("the initial values do not satisfy constraint"),
+            "{message}"
+        );
+        assert!(
+            ["constraint 0", "constraint 2"].contains(&equation),
+            "{equation}"
+        );
+    };
+    let opts = radau::Options {
+        index: dae.index(),
+        ..radau::Options::with_tolerances(1e-6, 1e-6)
+    };
+    let mut r = Radau::new(dae.clone(), FaerDenseLu::new(23), opts, 0.0, &y0, &yp0).unwrap();
+    let mut y = vec![0.0; 23];
+    match r.solve_to(case.t_end, &mut y, None) {
+        Err(e @ radau::RadauError::InconsistentStart { .. }) => {
+            let radau::RadauError::InconsistentStart {
+                ref equation,
+                residual,
+                ..
+            } = e
+            else {
+                unreachable!()
+            };
+            assert!((residual.abs() - 1e-3).abs() < 1e-9, "{residual}");
+            named(e.to_string(), equation);
+        }
+        other => panic!("Radau: {other:?}"),
+    }
+    for control in [HigherIndexControl::Scale, HigherIndexControl::Exclude] {
+        let opts = bdf::Options {
+            index: dae.index(),
+            higher_index: control,
+            ..bdf::Options::with_tolerances(1e-6, 1e-6)
+        };
+        let mut b = Bdf::new(dae.clone(), FaerDenseLu::new(23), opts, 0.0, &y0, &yp0).unwrap();
+        match b.solve_to(case.t_end, &mut y, None) {
+            Err(e @ bdf::BdfError::InconsistentStart { .. }) => {
+                let bdf::BdfError::InconsistentStart { ref equation, .. } = e else {
+                    unreachable!()
+                };
+                named(e.to_string(), equation);
+            }
+            other => panic!("BDF {control:?}: {other:?}"),
+        }
+    }
+}

@@ -507,7 +507,10 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         Ok(self.state.tn)
     }
 
-    /// `e`, or, when it is a failure to step (Newton, the error test, too many steps) of a
+    /// `e`, or, when it is a failure to step before the first step of an integration from
+    /// initial values that do not satisfy an equation, `e` wrapped in
+    /// [`BdfError::InconsistentStart`] ([`crate::index_estimate::inconsistent_start`]);
+    /// otherwise, when it is a failure to step (Newton, the error test, too many steps) of a
     /// DAE declared with every unknown of index at most 1 whose iteration matrix at the last
     /// point reached shows unknowns of index 2 or 3, `e` wrapped in
     /// [`BdfError::UndeclaredIndex`] (the start of the integration reads them so too) or
@@ -522,7 +525,21 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 | BdfError::ErrorTestFailed { .. }
                 | BdfError::TooManySteps { .. }
         );
-        if !stepping || !self.index_at_most_one() {
+        if !stepping {
+            return e;
+        }
+        if self.nst() == 0 {
+            if let Some(w) = crate::index_estimate::inconsistent_start(&self.dae, &self.start) {
+                return BdfError::InconsistentStart {
+                    t: self.start.t(),
+                    equation: self.dae.equation_name(w.equation),
+                    residual: w.residual,
+                    bound: w.bound,
+                    source: Box::new(e),
+                };
+            }
+        }
+        if !self.index_at_most_one() {
             return e;
         }
         let t = self.state.tn;

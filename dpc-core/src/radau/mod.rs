@@ -502,7 +502,10 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         Ok(self.t)
     }
 
-    /// `e`, or, when it is a failure to step of a DAE declared with every unknown of index
+    /// `e`, or, when it is a failure to step before the first step of an integration from
+    /// initial values that do not satisfy an equation, `e` wrapped in
+    /// [`RadauError::InconsistentStart`] ([`crate::index_estimate::inconsistent_start`]);
+    /// otherwise, when it is a failure to step of a DAE declared with every unknown of index
     /// at most 1 whose iteration matrix at the last point reached shows unknowns of index 2
     /// or 3, `e` wrapped in [`RadauError::UndeclaredIndex`] (the start of the integration
     /// reads them so too) or [`RadauError::SingularPoint`] (it read every unknown as of index
@@ -515,7 +518,21 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 | RadauError::RepeatedFailures { .. }
                 | RadauError::TooManySteps { .. }
         );
-        if !stepping || self.higher_index {
+        if !stepping {
+            return e;
+        }
+        if self.nst() == 0 {
+            if let Some(w) = crate::index_estimate::inconsistent_start(&self.dae, &self.start) {
+                return RadauError::InconsistentStart {
+                    t: self.start.t(),
+                    equation: self.dae.equation_name(w.equation),
+                    residual: w.residual,
+                    bound: w.bound,
+                    source: Box::new(e),
+                };
+            }
+        }
+        if self.higher_index {
             return e;
         }
         let t = self.t;
