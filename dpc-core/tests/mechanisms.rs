@@ -609,3 +609,52 @@ fn an_inconsistent_start_is_named() {
         }
     }
 }
+
+#[test]
+fn a_velocity_off_its_hidden_constraint_is_named_in_the_stabilised_form() {
+    // The crank centre's velocity (and its position's derivative with it) moved by 1e-2: the
+    // positions satisfy their constraints, the velocities do not satisfy the constraints'
+    // derivatives. The index-3 form cannot tell (it runs to a wrong answer); the
+    // stabilised form has the hidden constraints as equations, fails at its start, and the
+    // error names one of them.
+    let case = slider_crank_case();
+    let dae = IndexThree(case.mechanism.clone());
+    let (mut y0, mut yp0) = case.mechanism.initial(&case.start.0, &case.start.1);
+    y0[8] += 1e-2;
+    yp0[0] += 1e-2;
+    let s = Stabilised::detect(dae.clone(), 0.0, &y0, &yp0).unwrap();
+    let (y, yp) = s.extend(&y0, &yp0);
+    let n = s.dimension();
+    let opts = radau::Options {
+        index: s.index(),
+        ..radau::Options::with_tolerances(1e-6, 1e-6)
+    };
+    let mut r = Radau::new(s, FaerDenseLu::new(n), opts, 0.0, &y, &yp).unwrap();
+    let mut out = vec![0.0; n];
+    match r.solve_to(case.t_end, &mut out, None) {
+        Err(radau::RadauError::InconsistentStart { equation, .. }) => {
+            println!("Radau: {equation}");
+            assert!(
+                equation.starts_with("the hidden velocity constraint of constraint"),
+                "{equation}"
+            );
+        }
+        other => panic!("Radau: {other:?}"),
+    }
+    let s = Stabilised::detect(dae, 0.0, &y0, &yp0).unwrap();
+    let opts = bdf::Options {
+        index: s.index(),
+        ..bdf::Options::with_tolerances(1e-6, 1e-6)
+    };
+    let mut b = Bdf::new(s, FaerDenseLu::new(n), opts, 0.0, &y, &yp).unwrap();
+    match b.solve_to(case.t_end, &mut out, None) {
+        Err(bdf::BdfError::InconsistentStart { equation, .. }) => {
+            println!("BDF: {equation}");
+            assert!(
+                equation.starts_with("the hidden velocity constraint of constraint"),
+                "{equation}"
+            );
+        }
+        other => panic!("BDF: {other:?}"),
+    }
+}
