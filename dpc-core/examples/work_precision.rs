@@ -46,6 +46,12 @@
 //!   scored), by Radau and the BDF with the LU [`FaerLu::for_dae`] picks (banded) and by the
 //!   BDF with faer's sparse LU,
 //!
+//! * three index-3 mechanisms not in the Test Set (`tests/common/mechanisms.rs`: the rigid
+//!   slider crank, the four-bar linkage, the spherical pendulum in Cartesian coordinates; scored
+//!   on positions and velocities against their minimal-coordinate ODEs, relative to
+//!   `max(|r|, 1e-2)`), by Radau and the BDF (`Exclude` and `Scale`) on the index-3 form and by
+//!   both on [`Stabilised::detect`] of it (no IDA or diffsol rows),
+//!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`; and the BDF with the iteration matrix by the library's
 //! difference quotients ([`dpc_core::difference`], rows "difference quotients") on Robertson
 //! (IDA's floor from its `atol`), the transistor amplifier and the two bit adding unit (columns
@@ -72,6 +78,8 @@ mod fekete;
 mod food_web;
 #[path = "../tests/common/heat2d.rs"]
 mod heat2d;
+#[path = "../tests/common/mechanisms.rs"]
+mod mechanisms;
 #[path = "../tests/common/nand.rs"]
 mod nand;
 #[path = "../tests/common/peer_table.rs"]
@@ -204,11 +212,15 @@ enum Problem {
     // SUNDIALS' banded examples (`banded_rows`).
     Heat,
     FoodWeb,
+    // Index-3 mechanisms not in the Test Set (`mechanism_rows`).
+    RigidSliderCrank,
+    FourBar,
+    SphericalPendulum,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 23] = [
+    const ALL: [Self; 26] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -232,6 +244,9 @@ impl Problem {
         Self::RingModulator,
         Self::Heat,
         Self::FoodWeb,
+        Self::RigidSliderCrank,
+        Self::FourBar,
+        Self::SphericalPendulum,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -260,6 +275,9 @@ impl Problem {
             Self::RingModulator => "ring modulator (ODE; all)",
             Self::Heat => "heat 2-D, idaHeat2D_bnd (index 1; interior)",
             Self::FoodWeb => "food web, idaFoodWeb_bnd (index 1; all)",
+            Self::RigidSliderCrank => "rigid slider crank (index 3; q, v)",
+            Self::FourBar => "four-bar linkage (index 3; q, v)",
+            Self::SphericalPendulum => "spherical pendulum (index 3; q, v)",
         }
     }
 }
@@ -289,6 +307,8 @@ enum Code {
     /// The BDF with faer's sparse LU on the declared pattern, where [`FaerLu::for_dae`] picks
     /// the banded LU (SUNDIALS' banded examples).
     BdfFaerSparse,
+    /// Radau on [`Stabilised::detect`] of the index-3 form.
+    RadauDetect,
 }
 
 impl Code {
@@ -308,6 +328,7 @@ impl Code {
                 "dpc BDF (FaerLu: sparse; grouped difference quotients; index 2 declared)"
             }
             Self::BdfFaerSparse => "dpc BDF (FaerSparseLu)",
+            Self::RadauDetect => "dpc Radau (Stabilised::detect of the index-3 form)",
         }
     }
 }
@@ -828,7 +849,114 @@ fn main() {
         stiff_ode_rows(k, tol);
         banded_rows(k, tol);
         difference_rows(k, tol);
+        mechanism_rows(k, tol, &scalar);
     }
+}
+
+/// The rows of the index-3 mechanisms of `tests/common/mechanisms.rs` at `rtol = atol = tol`
+/// (label `1e-k`), positions and velocities scored against the stored references relative to
+/// `max(|r|, 1e-2)` (as `tests/mechanisms.rs`): Radau and the BDF (`Exclude`, `Scale`) on the
+/// index-3 form as declared, the BDF and Radau on [`Stabilised::detect`] of it.
+fn mechanism_rows(k: i32, tol: f64, scalar: &bdf::Options) {
+    use mechanisms::*;
+    /// A mechanism, its start in minimal coordinates, end time and reference.
+    type Case<'a, M> = (M, (&'a [f64], &'a [f64]), f64, &'a [f64]);
+    /// `N` unknowns in the index-3 form, `S` in the stabilised one.
+    fn rows<M: Minimal + Clone, const N: usize, const S: usize>(
+        problem: Problem,
+        (m, (s0, sd0), t_end, reference): Case<'_, M>,
+        k: i32,
+        tol: f64,
+        scalar: &bdf::Options,
+    ) {
+        let (y0, yp0) = m.initial(s0, sd0);
+        let start = (&y0[..], &yp0[..]);
+        let score = |y: &[f64]| {
+            -reference
+                .iter()
+                .zip(y)
+                .map(|(r, v)| (v - r).abs() / r.abs().max(1e-2))
+                .fold(0.0f64, |a, e| if e.is_nan() { f64::NAN } else { a.max(e) })
+                .log10()
+        };
+        let dae = IndexThree(m);
+        row_scored(problem, k, Code::Radau, score, || {
+            indexed_run::<N, _>(
+                Code::Radau,
+                dae.clone(),
+                start,
+                dae.index(),
+                tol,
+                scalar,
+                t_end,
+            )
+        });
+        for (code, higher_index) in [
+            (Code::Bdf, HigherIndexControl::Exclude),
+            (Code::BdfScale, HigherIndexControl::Scale),
+        ] {
+            row_scored(problem, k, code, score, || {
+                let opts = bdf::Options {
+                    index: dae.index(),
+                    higher_index,
+                    ..scalar.clone()
+                };
+                bdf_run::<N, _>(dae.clone(), start, opts, t_end)
+            });
+        }
+        for (code, solver) in [
+            (Code::BdfDetect, Code::Bdf),
+            (Code::RadauDetect, Code::Radau),
+        ] {
+            row_scored(problem, k, code, score, || {
+                let s =
+                    Stabilised::detect(dae.clone(), 0.0, &y0, &yp0).map_err(|e| e.to_string())?;
+                let index = s.index();
+                let (y, yp) = s.extend(&y0, &yp0);
+                indexed_run::<S, _>(solver, s, (&y, &yp), index, tol, scalar, t_end)
+            });
+        }
+    }
+    let sc = slider_crank();
+    let sc_start = ([SLIDER_CRANK_START.0], [SLIDER_CRANK_START.1]);
+    rows::<_, 23, 30>(
+        Problem::RigidSliderCrank,
+        (
+            sc,
+            (&sc_start.0, &sc_start.1),
+            SLIDER_CRANK_T_END,
+            &SLIDER_CRANK_REF,
+        ),
+        k,
+        tol,
+        scalar,
+    );
+    let fb = four_bar();
+    let fb_start = ([FOUR_BAR_START.0], [FOUR_BAR_START.1]);
+    rows::<_, 26, 34>(
+        Problem::FourBar,
+        (
+            fb,
+            (&fb_start.0, &fb_start.1),
+            FOUR_BAR_T_END,
+            &FOUR_BAR_REF,
+        ),
+        k,
+        tol,
+        scalar,
+    );
+    rows::<_, 7, 8>(
+        Problem::SphericalPendulum,
+        (
+            SPHERICAL,
+            (&SPHERICAL_START.0, &SPHERICAL_START.1),
+            SPHERICAL_T_END,
+            &SPHERICAL_REF,
+        ),
+        k,
+        tol,
+        scalar,
+    );
 }
 
 /// The slider crank's rows at `rtol = atol = tol` (label `1e-k`): Radau and the BDF, both with

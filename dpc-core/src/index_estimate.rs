@@ -281,12 +281,81 @@ impl StartPoint {
         }
     }
 
+    /// The start time.
+    pub(crate) fn t(&self) -> f64 {
+        self.t
+    }
+
     /// A new start of the same dimension, without allocating.
     pub(crate) fn set(&mut self, t: f64, y: &[f64], yp: &[f64]) {
         self.t = t;
         self.y.copy_from_slice(y);
         self.yp.copy_from_slice(yp);
     }
+}
+
+/// How far above its round-off bound an equation's residual at the start must lie for
+/// [`inconsistent_start`] to name it: three decades, so that no rounding of the user's
+/// arithmetic (the bound allows ten roundings of every term at the largest magnitude) is taken
+/// for an inconsistency.
+const INCONSISTENT_FACTOR: f64 = 1e3;
+
+/// An equation the start does not satisfy: [`inconsistent_start`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Inconsistency {
+    /// The equation's index.
+    pub equation: usize,
+    /// Its residual `F_i(t0, y0, y0')`.
+    pub residual: f64,
+    /// Its round-off bound `10 eps (sum_j |dF_i/dy_j| max_k |y_k| + sum_j |dF_i/dy'_j| max_k
+    /// |y'_k|)`.
+    pub bound: f64,
+}
+
+/// The equation with the largest residual at `start` among those more than
+/// [`INCONSISTENT_FACTOR`] times above their round-off bound: initial values that do not
+/// satisfy the DAE (a position off its constraint, say), which an integrator that fails before
+/// its first step names as the cause. The bound takes every unknown at the largest magnitude
+/// among the unknowns (and every derivative at the largest among the derivatives): a value
+/// that should vanish but was computed as a difference of large terms (the slider crank's
+/// slider speed, `1.1e-16`) carries their rounding, not its own (its bound from its own size
+/// was `2.5e-31`, and it was named instead of the velocity that was off by `1e-2`). `None`
+/// when no residual is so far above its bound, or when a residual or an iteration matrix at
+/// the start is not finite (another error names that). Costs a residual and two dense
+/// iteration matrices; meant for error paths only.
+pub(crate) fn inconsistent_start<D: ImplicitDae + ?Sized>(
+    dae: &D,
+    start: &StartPoint,
+) -> Option<Inconsistency> {
+    let (t, y, yp) = (start.t, &start.y[..], &start.yp[..]);
+    let n = dae.dimension();
+    let mut res = vec![0.0; n];
+    dae.residual(t, y, yp, &mut res);
+    if res.iter().any(|r| !r.is_finite()) {
+        return None;
+    }
+    let j0 = crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0).ok()?;
+    let j1 = crate::dae::dense_iteration_matrix(dae, t, y, yp, 1.0).ok()?;
+    let largest = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let (y_max, yp_max) = (largest(y), largest(yp));
+    let mut worst: Option<Inconsistency> = None;
+    for (i, &r) in res.iter().enumerate() {
+        let (dy, dyp) = (0..n).fold((0.0, 0.0), |(a, b), j| {
+            (a + j0[(i, j)].abs(), b + (j1[(i, j)] - j0[(i, j)]).abs())
+        });
+        let bound = 10.0 * f64::EPSILON * (dy * y_max + dyp * yp_max);
+        if r == 0.0 || r.abs() <= INCONSISTENT_FACTOR * bound {
+            continue;
+        }
+        if worst.as_ref().is_none_or(|w| r.abs() > w.residual.abs()) {
+            worst = Some(Inconsistency {
+                equation: i,
+                residual: r,
+                bound,
+            });
+        }
+    }
+    worst
 }
 
 /// What [`diagnose_failure`] finds for a step failure of a DAE declared with every unknown

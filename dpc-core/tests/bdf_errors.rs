@@ -366,7 +366,9 @@ fn fixed_step_newton_failure_is_typed_and_leaves_state() {
     assert!(matches!(f.step(), Err(BdfError::NewtonFailed { .. })));
     assert_eq!(f.t(), 0.0);
     assert_eq!(f.y(), &[1.0]);
-    // Variable-step: Newton fails down to the limit of failures.
+    // Variable-step: Newton fails down to the limit of failures, before the first step, from
+    // a start that does not satisfy the equation (residual 2): the error says so, with the
+    // failure as its source.
     let mut b = Bdf::new(
         NoSolution,
         NalgebraLu::<1>::new(),
@@ -377,10 +379,23 @@ fn fixed_step_newton_failure_is_typed_and_leaves_state() {
     )
     .unwrap();
     let mut y = [0.0];
-    assert!(matches!(
-        b.solve_to(1.0, &mut y, None),
-        Err(BdfError::NewtonFailed { .. } | BdfError::SingularMatrix { .. })
-    ));
+    match b.solve_to(1.0, &mut y, None) {
+        Err(BdfError::InconsistentStart {
+            equation,
+            residual,
+            source,
+            ..
+        }) => {
+            assert_eq!(equation, "equation 0");
+            assert_eq!(residual, 2.0);
+            assert!(
+                matches!(*source, BdfError::NewtonFailed { .. }),
+                "{source:?}"
+            );
+        }
+        Err(BdfError::SingularMatrix { .. }) => {}
+        r => panic!("unexpected {r:?}"),
+    }
 }
 
 #[test]

@@ -202,6 +202,36 @@ pub enum BdfError {
         #[source]
         source: Box<BdfError>,
     },
+    /// A step failed before the first step was taken ([`BdfError::NewtonFailed`],
+    /// [`BdfError::ErrorTestFailed`], [`BdfError::TooManySteps`]) and the initial values
+    /// do not satisfy an equation: its residual at the start exceeds its round-off bound by
+    /// more than a factor of 1 000 (the equation named is the one with the largest such
+    /// residual; the bound takes every unknown at the largest magnitude among them). An
+    /// integrator cannot move a constrained unknown that cannot jump (a position under a
+    /// constraint of index 3) onto its constraint within a step; the initial values must
+    /// satisfy every equation, and a constraint of index 2 or 3 also its derivatives.
+    #[error(
+        "{source}; the initial values do not satisfy {equation}: its residual at t = {} is {} \
+         (round-off would leave at most {}); start from values that satisfy every equation \
+         (for a position constraint also its derivative, the velocity constraint)",
+        Time(*t),
+        Readable(*residual),
+        Readable(*bound)
+    )]
+    InconsistentStart {
+        /// The start time.
+        t: f64,
+        /// The equation's name ([`crate::ImplicitDae::equation_name`]).
+        equation: String,
+        /// Its residual at the start.
+        residual: f64,
+        /// Its round-off bound, `10 eps (sum_j |dF/dy_j| max_k |y_k| + sum_j |dF/dy'_j| max_k
+        /// |y'_k|)`.
+        bound: f64,
+        /// The failure itself.
+        #[source]
+        source: Box<BdfError>,
+    },
     /// Consistent initialisation's Newton iteration did not converge.
     #[error(
         "consistent initialisation failed: Newton did not converge ({iterations} iterations, residual 2-norm {})",

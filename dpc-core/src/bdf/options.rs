@@ -60,8 +60,13 @@ pub enum HigherIndexControl {
     /// cannot pass at tight tolerances with a step that is not adapted.)
     #[default]
     Exclude,
-    /// Keep them but scale their weight by `min(1, h)^(m - 1)` in the error test and in
-    /// Newton's convergence test (Hairer, Lubich & Roche 1989; RADAU5's `nind2`, `nind3`).
+    /// Keep them but scale their weight by `min(1, h)^(m - 1)` in the error test (Hairer,
+    /// Lubich & Roche 1989; RADAU5's `nind2`, `nind3`), and in Newton's convergence test when
+    /// `m` is the highest index declared (the multipliers). The others (the velocities of an
+    /// index-3 mechanism, index 2 there) keep their plain weight in Newton's test, with the
+    /// round-off fallback `Exclude` has: Newton's error in a velocity carries forward as a
+    /// state error, which a weight relaxed by `h` admitted (as Radau's: see
+    /// [`crate::radau::Options::index`]).
     Scale,
 }
 

@@ -145,6 +145,13 @@ struct BdfState {
     /// Per component `[a, b, c, k]`: its index `m` as `a, b, c` (one of them 1 for `m` = 1,
     /// 2, 3, the others 0) and `k = 1` when the error test keeps it with `Exclude` (`m <= 1`).
     index_class: Vec<[f64; 4]>,
+    /// Per component: its index is 2 or more but below the highest declared one (the
+    /// velocities of an index-3 mechanism), so Newton's test keeps its plain weight under
+    /// [`HigherIndexControl::Scale`] as well (see [`Bdf::update_weights`]).
+    newton_plain: Vec<bool>,
+    /// Some component is in `newton_plain`: under `Scale` Newton's test then has the
+    /// round-off fallback that `Exclude` has (`RateTest::fallback`).
+    any_newton_plain: bool,
     /// Every unknown has index at most 1 (`Bdf::index_at_most_one`).
     index1: bool,
     /// Every unknown has index at most 1 and `dF/dy'` is singular at the start: a DAE with
@@ -210,6 +217,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             jacobian_evaluations: classification_matrices,
             ..Stats::default()
         };
+        let top = index.iter().copied().max().unwrap_or(1);
+        let newton_plain: Vec<bool> = index.iter().map(|&m| m >= 2 && m < top).collect();
+        let any_newton_plain = newton_plain.contains(&true);
         let index_class = index
             .iter()
             .map(|&m| match m {
@@ -256,6 +266,8 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 ewt,
                 index,
                 index_class,
+                newton_plain,
+                any_newton_plain,
                 index1,
                 index1_dae,
             },
@@ -507,7 +519,10 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         Ok(self.state.tn)
     }
 
-    /// `e`, or, when it is a failure to step (Newton, the error test, too many steps) of a
+    /// `e`, or, when it is a failure to step before the first step of an integration from
+    /// initial values that do not satisfy an equation, `e` wrapped in
+    /// [`BdfError::InconsistentStart`] ([`crate::index_estimate::inconsistent_start`]);
+    /// otherwise, when it is a failure to step (Newton, the error test, too many steps) of a
     /// DAE declared with every unknown of index at most 1 whose iteration matrix at the last
     /// point reached shows unknowns of index 2 or 3, `e` wrapped in
     /// [`BdfError::UndeclaredIndex`] (the start of the integration reads them so too) or
@@ -522,7 +537,21 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 | BdfError::ErrorTestFailed { .. }
                 | BdfError::TooManySteps { .. }
         );
-        if !stepping || !self.index_at_most_one() {
+        if !stepping {
+            return e;
+        }
+        if self.nst() == 0 {
+            if let Some(w) = crate::index_estimate::inconsistent_start(&self.dae, &self.start) {
+                return BdfError::InconsistentStart {
+                    t: self.start.t(),
+                    equation: self.dae.equation_name(w.equation),
+                    residual: w.residual,
+                    bound: w.bound,
+                    source: Box::new(e),
+                };
+            }
+        }
+        if !self.index_at_most_one() {
             return e;
         }
         let t = self.state.tn;
@@ -643,6 +672,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             let n = self.n;
             let state = &mut self.state;
             let (y, class) = (&state.phi.col(0)[..n], &state.index_class[..n]);
+            let plain = &state.newton_plain[..n];
             let (ewt, w_err) = (&mut state.ewt[..n], &mut state.w_err[..n]);
             let w_newton = &mut self.corrector.newton.w[..n];
             let w_scaled = &mut self.corrector.w_scaled[..n];
@@ -659,7 +689,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 let s = w * (a + b * hs2 + c * hs3);
                 ewt[i] = w;
                 // `w * 1.0` is `w` to the bit: index-1 components keep their weight.
-                w_newton[i] = if exclude { w } else { s };
+                w_newton[i] = if exclude || plain[i] { w } else { s };
                 w_err[i] = if exclude { w * k } else { s };
                 w_scaled[i] = s;
             }
@@ -695,6 +725,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 // scaled weight is the fallback of an iteration held up by round-off
                 // (`RateTest::fallback`).
                 HigherIndexControl::Exclude => (w, 0.0),
+                HigherIndexControl::Scale if state.newton_plain[i] => (w, s),
                 HigherIndexControl::Scale => (s, s),
             };
             *w_scaled = s;
@@ -744,7 +775,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 max_iterations: self.opts.max_newton_iterations,
                 epcon,
                 predictive: index1_dae,
-                fallback: !index1 && self.opts.higher_index == HigherIndexControl::Exclude,
+                fallback: !index1
+                    && (self.opts.higher_index == HigherIndexControl::Exclude
+                        || self.state.any_newton_plain),
                 min_carried: if index1 { 0.0 } else { MIN_CARRIED_RATE },
                 residual_tolerance: f64::INFINITY,
                 force_setup: self.nst() == 0 && ncf == 0 && nef == 0,

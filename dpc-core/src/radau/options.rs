@@ -68,8 +68,11 @@ pub struct Options {
     pub max_error_test_failures: usize,
     /// Differential index per component (0 or 1 for ordinary components, 2 or 3 for
     /// higher-index ones). Empty means every component has index at most 1. The error weight of
-    /// an index-`m` component is multiplied by `min(1, h)^(m - 1)` in the error test and in
-    /// Newton's convergence test (Hairer, Lubich & Roche 1989; RADAU5's `NIND2`, `NIND3`).
+    /// an index-`m` component is multiplied by `min(1, h)^(m - 1)` in the error test (Hairer,
+    /// Lubich & Roche 1989; RADAU5's `NIND2`, `NIND3`), and in Newton's convergence test when
+    /// `m` is the highest index declared (the multipliers); the others, such as the velocities
+    /// of an index-3 mechanism, keep their unrelaxed weight there, because Newton's error in
+    /// them carries forward as a state error.
     pub index: Vec<u8>,
 }
 
