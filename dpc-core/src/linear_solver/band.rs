@@ -12,6 +12,7 @@
 
 use super::{FactorError, LinearSolver};
 use crate::sink::MatrixSink;
+use core::ops::{DivAssign, Mul, SubAssign};
 
 /// An `n x n` matrix with entries only within `kl` below and `ku` above the diagonal, in band
 /// storage; a [`MatrixSink`].
@@ -167,11 +168,6 @@ impl BandLu {
     pub fn half_bandwidths(&self) -> (usize, usize) {
         self.matrix.half_bandwidths()
     }
-
-    /// Rows per column of the factors.
-    fn ld(&self) -> usize {
-        2 * self.matrix.kl + self.matrix.ku + 1
-    }
 }
 
 /// The lower and upper half-bandwidths `(kl, ku)` of `pattern` in an `n x n` matrix.
@@ -289,39 +285,7 @@ impl LinearSolver for BandLu {
             return;
         }
         let (n, kl, ku) = (self.matrix.n, self.matrix.kl, self.matrix.ku);
-        let (ld, kv) = (self.ld(), kl + ku);
-        let f = &self.factors;
-        let b = &mut b[..n];
-        // L: the interchanges and eliminations in the order of the factorisation.
-        for j in 0..n {
-            let p = self.pivots[j];
-            if p != j {
-                b.swap(j, p);
-            }
-            let below = kl.min(n - 1 - j);
-            let bj = b[j];
-            if bj != 0.0 && below > 0 {
-                let col = j * ld + kv;
-                for (bi, l) in b[j + 1..=j + below]
-                    .iter_mut()
-                    .zip(&f[col + 1..=col + below])
-                {
-                    *bi -= l * bj;
-                }
-            }
-        }
-        // U, with upper bandwidth kl + ku.
-        for j in (0..n).rev() {
-            let col = j * ld + kv;
-            b[j] /= f[col];
-            let above = kv.min(j);
-            let bj = b[j];
-            if bj != 0.0 && above > 0 {
-                for (bi, u) in b[j - above..j].iter_mut().zip(&f[col - above..col]) {
-                    *bi -= u * bj;
-                }
-            }
-        }
+        solve_band_factors(&self.factors, &self.pivots, n, kl, ku, b);
     }
 
     fn band(&self) -> Option<(usize, usize)> {
@@ -338,6 +302,54 @@ impl LinearSolver for BandLu {
             for i in first..=last {
                 let v = column[m.ku + i - j].abs() / wj;
                 out[i] = out[i].max(v);
+            }
+        }
+    }
+}
+
+/// Overwrite `b[..n]` with the solution of the system whose band factors `f` (LAPACK's layout,
+/// `2 kl + ku + 1` entries a column, `kl + ku` above the diagonal) and row interchanges
+/// `pivots` a banded elimination left: `L` with the interchanges in the order of the
+/// factorisation, then `U` (upper bandwidth `kl + ku`). Real ([`BandLu`]) and complex (Radau's
+/// stage system) alike; columns whose right-hand entry is zero are skipped.
+pub(crate) fn solve_band_factors<T>(
+    f: &[T],
+    pivots: &[usize],
+    n: usize,
+    kl: usize,
+    ku: usize,
+    b: &mut [T],
+) where
+    T: Copy + Default + PartialEq + SubAssign + DivAssign + Mul<Output = T>,
+{
+    let (ld, kv) = (2 * kl + ku + 1, kl + ku);
+    let b = &mut b[..n];
+    let zero = T::default();
+    for j in 0..n {
+        let p = pivots[j];
+        if p != j {
+            b.swap(j, p);
+        }
+        let below = kl.min(n - 1 - j);
+        let bj = b[j];
+        if bj != zero && below > 0 {
+            let col = j * ld + kv;
+            for (bi, &l) in b[j + 1..=j + below]
+                .iter_mut()
+                .zip(&f[col + 1..=col + below])
+            {
+                *bi -= l * bj;
+            }
+        }
+    }
+    for j in (0..n).rev() {
+        let col = j * ld + kv;
+        b[j] /= f[col];
+        let above = kv.min(j);
+        let bj = b[j];
+        if bj != zero && above > 0 {
+            for (bi, &u) in b[j - above..j].iter_mut().zip(&f[col - above..col]) {
+                *bi -= u * bj;
             }
         }
     }

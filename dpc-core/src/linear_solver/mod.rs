@@ -23,7 +23,7 @@
 //! [`LinearSolver::solve_in_place`].
 
 mod auto;
-mod band;
+pub(crate) mod band;
 mod faer_dense;
 mod faer_sparse;
 mod nalgebra_lu;

@@ -111,38 +111,14 @@ impl ComplexBandLu {
         if !self.factored {
             return;
         }
-        let (n, kl, ku) = (self.n, self.kl, self.ku);
-        let (ld, kv) = (2 * kl + ku + 1, kl + ku);
-        let f = &self.factors;
-        let b = &mut b[..n];
-        for j in 0..n {
-            let p = self.pivots[j];
-            if p != j {
-                b.swap(j, p);
-            }
-            let below = kl.min(n - 1 - j);
-            let bj = b[j];
-            if bj != c64::new(0.0, 0.0) && below > 0 {
-                let col = j * ld + kv;
-                for (bi, l) in b[j + 1..=j + below]
-                    .iter_mut()
-                    .zip(&f[col + 1..=col + below])
-                {
-                    *bi -= *l * bj;
-                }
-            }
-        }
-        for j in (0..n).rev() {
-            let col = j * ld + kv;
-            b[j] /= f[col];
-            let above = kv.min(j);
-            let bj = b[j];
-            if bj != c64::new(0.0, 0.0) && above > 0 {
-                for (bi, u) in b[j - above..j].iter_mut().zip(&f[col - above..col]) {
-                    *bi -= *u * bj;
-                }
-            }
-        }
+        crate::linear_solver::band::solve_band_factors(
+            &self.factors,
+            &self.pivots,
+            self.n,
+            self.kl,
+            self.ku,
+            b,
+        );
     }
 }
 
