@@ -116,8 +116,8 @@ use fekete::{
 };
 use peer_table::Run;
 use problems::{
-    robertson_atol, Pendulum, Robertson, PENDULUM_INDEX, PENDULUM_T, ROBERTSON_REF,
-    ROBERTSON_T_END, THETA0,
+    robertson_atol, robertson_options, Pendulum, Robertson, PENDULUM_INDEX, PENDULUM_T,
+    ROBERTSON_REF, ROBERTSON_T_END, THETA0,
 };
 use slider_crank::{crank_index, SliderCrank, CRANK_REF, CRANK_SCORED, CRANK_T_END};
 use standard_dae::{
@@ -588,11 +588,7 @@ fn main() {
         let tol = 10f64.powi(-k) * factor;
         let scalar = bdf::Options::with_tolerances(tol, tol);
 
-        let robertson_opts = bdf::Options {
-            rtol: Tolerance::Scalar(tol),
-            atol: Tolerance::Vector(robertson_atol(tol)),
-            ..bdf::Options::default()
-        };
+        let robertson_opts = robertson_options(tol);
         row(
             Problem::Robertson,
             k,
@@ -1250,11 +1246,7 @@ fn banded_rows(k: i32, tol: f64) {
 fn difference_rows(k: i32, tol: f64) {
     use differenced::Differenced;
     use dpc_core::difference::DifferenceQuotients;
-    let robertson_opts = bdf::Options {
-        rtol: Tolerance::Scalar(tol),
-        atol: Tolerance::Vector(robertson_atol(tol)),
-        ..bdf::Options::default()
-    };
+    let robertson_opts = robertson_options(tol);
     row(
         Problem::Robertson,
         k,

@@ -12,20 +12,16 @@ mod heat2d;
 mod problems;
 
 use counting_allocator::allocations;
-use dpc_core::bdf::{Bdf, FixedBdf, Options, Tolerance};
+use dpc_core::bdf::{Bdf, FixedBdf, Options};
 use dpc_core::linear_solver::{FaerDenseLu, NalgebraLu};
-use problems::{robertson_atol, Pendulum, Robertson, PENDULUM_INDEX};
+use problems::{robertson_options, Pendulum, Robertson, PENDULUM_INDEX};
 
 #[test]
 fn steps_after_setup_do_not_allocate() {
     // Variable step, Robertson (index 1): thousands of steps with rejections, order changes,
     // Jacobian refreshes and interpolation.
     let rtol = 1e-6;
-    let opts = Options {
-        rtol: Tolerance::Scalar(rtol),
-        atol: Tolerance::Vector(robertson_atol(rtol)),
-        ..Options::default()
-    };
+    let opts = robertson_options(rtol);
     let mut bdf = Bdf::new(
         Robertson,
         NalgebraLu::<3>::new(),
@@ -67,11 +63,7 @@ fn steps_after_setup_do_not_allocate() {
     assert_eq!(allocations() - before, 0);
 
     // The faer dense back end also keeps its workspace from construction on.
-    let opts = Options {
-        rtol: Tolerance::Scalar(rtol),
-        atol: Tolerance::Vector(robertson_atol(rtol)),
-        ..Options::default()
-    };
+    let opts = robertson_options(rtol);
     let mut bdf = Bdf::new(
         Robertson,
         FaerDenseLu::new(3),

@@ -5,7 +5,7 @@
 #[path = "common/bdf_problems.rs"]
 mod problems;
 
-use dpc_core::bdf::{consistent_initial_values, Bdf, Options, Tolerance};
+use dpc_core::bdf::{consistent_initial_values, Bdf, Options};
 use dpc_core::linear_solver::{FaerDenseLu, FaerLu, FaerSparseLu, LinearSolver, NalgebraLu};
 use dpc_core::ImplicitDae;
 use problems::*;
@@ -32,11 +32,7 @@ fn robertson_to_1e11_matches_reference() {
 #[test]
 fn work_counters_are_pinned() {
     let rtol = 1e-6;
-    let opts = Options {
-        rtol: Tolerance::Scalar(rtol),
-        atol: Tolerance::Vector(robertson_atol(rtol)),
-        ..Options::default()
-    };
+    let opts = robertson_options(rtol);
     let mut bdf = Bdf::new(
         Robertson,
         NalgebraLu::<3>::new(),

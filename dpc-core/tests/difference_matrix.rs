@@ -24,9 +24,11 @@ mod water_tube;
 
 use std::cell::Cell;
 
-use bdf_problems::{robertson_atol, significant_digits, Robertson, ROBERTSON_REF};
+use bdf_problems::{
+    robertson_atol, robertson_options, significant_digits, Robertson, ROBERTSON_REF,
+};
 use differenced::Differenced;
-use dpc_core::bdf::{self, Bdf, Tolerance};
+use dpc_core::bdf::{self, Bdf};
 use dpc_core::difference::{DifferenceQuotients, Formula, Prepared};
 use dpc_core::linear_solver::{FaerDenseLu, FaerLu, NalgebraLu};
 use dpc_core::radau::{self, Radau};
@@ -329,11 +331,7 @@ fn robertson_run<D: ImplicitDae>(
     dae: D,
     rtol: f64,
 ) -> (Result<[f64; 3], bdf::BdfError>, bdf::Stats) {
-    let opts = bdf::Options {
-        rtol: Tolerance::Scalar(rtol),
-        atol: Tolerance::Vector(robertson_atol(rtol)),
-        ..bdf::Options::default()
-    };
+    let opts = robertson_options(rtol);
     let t_end = bdf_problems::ROBERTSON_T_END;
     let mut s = Bdf::new(
         dae,
@@ -582,11 +580,7 @@ fn matrices_after_the_first_do_not_allocate() {
         assert_eq!(during, 0, "{:?}: {during} allocations", dq.formula());
     }
     // In an integration: Robertson's BDF steps with the difference matrix allocate nothing.
-    let opts = bdf::Options {
-        rtol: Tolerance::Scalar(1e-6),
-        atol: Tolerance::Vector(robertson_atol(1e-6)),
-        ..bdf::Options::default()
-    };
+    let opts = robertson_options(1e-6);
     let dae = Differenced::new(Robertson, robertson_differences(1e-6));
     let mut s = Bdf::new(
         dae,
@@ -651,34 +645,39 @@ fn a_non_finite_residual_at_a_perturbed_point_is_a_non_finite_entry() {
     assert!((m[(0, 0)] - 6.0).abs() < 1e-6, "{}", m[(0, 0)]);
 }
 
-/// Robertson whose residual is NaN at the perturbed points of one matrix formed after
-/// `t = 1` (as a model undefined just beyond the current point would be): the integrator's
-/// factorisation reads the non-finite matrix as failed, the step is retried smaller with a
-/// fresh matrix, and the run ends where the undisturbed one does.
-struct PoisonedOnce {
+/// `inner` whose difference matrices formed after `from` are poisoned, `shots` of them: the
+/// residual is NaN at their perturbed points (as a model undefined just beyond the current
+/// point would be), so the matrix's column of `y[0]` is not finite. The integrator's linear
+/// solver refuses it; the BDF retries smaller with a fresh matrix, Radau stops.
+struct Poisoned<D> {
+    inner: D,
     differences: DifferenceQuotients,
+    /// Matrices after this time are poisoned.
+    from: f64,
     /// Matrices left to poison.
     shots: Cell<usize>,
     /// Matrices poisoned.
     poisoned: Cell<usize>,
 }
 
-impl PoisonedOnce {
-    fn new(shots: usize) -> Self {
+impl<D> Poisoned<D> {
+    fn new(inner: D, differences: DifferenceQuotients, from: f64, shots: usize) -> Self {
         Self {
-            differences: robertson_differences(1e-6),
+            inner,
+            differences,
+            from,
             shots: Cell::new(shots),
             poisoned: Cell::new(0),
         }
     }
 }
 
-impl ImplicitDae for PoisonedOnce {
+impl<D: ImplicitDae> ImplicitDae for Poisoned<D> {
     fn dimension(&self) -> usize {
-        3
+        self.inner.dimension()
     }
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-        Robertson.residual(t, y, yp, out);
+        self.inner.residual(t, y, yp, out);
     }
     fn iteration_matrix<S: MatrixSink + ?Sized>(
         &self,
@@ -688,32 +687,35 @@ impl ImplicitDae for PoisonedOnce {
         c: f64,
         out: &mut S,
     ) {
-        if t > 1.0 && self.shots.get() > 0 {
+        if t > self.from && self.shots.get() > 0 {
             self.shots.set(self.shots.get() - 1);
             self.poisoned.set(self.poisoned.get() + 1);
-            // The residual NaN wherever y1 moves off the current point.
-            let edge = Poison { y0: y[0] };
+            let edge = NanOffY0 {
+                inner: &self.inner,
+                y0: y[0],
+            };
             self.differences.iteration_matrix(&edge, t, y, yp, c, out);
         } else {
             self.differences.iteration_matrix(self, t, y, yp, c, out);
         }
     }
     fn is_differential(&self, i: usize) -> bool {
-        i < 2
+        self.inner.is_differential(i)
     }
 }
 
-/// Robertson's residual, NaN wherever `y1` is not `y0`: column 0 of a difference matrix.
-struct Poison {
+/// `inner`'s residual, NaN wherever `y[0]` is not `y0`: column 0 of a difference matrix.
+struct NanOffY0<'a, D> {
+    inner: &'a D,
     y0: f64,
 }
 
-impl ImplicitDae for Poison {
+impl<D: ImplicitDae> ImplicitDae for NanOffY0<'_, D> {
     fn dimension(&self) -> usize {
-        3
+        self.inner.dimension()
     }
     fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-        Robertson.residual(t, y, yp, out);
+        self.inner.residual(t, y, yp, out);
         if y[0] != self.y0 {
             out.fill(f64::NAN);
         }
@@ -729,6 +731,11 @@ impl ImplicitDae for Poison {
     }
 }
 
+/// Robertson with `shots` matrices after `t = 1` poisoned.
+fn poisoned_robertson(shots: usize) -> Poisoned<Robertson> {
+    Poisoned::new(Robertson, robertson_differences(1e-6), 1.0, shots)
+}
+
 #[test]
 fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
     let rtol = 1e-6;
@@ -737,7 +744,7 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
         rtol,
     );
     for shots in [1, 3] {
-        let dae = PoisonedOnce::new(shots);
+        let dae = poisoned_robertson(shots);
         let (d, st) = robertson_bdf(&dae, rtol);
         println!("Robertson with {shots} NaN matrices: {d:.2} {st:?} (undisturbed {d0:.2} {s0:?})");
         assert_eq!(dae.poisoned.get(), shots);
@@ -751,7 +758,7 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
     }
     // Every matrix after t = 1 poisoned: the retries (each at a new predicted point) end in a
     // typed error naming the entry, not a vanished pivot.
-    match robertson_run(PoisonedOnce::new(usize::MAX), rtol).0 {
+    match robertson_run(poisoned_robertson(usize::MAX), rtol).0 {
         Err(bdf::BdfError::NonFiniteMatrix {
             t,
             equation,
@@ -765,69 +772,11 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
         }
         other => panic!("{other:?}"),
     }
-    // Radau: the same, on Andrews' mechanism with its first matrix after t = 0.01 poisoned.
-    struct AndrewsPoisoned {
-        differences: DifferenceQuotients,
-        shots: Cell<usize>,
-        /// Matrices after this time are poisoned.
-        from: f64,
-    }
-    struct NanBeyond(f64);
-    impl ImplicitDae for NanBeyond {
-        fn dimension(&self) -> usize {
-            27
-        }
-        fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-            Andrews.residual(t, y, yp, out);
-            if y[0] != self.0 {
-                out.fill(f64::NAN);
-            }
-        }
-        fn iteration_matrix<S: MatrixSink + ?Sized>(
-            &self,
-            _: f64,
-            _: &[f64],
-            _: &[f64],
-            _: f64,
-            _: &mut S,
-        ) {
-        }
-    }
-    impl ImplicitDae for AndrewsPoisoned {
-        fn dimension(&self) -> usize {
-            27
-        }
-        fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-            Andrews.residual(t, y, yp, out);
-        }
-        fn iteration_matrix<S: MatrixSink + ?Sized>(
-            &self,
-            t: f64,
-            y: &[f64],
-            yp: &[f64],
-            c: f64,
-            out: &mut S,
-        ) {
-            if t > self.from && self.shots.get() > 0 {
-                self.shots.set(self.shots.get() - 1);
-                let edge = NanBeyond(y[0]);
-                self.differences.iteration_matrix(&edge, t, y, yp, c, out);
-            } else {
-                self.differences.iteration_matrix(self, t, y, yp, c, out);
-            }
-        }
-        fn is_differential(&self, i: usize) -> bool {
-            Andrews.is_differential(i)
-        }
-    }
+    // Radau: the same, on Andrews' mechanism with its matrices after t = 0.01 poisoned.
     // Radau forms its matrix at the step's start, which a smaller step does not move: the
     // first non-finite matrix ends the run at once, in a typed error naming the entry.
     let (y0, yp0) = Andrews::initial();
-    let dae = AndrewsPoisoned {
-        differences: differenced::unit_scale(),
-        shots: Cell::new(usize::MAX),
-        from: 0.01,
-    };
+    let dae = Poisoned::new(Andrews, differenced::unit_scale(), 0.01, usize::MAX);
     let opts = radau::Options {
         index: andrews_index(),
         ..radau::Options::with_tolerances(1e-6, 1e-6)
@@ -856,11 +805,12 @@ fn a_non_finite_matrix_is_retried_by_the_bdf_and_reported_by_radau() {
         other => panic!("{other:?}"),
     }
     // Poisoned from the start: no factorisation of it is tried (none fails), no step is cut.
-    let dae = AndrewsPoisoned {
-        differences: differenced::unit_scale(),
-        shots: Cell::new(usize::MAX),
-        from: f64::NEG_INFINITY,
-    };
+    let dae = Poisoned::new(
+        Andrews,
+        differenced::unit_scale(),
+        f64::NEG_INFINITY,
+        usize::MAX,
+    );
     let mut s = Radau::new(&dae, FaerDenseLu::new(27), opts, 0.0, &y0, &yp0).expect("set up");
     let result = s.solve_to(ANDREWS_T_END, &mut y, None);
     assert!(

@@ -76,6 +76,15 @@ pub fn robertson_atol(rtol: f64) -> Vec<f64> {
     vec![1e-8 * s, 1e-14 * s, 1e-6 * s]
 }
 
+/// The BDF's options for Robertson at `rtol`: IDA's `atol` ([`robertson_atol`]).
+pub fn robertson_options(rtol: f64) -> Options {
+    Options {
+        rtol: Tolerance::Scalar(rtol),
+        atol: Tolerance::Vector(robertson_atol(rtol)),
+        ..Options::default()
+    }
+}
+
 /// The planar pendulum in Cartesian coordinates, index 3 (Hairer & Wanner 1996, Section
 /// VII.1): unknowns `(x, y, u, v, lambda)`, `x' = u`, `y' = v`, `u' = -lambda x`,
 /// `v' = -lambda y - g`, `0 = x^2 + y^2 - L^2`.
@@ -323,11 +332,7 @@ impl ImplicitDae for Heat {
 /// Robertson to `t = 1e11`: returns (significant digits, steps, seconds).
 pub fn robertson(rtol: f64) -> (f64, usize, f64) {
     let start = Instant::now();
-    let opts = Options {
-        rtol: Tolerance::Scalar(rtol),
-        atol: Tolerance::Vector(robertson_atol(rtol)),
-        ..Options::default()
-    };
+    let opts = robertson_options(rtol);
     let y0 = [1.0, 0.0, 0.0];
     let yp0 = [-0.04, 0.04, 0.0];
     let mut bdf = Bdf::new(Robertson, NalgebraLu::<3>::new(), opts, 0.0, &y0, &yp0).unwrap();
