@@ -298,7 +298,7 @@ impl StartPoint {
 /// [`inconsistent_start`] to name it: three decades, so that no rounding of the user's
 /// arithmetic (the bound allows ten roundings of every term at the largest magnitude) is taken
 /// for an inconsistency.
-const INCONSISTENT_FACTOR: f64 = 1e3;
+pub(crate) const INCONSISTENT_FACTOR: f64 = 1e3;
 
 /// An equation the start does not satisfy: [`inconsistent_start`].
 #[derive(Debug, Clone, PartialEq)]

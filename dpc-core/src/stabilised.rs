@@ -722,6 +722,121 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
     }
 }
 
+/// A constraint the initial values miss by more than the tolerances allow: [`start_violation`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ConstraintViolation {
+    /// The constraint's name (the DAE's [`ImplicitDae::equation_name`], or "the hidden
+    /// velocity constraint of ..." for the derivative of a position constraint).
+    pub equation: String,
+    /// Its residual at the start.
+    pub residual: f64,
+    /// What moving every unknown by its tolerance can change it by (see [`start_violation`]).
+    pub bound: f64,
+}
+
+/// The constraint the start `(t, y, y')` of `dae` misses worst, when it misses one by more than
+/// the tolerances allow; `None` when every constraint holds within them, or when the DAE's
+/// structure cannot be read at the start (a non-finite iteration matrix: the integrators report
+/// that themselves).
+///
+/// The constraints are the rows [`Stabilised::detect`] classifies (equations without
+/// derivatives and without algebraic unknowns, which restrict the differential unknowns
+/// themselves), and, of every position constraint `0 = g(t, q)`, its hidden velocity
+/// constraint `G(t, q) phi(t, y) + dg/dt = 0` (the residual of [`Stabilised`]'s row; `phi` the
+/// velocities the kinematic rows give). An integrator started off such a constraint jumps onto
+/// it within its first step, with no error: the solution it returns is not the one of the
+/// values given. A constraint row `h` with residual `r` is missed when `|r|` exceeds both
+/// `sum_j |dh/dy_j| tol_j`, with `tol_j = tolerance(j)` (the integrator's `rtol_j |y_j| +
+/// atol_j`: by Hölder's inequality, no change of the unknowns within their tolerances can
+/// remove a larger residual), and [`crate::index_estimate::INCONSISTENT_FACTOR`] times its
+/// round-off bound `10 eps sum_j |dh/dy_j| max_k |y_k|`. The worst is the largest ratio of
+/// residual to bound. Costs the structure's sampled matrices (six dense iteration matrices)
+/// and the stabilised form's residual and iteration matrix: for set-up, not for a step.
+pub(crate) fn start_violation<D: ImplicitDae>(
+    dae: &D,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+    tolerance: impl Fn(usize) -> f64,
+) -> Option<ConstraintViolation> {
+    let n = dae.dimension();
+    let found = detect::structure(dae, t, y, yp).ok()?;
+    if !found.constrained {
+        return None;
+    }
+    let y_max = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut worst: Option<(f64, ConstraintViolation)> = None;
+    // The rows `rows` of a DAE of dimension `m` at `(ys, yps)`: residual and `dF/dy` there.
+    let mut check = |dae: &dyn Fn(&mut [f64], &mut Selection),
+                     m: usize,
+                     rows: &[usize],
+                     name: &dyn Fn(usize) -> String| {
+        let mut res = vec![0.0; m];
+        let mut grad = Selection::new(m, m, rows, None);
+        dae(&mut res, &mut grad);
+        let width = grad.values().len() / rows.len().max(1);
+        for (k, &i) in rows.iter().enumerate() {
+            let row = &grad.values()[k * width..(k + 1) * width];
+            let (mut tolerated, mut size) = (0.0, 0.0);
+            for (j, g) in row.iter().enumerate().take(n) {
+                tolerated += g.abs() * tolerance(j);
+                size += g.abs();
+            }
+            let roundoff =
+                crate::index_estimate::INCONSISTENT_FACTOR * 10.0 * f64::EPSILON * size * y_max;
+            let bound = tolerated.max(roundoff);
+            let r = res[i];
+            if !r.is_finite() || r.abs() <= bound {
+                continue;
+            }
+            let ratio = r.abs() / bound;
+            if worst.as_ref().is_none_or(|(w, _)| ratio > *w) {
+                worst = Some((
+                    ratio,
+                    ConstraintViolation {
+                        equation: name(i),
+                        residual: r,
+                        bound,
+                    },
+                ));
+            }
+        }
+    };
+    let rows: Vec<usize> = found
+        .rows
+        .iter()
+        .chain(&found.velocity_rows)
+        .copied()
+        .collect();
+    check(
+        &|res, grad| {
+            dae.residual(t, y, yp, res);
+            dae.iteration_matrix(t, y, yp, 0.0, grad);
+        },
+        n,
+        &rows,
+        &|i| dae.equation_name(i),
+    );
+    if !found.rows.is_empty() {
+        let s =
+            Stabilised::with_differential(dae, found.rows, found.kinematic, found.differential, 2)
+                .ok()?;
+        let (ys, yps) = s.extend(y, yp);
+        let m = s.dimension();
+        let hidden: Vec<usize> = (n..m).collect();
+        check(
+            &|res, grad| {
+                s.residual(t, &ys, &yps, res);
+                s.iteration_matrix(t, &ys, &yps, 0.0, grad);
+            },
+            m,
+            &hidden,
+            &|i| s.equation_name(i),
+        );
+    }
+    worst.map(|(_, v)| v)
+}
+
 /// The structure [`Stabilised::detect`] reads from sampled iteration matrices, classified by
 /// the one classification of constraint structures ([`ConstraintStructure`]).
 mod detect {
@@ -743,6 +858,8 @@ mod detect {
         pub(super) rows: Vec<usize>,
         pub(super) kinematic: Vec<(usize, usize)>,
         pub(super) differential: Vec<bool>,
+        /// The constraints on unknowns without kinematic rows (velocity type, index 2).
+        pub(super) velocity_rows: Vec<usize>,
         /// Whether the DAE has constraints of either type.
         pub(super) constrained: bool,
     }
@@ -846,6 +963,7 @@ mod detect {
         Ok(Found {
             constrained: classified.is_constrained(),
             rows: classified.position_constraints,
+            velocity_rows: classified.velocity_constraints,
             kinematic,
             differential,
         })
@@ -908,6 +1026,83 @@ mod tests {
             out.set(0, 0, 2.0 * y[0] * (yp[0] - y[1]) + k * c);
             out.set(0, 1, -k);
         }
+    }
+
+    /// `y0' = y0 + y1`, `0 = y0 - 1`: a constraint on a differential unknown without a
+    /// kinematic row (the row of `y0'` has the algebraic `y1`), of index 2.
+    struct VelocityType;
+    impl ImplicitDae for VelocityType {
+        fn dimension(&self) -> usize {
+            2
+        }
+        fn residual(&self, _t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            out[0] = yp[0] - y[0] - y[1];
+            out[1] = y[0] - 1.0;
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            _t: f64,
+            _y: &[f64],
+            _yp: &[f64],
+            c: f64,
+            out: &mut S,
+        ) {
+            out.set(0, 0, c - 1.0);
+            out.set(0, 1, -1.0);
+            out.set(1, 0, 1.0);
+        }
+    }
+
+    /// `rtol |y_j| + atol` with `rtol = atol = 1e-6` at `y`.
+    fn tolerance(y: &[f64]) -> impl Fn(usize) -> f64 + '_ {
+        |j| 1e-6 * y[j].abs() + 1e-6
+    }
+
+    #[test]
+    fn start_violation_reads_the_constraint_its_derivative_and_the_tolerance() {
+        // `Moving` at t = 0.3 on its solution: y0 = sin t, y1 = y0' = cos t, and y2 from
+        // y1' = -y2 y0 with y1' = -sin t, so y2 = 1.
+        let t = 0.3f64;
+        let y = [t.sin(), t.cos(), 1.0];
+        let yp = [t.cos(), -t.sin(), 0.0];
+        assert_eq!(start_violation(&Moving, t, &y, &yp, tolerance(&y)), None);
+        // The position off its (time-dependent) constraint by 1e-3.
+        let mut off = y;
+        off[0] += 1e-3;
+        let v = start_violation(&Moving, t, &off, &yp, tolerance(&off)).unwrap();
+        assert_eq!(v.equation, "equation 2");
+        assert!((v.residual - 1e-3).abs() < 1e-12, "{}", v.residual);
+        assert!((v.bound - tolerance(&off)(0)).abs() < 1e-15, "{}", v.bound);
+        // The velocity (and y0' with it) off the hidden constraint `y1 - cos t = 0` by 1e-3:
+        // the derivative of the moving constraint, `dg/dt = -cos t`, is taken into account.
+        let (mut off, mut off_p) = (y, yp);
+        off[1] += 1e-3;
+        off_p[0] += 1e-3;
+        let v = start_violation(&Moving, t, &off, &off_p, tolerance(&off)).unwrap();
+        assert_eq!(v.equation, "the hidden velocity constraint of equation 2");
+        assert!((v.residual - 1e-3).abs() < 1e-9, "{}", v.residual);
+        // By a tenth of the tolerance it passes; by ten times it is named.
+        for (by, missed) in [(1e-7, false), (1e-5, true)] {
+            let (mut off, mut off_p) = (y, yp);
+            off[1] += by;
+            off_p[0] += by;
+            let v = start_violation(&Moving, t, &off, &off_p, tolerance(&off));
+            assert_eq!(v.is_some(), missed, "{by}: {v:?}");
+        }
+        // A constraint of velocity type is checked itself, without a derivative.
+        let (y, yp) = ([1.0 + 1e-3, 0.0], [1.0 + 1e-3, 0.0]);
+        let v = start_violation(&VelocityType, 0.0, &y, &yp, tolerance(&y)).unwrap();
+        assert_eq!(v.equation, "equation 1");
+        let (y, yp) = ([1.0, 0.0], [5.0, 0.0]);
+        assert_eq!(
+            start_violation(&VelocityType, 0.0, &y, &yp, tolerance(&y)),
+            None
+        );
+        // No structure to read (a non-finite iteration matrix): no verdict.
+        assert_eq!(
+            start_violation(&NotFinite, 0.0, &[1.0, 1.0], &[1.0, 0.0], |_| 1e-6),
+            None
+        );
     }
 
     /// A DAE whose iteration matrix has `d(equation 1)/d(y[0]) = NaN` everywhere.

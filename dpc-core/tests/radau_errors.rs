@@ -250,3 +250,67 @@ fn bad_input_is_rejected_before_integrating() {
         Err(RadauError::TooManySteps { max_steps: 3, .. })
     ));
 }
+
+/// `0 = y^2 + 1`, which no real `y` satisfies.
+struct NoSolution;
+
+impl ImplicitDae for NoSolution {
+    fn dimension(&self) -> usize {
+        1
+    }
+    fn residual(&self, _: f64, y: &[f64], _: &[f64], out: &mut [f64]) {
+        out[0] = y[0] * y[0] + 1.0;
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        _: f64,
+        y: &[f64],
+        _: &[f64],
+        _: f64,
+        m: &mut S,
+    ) {
+        m.set(0, 0, 2.0 * y[0]);
+    }
+    fn equation_name(&self, _: usize) -> String {
+        "y squared plus one".to_string()
+    }
+}
+
+#[test]
+fn a_failure_from_a_start_off_an_equation_names_it() {
+    // Newton fails at every step size from y = 1, where the residual is 2: the failure before
+    // the first step says the initial values do not satisfy the equation, by its name, with
+    // the failure as its source.
+    let mut r = Radau::new(
+        NoSolution,
+        NalgebraLu::<1>::new(),
+        Options::with_tolerances(1e-6, 1e-6),
+        0.0,
+        &[1.0],
+        &[0.0],
+    )
+    .unwrap();
+    let mut y = [0.0];
+    match r.solve_to(1.0, &mut y, None) {
+        Err(
+            ref e @ RadauError::InconsistentStart {
+                ref equation,
+                residual,
+                ref source,
+                ..
+            },
+        ) => {
+            println!("{e}");
+            assert_eq!(equation, "y squared plus one");
+            assert_eq!(residual, 2.0);
+            assert!(
+                matches!(
+                    **source,
+                    RadauError::StepTooSmall { .. } | RadauError::RepeatedFailures { .. }
+                ),
+                "{source:?}"
+            );
+        }
+        other => panic!("unexpected {other:?}"),
+    }
+}

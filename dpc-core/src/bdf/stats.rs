@@ -12,9 +12,10 @@ pub struct Stats {
     pub newton_failures: usize,
     /// Newton iterations (linear solves).
     pub newton_iterations: usize,
-    /// Residual evaluations.
+    /// Residual evaluations (not those of `new`'s constraint check, for a DAE declared of
+    /// index 2 or 3).
     pub residual_evaluations: usize,
-    /// Iteration-matrix (Jacobian) evaluations.
+    /// Iteration-matrix (Jacobian) evaluations (not those of `new`'s constraint check).
     pub jacobian_evaluations: usize,
     /// LU factorisations.
     pub factorisations: usize,

@@ -168,7 +168,10 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// `dae.dimension()`; option errors from [`Options::validate`];
     /// [`BdfError::NothingInErrorTest`] if [`Options::index`] leaves no unknown in the error
     /// test ([`Options::check_error_test`]); [`BdfError::NonFiniteResidual`] if
-    /// `F(t0, y0, yp0)` is not finite.
+    /// `F(t0, y0, yp0)` is not finite; [`BdfError::InconsistentConstraint`] if
+    /// [`Options::index`] declares an unknown of index 2 or 3 and the initial values miss a
+    /// constraint, or a position constraint's hidden velocity constraint, by more than the
+    /// tolerances allow (the start would be left by a jump the error test does not see).
     pub fn new(
         dae: D,
         ls: L,
@@ -206,6 +209,17 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         error_weights(&opts, y0, &mut ewt)?;
         let index: Vec<u8> = (0..n).map(|i| opts.index_of(i)).collect();
         let index1 = index.iter().all(|&m| m <= 1);
+        if !index1 {
+            let tolerance = |j: usize| opts.rtol.get(j) * y0[j].abs() + opts.atol.get(j);
+            if let Some(v) = crate::stabilised::start_violation(&dae, t0, y0, yp0, tolerance) {
+                return Err(BdfError::InconsistentConstraint {
+                    t: t0,
+                    equation: v.equation,
+                    residual: v.residual,
+                    bound: v.bound,
+                });
+            }
+        }
         let (index1_dae, classification_matrices) = if index1 {
             leading_matrix_singular(&dae, t0, y0, yp0)
         } else {
@@ -295,7 +309,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     ///
     /// # Errors
     /// [`BdfError::DimensionMismatch`], [`BdfError::NonFiniteResidual`] or
-    /// [`BdfError::InvalidTolerance`] as for [`Bdf::new`].
+    /// [`BdfError::InvalidTolerance`] as for [`Bdf::new`]. The constraints are not checked
+    /// here (the allocation-free restart of closed loops, which project their states
+    /// themselves): a start given to `reinit` must satisfy them.
     pub fn reinit(&mut self, t0: f64, y0: &[f64], yp0: &[f64]) -> Result<(), BdfError> {
         let n = self.n;
         BdfError::check_lengths(n, &[("y0", y0.len()), ("yp0", yp0.len())])?;

@@ -218,6 +218,38 @@ pub enum RadauError {
         #[source]
         source: Box<RadauError>,
     },
+    /// The integrator was given initial values, for a DAE declared with unknowns of index 2
+    /// or 3, that miss a constraint by more than the tolerances allow: a constraint row
+    /// (an equation without derivatives and without algebraic unknowns, which restricts the
+    /// differential unknowns themselves) or the hidden velocity constraint of a position
+    /// constraint (its derivative along the motion). Its residual exceeds what moving every
+    /// unknown by its tolerance (`rtol |y| + atol`) can change it by: an integrator started
+    /// there would jump onto the constraint within its first step and return the solution of
+    /// other initial values, without an error. Checked by `new` only (not by `reinit`, the
+    /// allocation-free restart), from the structure [`crate::stabilised::Stabilised::detect`]
+    /// reads.
+    #[error(
+        "the initial values miss {equation}: its residual at t = {} is {}, more than moving \
+         every unknown by its tolerance (rtol |y| + atol) can change ({}); an integrator \
+         would jump onto the constraint in its first step. Start from values that satisfy \
+         every constraint and, for a position constraint, its hidden velocity constraint",
+        Time(*t),
+        Readable(*residual),
+        Readable(*bound)
+    )]
+    InconsistentConstraint {
+        /// The start time.
+        t: f64,
+        /// The constraint's name ([`crate::ImplicitDae::equation_name`]; "the hidden velocity
+        /// constraint of ..." for the derivative of a position constraint).
+        equation: String,
+        /// Its residual at the start.
+        residual: f64,
+        /// What moving every unknown by its tolerance can change it by: `sum_j |dh/dy_j|
+        /// (rtol_j |y_j| + atol_j)` over the constraint's gradient `dh/dy` (at least 1 000
+        /// times its round-off bound).
+        bound: f64,
+    },
     /// A step failed before the first step was taken ([`RadauError::StepTooSmall`],
     /// [`RadauError::RepeatedFailures`], [`RadauError::TooManySteps`]) and the initial values
     /// do not satisfy an equation: its residual at the start exceeds its round-off bound by

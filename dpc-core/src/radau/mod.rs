@@ -182,7 +182,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     /// # Errors
     /// [`RadauError::DimensionMismatch`] if `y0`, `yp0` or the solver do not match
     /// `dae.dimension()`; option errors from [`Options::validate`];
-    /// [`RadauError::NonFiniteResidual`] if `F(t0, y0, yp0)` is not finite.
+    /// [`RadauError::NonFiniteResidual`] if `F(t0, y0, yp0)` is not finite;
+    /// [`RadauError::InconsistentConstraint`] if [`Options::index`] declares an unknown of
+    /// index 2 or 3 and the initial values miss a constraint, or a position constraint's
+    /// hidden velocity constraint, by more than the tolerances allow (the first step would
+    /// jump onto it without an error).
     pub fn new(
         dae: D,
         ls: L,
@@ -240,6 +244,17 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             atol.iter().copied().fold(f64::INFINITY, f64::min)
         };
         let higher_index = (0..n).any(|i| opts.index_of(i) >= 2);
+        if higher_index {
+            let tolerance = |j: usize| opts.rtol.get(j) * y0[j].abs() + opts.atol.get(j);
+            if let Some(v) = crate::stabilised::start_violation(&dae, t0, y0, yp0, tolerance) {
+                return Err(RadauError::InconsistentConstraint {
+                    t: t0,
+                    equation: v.equation,
+                    residual: v.residual,
+                    bound: v.bound,
+                });
+            }
+        }
         let fnewt = opts.newton_tolerance.unwrap_or_else(|| {
             let f = (10.0 * f64::EPSILON / tolst).max(0.03f64.min(tolst.sqrt()));
             if higher_index {
@@ -316,7 +331,9 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     ///
     /// # Errors
     /// [`RadauError::DimensionMismatch`], [`RadauError::NonFiniteResidual`] or
-    /// [`RadauError::InvalidOption`] as for [`Radau::new`].
+    /// [`RadauError::InvalidOption`] as for [`Radau::new`]. The constraints are not checked
+    /// here (the allocation-free restart of closed loops, which project their states
+    /// themselves): a start given to `reinit` must satisfy them.
     pub fn reinit(&mut self, t0: f64, y0: &[f64], yp0: &[f64]) -> Result<(), RadauError> {
         for (what, found) in [("y0", y0.len()), ("yp0", yp0.len())] {
             if found != self.n {

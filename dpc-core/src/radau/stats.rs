@@ -12,11 +12,12 @@ pub struct Stats {
     pub newton_failures: usize,
     /// Simplified-Newton iterations (each one real and one complex solve).
     pub newton_iterations: usize,
-    /// Residual evaluations (three per Newton iteration, one or two per error estimate).
+    /// Residual evaluations (three per Newton iteration, one or two per error estimate; not
+    /// those of `new`'s constraint check, for a DAE declared of index 2 or 3).
     pub residual_evaluations: usize,
     /// Jacobian evaluations (each gives `dF/dy` and `dF/dy'`: a call of `iteration_matrix`
     /// and one of `mass_matrix`, or two of `iteration_matrix` when the model supplies no
-    /// `mass_matrix`).
+    /// `mass_matrix`; not those of `new`'s constraint check).
     pub jacobian_evaluations: usize,
     /// Factorisations of the stage matrices (each one real and one complex LU).
     pub factorisations: usize,
