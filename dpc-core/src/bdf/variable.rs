@@ -22,7 +22,8 @@
 //! estimates of algebraic unknowns: an implicit ODE (`dF/dy'` regular at the start) keeps
 //! IDA's rules and takes IDA's steps (HIRES: 100 / 230 steps at 1e-4 / 1e-6 as IDA, and its
 //! digits over a tolerance jitter, where the DAE rules took larger steps and lost up to 0.33
-//! digits at 1e-6).
+//! digits at 1e-6), and so does a DAE of higher index run without its index declared
+//! (`dae_rules_apply`: SUNDIALS' analytic index-2 example as IDA's example runs it).
 
 use super::history::History;
 use super::newton::{error_weights, Corrector, NewtonProblem};
@@ -154,8 +155,9 @@ struct BdfState {
     any_newton_plain: bool,
     /// Every unknown has index at most 1 (`Bdf::index_at_most_one`).
     index1: bool,
-    /// Every unknown has index at most 1 and `dF/dy'` is singular at the start: a DAE with
-    /// algebraic unknowns, not an implicit ODE (`Bdf::index_one_dae`).
+    /// Every unknown has index at most 1, `dF/dy'` is singular at the start and the DAE of
+    /// index 1 there: a DAE with algebraic unknowns, not an implicit ODE nor a DAE of
+    /// undeclared higher index (`Bdf::index_one_dae`, [`dae_rules_apply`]).
     index1_dae: bool,
 }
 
@@ -221,7 +223,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             }
         }
         let (index1_dae, classification_matrices) = if index1 {
-            leading_matrix_singular(&dae, t0, y0, yp0)
+            dae_rules_apply(&dae, t0, y0, yp0)
         } else {
             (false, 0)
         };
@@ -650,11 +652,12 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.state.index1
     }
 
-    /// Every unknown has index at most 1 and `dF/dy'` was singular at the start (algebraic
-    /// unknowns or combinations, [`leading_matrix_singular`]): the corrector's tighter test
-    /// (`INDEX1_NEWTON_FACTOR`) and the filtered error estimate apply. Both exist for the error
-    /// estimates of algebraic unknowns; an implicit ODE (`dF/dy'` regular, HIRES) keeps IDA's
-    /// rules and takes IDA's steps.
+    /// Every unknown has index at most 1, `dF/dy'` was singular at the start (algebraic
+    /// unknowns or combinations) and the DAE of index 1 there ([`dae_rules_apply`]): the
+    /// corrector's tighter test (`INDEX1_NEWTON_FACTOR`) and the filtered error estimate apply.
+    /// Both exist for the error estimates of algebraic unknowns; an implicit ODE (`dF/dy'`
+    /// regular, HIRES) and a DAE of higher index run without its index declared keep IDA's
+    /// rules and take IDA's steps.
     fn index_one_dae(&self) -> bool {
         self.state.index1_dae
     }
@@ -1218,25 +1221,34 @@ fn error_norms(e: &[f64], w: &[f64], p_k: &[f64], p_km1: &[f64], k: usize) -> (f
     ((s0 / m).sqrt(), (s1 / m).sqrt(), (s2 / m).sqrt())
 }
 
-/// Above this many unknowns [`leading_matrix_singular`] does not decompose `dF/dy'` and
-/// answers `true` (the DAE rules, which were the rules for every index-1 problem before the
-/// distinction): a dense `n x n` decomposition at set-up would cost more than it saves.
+/// Above this many unknowns [`dae_rules_apply`] does not decompose `dF/dy'` and answers `true`
+/// (the DAE rules, which were the rules for every index-1 problem before the distinction): a
+/// dense `n x n` decomposition at set-up would cost more than it saves.
 const LEADING_CHECK_MAX: usize = 256;
 
-/// Whether `dF/dy'` at `(t, y, y')` is singular, with the number of iteration matrices
-/// evaluated to tell: some unknown declared algebraic ([`ImplicitDae::is_differential`]), or the
-/// smallest diagonal entry of a column-pivoted QR of `dF/dy' = G(1) - G(0)` (of `dF/dy'`
-/// itself when it is diagonal) at most `1e3 n eps` times the largest. A matrix that is not
-/// finite, or a DAE above [`LEADING_CHECK_MAX`] unknowns, counts as singular: an implicit ODE
-/// misread as a DAE only keeps the rules every index-1 problem had before.
-fn leading_matrix_singular<D: ImplicitDae>(
-    dae: &D,
-    t: f64,
-    y: &[f64],
-    yp: &[f64],
-) -> (bool, usize) {
+/// Whether the DAE rules apply to a DAE declared with every unknown of index at most 1, read
+/// at `(t, y, y')`, with the number of iteration matrices evaluated to tell: `dF/dy'` is
+/// singular there (algebraic unknowns or combinations) and the DAE has index 1 there.
+///
+/// * `dF/dy' = G(1) - G(0)` is singular when the smallest diagonal entry of a column-pivoted
+///   QR of its transpose (of `dF/dy'` itself when it is diagonal) is at most `1e3 n eps` times
+///   the largest; the trailing columns of that QR's `Q` span its null space `ker dF/dy'`.
+/// * Index 1 (the first step of Griepentrog and März's tractability index): with `Q0` the
+///   orthogonal projector onto `ker dF/dy'`, `G1 = s dF/dy' + dF/dy Q0` is regular (the same
+///   test on its column-pivoted QR; `s = |dF/dy|_F / |dF/dy'|_F` balances the two terms, `G1`
+///   is regular for every `s != 0` or for none). A singular `G1` is a DAE of higher index run
+///   without its index declared, as SUNDIALS' `idaAnalytic_mels` runs IDA on Ascher and
+///   Petzold's index-2 example: there the DAE rules, whose tighter corrector test is for the
+///   algebraic estimates of index-1 DAEs, kept the step small on every step (895 steps at
+///   `rtol = 1e-4`, `atol = 1e-9`; 43 055 at `1e-6`), where IDA's rules take IDA's steps (338
+///   with 222 error-test failures; IDA 343 with 232) and 8 912.
+///
+/// A matrix that is not finite, or a DAE above [`LEADING_CHECK_MAX`] unknowns, counts as a
+/// DAE of index 1: an implicit ODE misread as one only keeps the rules every index-1 problem
+/// had before.
+fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (bool, usize) {
     let n = dae.dimension();
-    if (0..n).any(|i| !dae.is_differential(i)) || n > LEADING_CHECK_MAX {
+    if n > LEADING_CHECK_MAX {
         return (true, 0);
     }
     let (Ok(g0), Ok(g1)) = (
@@ -1245,20 +1257,50 @@ fn leading_matrix_singular<D: ImplicitDae>(
     ) else {
         return (true, 2);
     };
-    let leading = g1 - g0;
+    let leading = g1 - &g0;
+    let negligible = |r: &nalgebra::DVector<f64>| {
+        let largest = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let tol = 1e3 * n as f64 * f64::EPSILON * largest;
+        // An all-zero matrix has every entry negligible.
+        r.map(|v| v.abs() <= tol || largest == 0.0)
+    };
     // A diagonal dF/dy' (every implicit ODE `y' - f`, the identity) is its own R up to signs:
     // its diagonal is read directly instead of decomposing (for a 20 x 20 ODE the QR was a
-    // fifth of a whole solve at loose tolerances).
+    // fifth of a whole solve at loose tolerances); its null space is spanned by unit vectors.
     let diagonal_only = leading
         .iter()
         .enumerate()
         .all(|(k, v)| k % n == k / n || *v == 0.0);
-    let diagonal = if diagonal_only {
-        leading.diagonal().map(f64::abs)
+    let null_space = if diagonal_only {
+        let zero = negligible(&leading.diagonal());
+        let columns: Vec<usize> = (0..n).filter(|&j| zero[j]).collect();
+        nalgebra::DMatrix::from_fn(n, columns.len(), |i, k| {
+            f64::from(u8::from(i == columns[k]))
+        })
     } else {
-        leading.col_piv_qr().unpack_r().diagonal().map(f64::abs)
+        let qr = leading.transpose().col_piv_qr();
+        let q = qr.q();
+        let zero = negligible(&qr.unpack_r().diagonal());
+        let rank = zero.iter().filter(|z| !**z).count();
+        q.columns(rank, n - rank).into_owned()
     };
-    let (largest, smallest) = (diagonal.max(), diagonal.min());
-    // Finite here, so the comparison is total; an all-zero dF/dy' is singular too.
-    (smallest <= 1e3 * n as f64 * f64::EPSILON * largest, 2)
+    if null_space.ncols() == 0 {
+        return (false, 2);
+    }
+    let norm_m = leading.norm();
+    let scale = if norm_m > 0.0 {
+        g0.norm() / norm_m
+    } else {
+        1.0
+    };
+    let scale = if scale > 0.0 && scale.is_finite() {
+        scale
+    } else {
+        1.0
+    };
+    let g1 = leading * scale + &g0 * &null_space * null_space.transpose();
+    let regular = !negligible(&g1.col_piv_qr().unpack_r().diagonal())
+        .iter()
+        .any(|z| *z);
+    (regular, 2)
 }

@@ -22,6 +22,10 @@
 //!   "Numerical solution of initial-value problems in DAEs"; Ascher & Petzold's book) with its
 //!   parameter `eta`: index 2 for every `eta != -1`, with every unknown of index 2 (its local
 //!   pencil `det(c A + B) = 1 + eta` does not depend on `c`), not index 1.
+//! * [`AscherPetzold`]: the linear time-varying index-2 problem of Ascher & Petzold's book
+//!   ("Computer Methods for ODEs and DAEs", SIAM 1998, Example 10.2), the analytic example of
+//!   SUNDIALS' IDA (`idaAnalytic_mels`): one differential unknown held by a constraint, one
+//!   algebraic unknown that only the constraint's derivative determines.
 #![allow(dead_code)]
 
 use dpc_core::{ImplicitDae, MatrixSink};
@@ -420,5 +424,73 @@ impl ImplicitDae for Bcp {
         m.set(1, 0, 1.0);
         m.set(1, 1, self.eta * t);
         true
+    }
+}
+
+/// Ascher & Petzold's Example 10.2 (SIAM 1998, p. 267), as SUNDIALS' `idaAnalytic_mels` states
+/// it, unknowns `(x1, x2)`, with its stiffness parameter `alpha` (10 there):
+///
+/// ```text
+/// x1' = (1 - alpha) / (t - 2) x1 - x1 + (alpha - 1) x2 + 2 e^t
+///  0  = (t + 2) x1 - (t + 2) e^t
+/// ```
+///
+/// with `x1 = e^t`, `x2 = e^t / (t - 2)` on `[0, 1]`. The constraint holds `x1`, a
+/// differential unknown, so `x1' = e^t` is fixed and the first equation determines `x2`
+/// (through `alpha - 1 != 0`): index 2, `x2` the unknown of index 2. The residual is written
+/// in the example's sign, `f - x1'` (the mass matrix `dF/dx' = diag(-1, 0)`).
+#[derive(Debug, Clone, Copy)]
+pub struct AscherPetzold {
+    /// The stiffness parameter (SUNDIALS' example: 10).
+    pub alpha: f64,
+}
+
+/// End of [`AscherPetzold`]'s interval (from 0).
+pub const ASCHER_PETZOLD_T_END: f64 = 1.0;
+
+impl AscherPetzold {
+    /// The exact solution and its derivative (`x2' = e^t (t - 3) / (t - 2)^2`).
+    pub fn exact(t: f64) -> ([f64; 2], [f64; 2]) {
+        let e = t.exp();
+        let d = t - 2.0;
+        ([e, e / d], [e, e * (d - 1.0) / (d * d)])
+    }
+}
+
+impl ImplicitDae for AscherPetzold {
+    fn dimension(&self) -> usize {
+        2
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        let a = self.alpha;
+        out[0] = (1.0 - a) / (t - 2.0) * y[0] - y[0] + (a - 1.0) * y[1] + 2.0 * t.exp() - yp[0];
+        out[1] = (t + 2.0) * y[0] - (t + 2.0) * t.exp();
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        _: &[f64],
+        _: &[f64],
+        c: f64,
+        m: &mut S,
+    ) {
+        let a = self.alpha;
+        m.set(0, 0, (1.0 - a) / (t - 2.0) - 1.0 - c);
+        m.set(0, 1, a - 1.0);
+        m.set(1, 0, t + 2.0);
+    }
+    /// `diag(-1, 0)`.
+    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
+        m.set(0, 0, -1.0);
+        true
+    }
+    fn is_differential(&self, i: usize) -> bool {
+        i == 0
+    }
+    fn equation_name(&self, i: usize) -> String {
+        ["x1'", "constraint"][i].to_string()
+    }
+    fn unknown_name(&self, i: usize) -> String {
+        ["x1", "x2"][i].to_string()
     }
 }
