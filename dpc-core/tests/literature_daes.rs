@@ -185,8 +185,8 @@ fn the_exact_solutions_satisfy_the_equations() {
         check_fixture(&p, |t| vecs(p.exact(t)), [0.0, 0.7, 1.4, 2.2, 3.0]);
     }
     check_fixture(
-        &AscherPetzold { alpha: 10.0 },
-        |t| vecs(AscherPetzold::exact(t)),
+        &AnalyticIndex2 { alpha: 10.0 },
+        |t| vecs(AnalyticIndex2::exact(t)),
         [0.0, 0.25, 0.5, 0.75, 1.0],
     );
 }
@@ -644,20 +644,20 @@ fn bcp_with_every_unknown_excluded_is_not_silently_wrong() {
 /// Ascher & Petzold's Example 10.2 with SUNDIALS' `alpha = 10`, from its exact start, with
 /// `index` as the option (`[1, 2]`: `x2` of index 2; empty: every unknown in the error test,
 /// as SUNDIALS' example runs IDA).
-fn ascher_petzold(code: Code, index: Vec<u8>) -> Vec<Row> {
-    let (y0, yp0) = AscherPetzold::exact(0.0);
-    let (reference, _) = AscherPetzold::exact(ASCHER_PETZOLD_T_END);
+fn analytic_index2(code: Code, index: Vec<u8>) -> Vec<Row> {
+    let (y0, yp0) = AnalyticIndex2::exact(0.0);
+    let (reference, _) = AnalyticIndex2::exact(ANALYTIC_T_END);
     sweep(
-        &format!("Ascher-Petzold 10.2 (index {index:?}), {code:?}"),
+        &format!("analytic index 2 (Ascher-Petzold 10.2; index {index:?}), {code:?}"),
         |tol| {
-            let dae = AscherPetzold { alpha: 10.0 };
+            let dae = AnalyticIndex2 { alpha: 10.0 };
             solve(
                 dae,
                 code,
                 tol,
                 index.clone(),
                 0.0,
-                ASCHER_PETZOLD_T_END,
+                ANALYTIC_T_END,
                 &y0,
                 &yp0,
             )
@@ -668,53 +668,53 @@ fn ascher_petzold(code: Code, index: Vec<u8>) -> Vec<Row> {
 }
 
 #[test]
-fn ascher_petzold_index2_bdf() {
+fn analytic_index2_index2_bdf() {
     // Measured medians (x1 / x2) with x2 declared of index 2: 15.79 / 4.49 at 1e-4, 9.42 /
     // 6.03 at 1e-6, 15.79 / 7.98 at 1e-8 (x1 is held by the constraint: exact up to
     // rounding) in 18 / 32 / 52 steps, one rejected step at 1e-6 and 1e-8.
-    let rows = ascher_petzold(Code::Bdf, vec![1, 2]);
+    let rows = analytic_index2(Code::Bdf, vec![1, 2]);
     check(&rows, 1, 5.5, 3.0);
     check(&rows, 0, 8.5, -1.0);
     assert!(rows[2].steps < 100, "{rows:?}");
 }
 
 #[test]
-fn ascher_petzold_index2_radau() {
+fn analytic_index2_index2_radau() {
     // Measured medians (x1 / x2): 6.30 / 5.13, 8.84 / 6.78, 10.60 / 6.56 in 7 / 11 / 17
     // steps: x2 stops gaining below 1e-6 (the multiplier-like unknown follows the last step,
     // as Jay's `z`).
-    let rows = ascher_petzold(Code::Radau, vec![1, 2]);
+    let rows = analytic_index2(Code::Radau, vec![1, 2]);
     check(&rows, 1, 6.2, 1.0);
     check(&rows, 0, 8.3, 3.5);
     assert!(rows[2].steps < 40, "{rows:?}");
 }
 
 #[test]
-fn ascher_petzold_undeclared_radau() {
+fn analytic_index2_undeclared_radau() {
     // Without the index option (x2 in the error test as x1): 3.85 / 6.67 / 7.97 digits in x2
     // in 6 / 13 / 27 steps.
-    let rows = ascher_petzold(Code::Radau, vec![]);
+    let rows = analytic_index2(Code::Radau, vec![]);
     check(&rows, 1, 6.1, 3.0);
 }
 
 #[test]
-fn ascher_petzold_undeclared_bdf_takes_idas_steps() {
+fn analytic_index2_undeclared_bdf_takes_idas_steps() {
     // SUNDIALS runs IDA on this problem with nothing declared (x2 in the error test) at
     // `rtol = 1e-4`, `atol = 1e-9`: 343 steps, 232 error-test failures, x2 = -2.718640 at
     // t = 1 (3.9 digits). The BDF reads the DAE as of higher index than declared at its start
     // and keeps IDA's rules: 338 steps, 222 failures, 3.95 digits (with the rules of index-1
     // DAEs it took 895 steps). At `rtol = atol = 1e-6` 8 912 steps, 5.6 digits (IDA stops
     // at its 500 steps per output); at 1e-8 neither finishes, and the error names `x2` as of
-    // index 2, the option that solves it in 52 steps (`ascher_petzold_index2_bdf`).
-    let (y0, yp0) = AscherPetzold::exact(0.0);
-    let (reference, _) = AscherPetzold::exact(ASCHER_PETZOLD_T_END);
+    // index 2, the option that solves it in 52 steps (`analytic_index2_index2_bdf`).
+    let (y0, yp0) = AnalyticIndex2::exact(0.0);
+    let (reference, _) = AnalyticIndex2::exact(ANALYTIC_T_END);
     let run = |rtol: f64, atol: f64| {
         let opts = bdf::Options::with_tolerances(rtol, atol);
-        let dae = AscherPetzold { alpha: 10.0 };
+        let dae = AnalyticIndex2 { alpha: 10.0 };
         let mut b = bdf::Bdf::new(dae, FaerDenseLu::new(2), opts, 0.0, &y0, &yp0).unwrap();
-        b.set_stop_time(ASCHER_PETZOLD_T_END).unwrap();
+        b.set_stop_time(ANALYTIC_T_END).unwrap();
         let mut y = vec![0.0; 2];
-        let r = b.solve_to(ASCHER_PETZOLD_T_END, &mut y, None);
+        let r = b.solve_to(ANALYTIC_T_END, &mut y, None);
         (r.map(|_| y), b.stats())
     };
     let (y, stats) = run(1e-4, 1e-9);

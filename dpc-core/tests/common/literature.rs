@@ -22,7 +22,7 @@
 //!   "Numerical solution of initial-value problems in DAEs"; Ascher & Petzold's book) with its
 //!   parameter `eta`: index 2 for every `eta != -1`, with every unknown of index 2 (its local
 //!   pencil `det(c A + B) = 1 + eta` does not depend on `c`), not index 1.
-//! * [`AscherPetzold`]: the linear time-varying index-2 problem of Ascher & Petzold's book
+//! * [`AnalyticIndex2`]: the linear time-varying index-2 problem of Ascher & Petzold's book
 //!   ("Computer Methods for ODEs and DAEs", SIAM 1998, Example 10.2), the analytic example of
 //!   SUNDIALS' IDA (`idaAnalytic_mels`): one differential unknown held by a constraint, one
 //!   algebraic unknown that only the constraint's derivative determines.
@@ -440,15 +440,15 @@ impl ImplicitDae for Bcp {
 /// (through `alpha - 1 != 0`): index 2, `x2` the unknown of index 2. The residual is written
 /// in the example's sign, `f - x1'` (the mass matrix `dF/dx' = diag(-1, 0)`).
 #[derive(Debug, Clone, Copy)]
-pub struct AscherPetzold {
+pub struct AnalyticIndex2 {
     /// The stiffness parameter (SUNDIALS' example: 10).
     pub alpha: f64,
 }
 
-/// End of [`AscherPetzold`]'s interval (from 0).
-pub const ASCHER_PETZOLD_T_END: f64 = 1.0;
+/// End of [`AnalyticIndex2`]'s interval (from 0).
+pub const ANALYTIC_T_END: f64 = 1.0;
 
-impl AscherPetzold {
+impl AnalyticIndex2 {
     /// The exact solution and its derivative (`x2' = e^t (t - 3) / (t - 2)^2`).
     pub fn exact(t: f64) -> ([f64; 2], [f64; 2]) {
         let e = t.exp();
@@ -457,7 +457,7 @@ impl AscherPetzold {
     }
 }
 
-impl ImplicitDae for AscherPetzold {
+impl ImplicitDae for AnalyticIndex2 {
     fn dimension(&self) -> usize {
         2
     }
