@@ -46,6 +46,12 @@
 //!   scored), by Radau and the BDF with the LU [`FaerLu::for_dae`] picks (banded) and by the
 //!   BDF with faer's sparse LU,
 //!
+//! * SUNDIALS' dense example `idaSlCrank_dns` written anew (a slider crank with a spring-damper
+//!   and a constant force in the stabilised index-2 GGL form, 10 unknowns, to `t = 10`, scored
+//!   on the six positions and velocities against Radau at `1e-12`), by Radau, by the BDF with
+//!   `lambda, mu` declared of index 2 (excluded from the error test, the example's
+//!   `suppressalg`) and by that BDF with the library's difference quotients,
+//!
 //! * three index-3 mechanisms not in the Test Set (`tests/common/mechanisms.rs`: the rigid
 //!   slider crank, the four-bar linkage, the spherical pendulum in Cartesian coordinates; scored
 //!   on positions and velocities against their minimal-coordinate ODEs, relative to
@@ -78,6 +84,8 @@ mod fekete;
 mod food_web;
 #[path = "../tests/common/heat2d.rs"]
 mod heat2d;
+#[path = "../tests/common/ida_slider_crank.rs"]
+mod ida_slider_crank;
 #[path = "../tests/common/mechanisms.rs"]
 mod mechanisms;
 #[path = "../tests/common/nand.rs"]
@@ -212,6 +220,8 @@ enum Problem {
     // SUNDIALS' banded examples (`banded_rows`).
     Heat,
     FoodWeb,
+    // SUNDIALS' dense example `idaSlCrank_dns` (`ida_slider_crank_rows`).
+    IdaSlCrank,
     // Index-3 mechanisms not in the Test Set (`mechanism_rows`).
     RigidSliderCrank,
     FourBar,
@@ -220,7 +230,7 @@ enum Problem {
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 26] = [
+    const ALL: [Self; 27] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -244,6 +254,7 @@ impl Problem {
         Self::RingModulator,
         Self::Heat,
         Self::FoodWeb,
+        Self::IdaSlCrank,
         Self::RigidSliderCrank,
         Self::FourBar,
         Self::SphericalPendulum,
@@ -275,6 +286,7 @@ impl Problem {
             Self::RingModulator => "ring modulator (ODE; all)",
             Self::Heat => "heat 2-D, idaHeat2D_bnd (index 1; interior)",
             Self::FoodWeb => "food web, idaFoodWeb_bnd (index 1; all)",
+            Self::IdaSlCrank => "slider crank, idaSlCrank_dns (index 2; q, v)",
             Self::RigidSliderCrank => "rigid slider crank (index 3; q, v)",
             Self::FourBar => "four-bar linkage (index 3; q, v)",
             Self::SphericalPendulum => "spherical pendulum (index 3; q, v)",
@@ -844,6 +856,7 @@ fn main() {
         two_bit_adder_rows(k, tol);
         stiff_ode_rows(k, tol);
         banded_rows(k, tol);
+        ida_slider_crank_rows(k, tol, &scalar);
         difference_rows(k, tol);
         mechanism_rows(k, tol, &scalar);
     }
@@ -1154,6 +1167,54 @@ fn stiff_ode_rows(k: i32, tol: f64) {
     rows::<_, 3>(Problem::Orego, Orego, k, tol);
     rows::<_, 20>(Problem::Pollution, Pollution, k, tol);
     rows::<_, 15>(Problem::RingModulator, RingModulator, k, tol);
+}
+
+/// The rows of SUNDIALS' dense example `idaSlCrank_dns` written anew
+/// (`tests/common/ida_slider_crank.rs`: the slider crank with a spring-damper in its GGL form,
+/// 10 unknowns, to `t = 10`) at `rtol = atol = tol` (label `1e-k`), scored on the six
+/// differential unknowns (positions and velocities) against the fixture's reference: Radau and
+/// the BDF with `lambda, mu` declared of index 2 (the BDF excludes them from its error test, as
+/// the example's `IDASetSuppressAlg`), and the BDF with the iteration matrix by the library's
+/// difference quotients (the example's own setting: IDA's dense difference quotients).
+fn ida_slider_crank_rows(k: i32, tol: f64, scalar: &bdf::Options) {
+    use differenced::Differenced;
+    use ida_slider_crank::{
+        slcrank_index, slcrank_initial, SlCrank, SLCRANK_DIM, SLCRANK_REF, SLCRANK_SCORED,
+        SLCRANK_T_END,
+    };
+    let (y0, yp0) = slcrank_initial();
+    for code in [Code::Radau, Code::Bdf, Code::BdfDifferences] {
+        row(
+            Problem::IdaSlCrank,
+            k,
+            code,
+            &SLCRANK_REF,
+            &SLCRANK_SCORED,
+            || {
+                let start = (&y0[..], &yp0[..]);
+                let index = slcrank_index();
+                match code {
+                    Code::BdfDifferences => {
+                        let opts = bdf::Options {
+                            index,
+                            ..scalar.clone()
+                        };
+                        let dae = Differenced::new(SlCrank, differenced::unit_scale());
+                        bdf_run::<SLCRANK_DIM, _>(dae, start, opts, SLCRANK_T_END)
+                    }
+                    _ => indexed_run::<SLCRANK_DIM, _>(
+                        code,
+                        SlCrank,
+                        start,
+                        index,
+                        tol,
+                        scalar,
+                        SLCRANK_T_END,
+                    ),
+                }
+            },
+        );
+    }
 }
 
 /// The rows of SUNDIALS' banded examples written anew (`tests/common/heat2d.rs`: the 2-D heat

@@ -51,6 +51,11 @@
 //! initialisation fails on it ("LU solve failed"); from the consistent `(y0, y0')` it runs at
 //! 1e-4. At 1e-8 dpc-core's BDF and IDA fail, and it is not run.
 //!
+//! SUNDIALS' dense example `idaSlCrank_dns` (row 24; `dpc-core/tests/common/ida_slider_crank.rs`,
+//! the GGL form with the constant mass matrix `diag(1, 1, 1, J1, m2, J2, 0, 0, 0, 0)`) is run
+//! both ways through its dpc-core residual, as the mechanisms above, scored on the six
+//! positions and velocities; its `lambda, mu` (index 2) stay in diffsol's error test.
+//!
 //! The Test Set's stiff ODEs (rows 18-21: Van der Pol with `eps = 1e-6`, OREGO, Pollution, the
 //! ring modulator; `dpc-core/tests/common/stiff_odes.rs`) are given as diffsol intends an ODE:
 //! `y' = f(t, y)` without a mass matrix, with the fixtures' exact Jacobians `df/dy`, at
@@ -58,6 +63,8 @@
 
 #[path = "../../../dpc-core/tests/common/bdf_problems.rs"]
 mod bdf_problems;
+#[path = "../../../dpc-core/tests/common/ida_slider_crank.rs"]
+mod ida_slider_crank;
 #[path = "../../../dpc-core/tests/common/peer_table.rs"]
 mod peer_table;
 #[path = "../../../dpc-core/tests/common/pump.rs"]
@@ -749,6 +756,32 @@ fn main() {
             }
         }
         stiff_ode_rows(k, tol);
+        // SUNDIALS' idaSlCrank_dns (row 24; GGL form, constant mass matrix
+        // diag(1, 1, 1, J1, m2, J2, 0, 0, 0, 0)), scored on the six differential unknowns.
+        let (sy0, syp0) = ida_slider_crank::slcrank_initial();
+        for (code, given) in [(CODE, false), (CODE_GIVEN, true)] {
+            row(
+                (24, "slider crank, idaSlCrank_dns (index 2; q, v)"),
+                k,
+                code,
+                |y| {
+                    scd(
+                        y,
+                        &ida_slider_crank::SLCRANK_REF,
+                        &ida_slider_crank::SLCRANK_SCORED,
+                    )
+                },
+                || {
+                    general(
+                        ida_slider_crank::SlCrank,
+                        (&sy0, &syp0),
+                        ida_slider_crank::SLCRANK_T_END,
+                        tol,
+                        given,
+                    )
+                },
+            );
+        }
     }
 }
 
