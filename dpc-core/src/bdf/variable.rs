@@ -1264,43 +1264,50 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
         // An all-zero matrix has every entry negligible.
         r.map(|v| v.abs() <= tol || largest == 0.0)
     };
-    // A diagonal dF/dy' (every implicit ODE `y' - f`, the identity) is its own R up to signs:
-    // its diagonal is read directly instead of decomposing (for a 20 x 20 ODE the QR was a
-    // fifth of a whole solve at loose tolerances); its null space is spanned by unit vectors.
+    // Regular: no negligible diagonal entry in the R of a column-pivoted QR.
+    let regular = |m: nalgebra::DMatrix<f64>| {
+        !negligible(&m.col_piv_qr().unpack_r().diagonal())
+            .iter()
+            .any(|z| *z)
+    };
+    // A diagonal dF/dy' (every implicit ODE `y' - f`, the identity, and every semi-explicit
+    // DAE) is its own R up to signs: its diagonal is read directly instead of decomposing (for
+    // a 20 x 20 ODE the QR was a fifth of a whole solve at loose tolerances). Its null space is
+    // spanned by the unit vectors `e_j` of its zero diagonal entries `Z`, and after a
+    // permutation `G1` is block triangular with the regular diagonal of `dF/dy'` on the other
+    // rows and columns: `G1` is regular exactly when the block `dF_Z/dy_Z` is (a `|Z| x |Z|` QR
+    // instead of two `n x n` ones: `Bdf::new` on SUNDIALS' heat example, 100 unknowns, 0.48 ms
+    // with them, 0.08 ms so, against 1.5 ms for its whole run at `1e-7`).
     let diagonal_only = leading
         .iter()
         .enumerate()
         .all(|(k, v)| k % n == k / n || *v == 0.0);
-    let null_space = if diagonal_only {
+    if diagonal_only {
         let zero = negligible(&leading.diagonal());
-        let columns: Vec<usize> = (0..n).filter(|&j| zero[j]).collect();
-        nalgebra::DMatrix::from_fn(n, columns.len(), |i, k| {
-            f64::from(u8::from(i == columns[k]))
-        })
-    } else {
-        let qr = leading.transpose().col_piv_qr();
-        let q = qr.q();
-        let zero = negligible(&qr.unpack_r().diagonal());
-        let rank = zero.iter().filter(|z| !**z).count();
-        q.columns(rank, n - rank).into_owned()
-    };
-    if null_space.ncols() == 0 {
+        let z: Vec<usize> = (0..n).filter(|&j| zero[j]).collect();
+        if z.is_empty() {
+            return (false, 2);
+        }
+        let block = nalgebra::DMatrix::from_fn(z.len(), z.len(), |a, b| g0[(z[a], z[b])]);
+        return (regular(block), 2);
+    }
+    // The general case: the trailing columns of the `Q` of a column-pivoted QR of
+    // `(dF/dy')^T` span `ker dF/dy'`.
+    let qr = leading.transpose().col_piv_qr();
+    let q = qr.q();
+    let zero = negligible(&qr.unpack_r().diagonal());
+    let rank = zero.iter().filter(|z| !**z).count();
+    if rank == n {
         return (false, 2);
     }
+    let null_space = q.columns(rank, n - rank);
     let norm_m = leading.norm();
-    let scale = if norm_m > 0.0 {
-        g0.norm() / norm_m
-    } else {
-        1.0
-    };
+    let scale = g0.norm() / norm_m;
     let scale = if scale > 0.0 && scale.is_finite() {
         scale
     } else {
         1.0
     };
-    let g1 = leading * scale + &g0 * &null_space * null_space.transpose();
-    let regular = !negligible(&g1.col_piv_qr().unpack_r().diagonal())
-        .iter()
-        .any(|z| *z);
-    (regular, 2)
+    let g1 = leading * scale + &g0 * null_space * null_space.transpose();
+    (regular(g1), 2)
 }
