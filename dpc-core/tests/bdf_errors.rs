@@ -3,9 +3,13 @@
 #[path = "common/bdf_problems.rs"]
 mod problems;
 
+#[path = "common/no_solution.rs"]
+mod no_solution;
+
 use dpc_core::bdf::{consistent_initial_values, Bdf, BdfError, FixedBdf, Options, Tolerance};
 use dpc_core::linear_solver::{FaerDenseLu, FaerSparseLu, NalgebraLu};
 use dpc_core::{ImplicitDae, MatrixSink};
+use no_solution::NoSolution;
 use problems::Robertson;
 
 /// `y0' + y0 = 0` and a second equation chosen by `kind`:
@@ -327,30 +331,6 @@ fn too_many_steps() {
     assert!(bdf.solve_to(bdf.t() + 1e-6, &mut y, None).is_ok());
 }
 
-/// `0 = y^2 + 1` has no real solution: the fixed-step Newton iteration must fail cleanly.
-struct NoSolution;
-impl ImplicitDae for NoSolution {
-    fn dimension(&self) -> usize {
-        1
-    }
-    fn residual(&self, _: f64, y: &[f64], _: &[f64], out: &mut [f64]) {
-        out[0] = y[0] * y[0] + 1.0;
-    }
-    fn iteration_matrix<S: MatrixSink + ?Sized>(
-        &self,
-        _: f64,
-        y: &[f64],
-        _: &[f64],
-        _: f64,
-        m: &mut S,
-    ) {
-        m.set(0, 0, 2.0 * y[0]);
-    }
-    fn is_differential(&self, _: usize) -> bool {
-        false
-    }
-}
-
 #[test]
 fn fixed_step_newton_failure_is_typed_and_leaves_state() {
     let mut f = FixedBdf::new(
@@ -386,7 +366,7 @@ fn fixed_step_newton_failure_is_typed_and_leaves_state() {
             source,
             ..
         }) => {
-            assert_eq!(equation, "equation 0");
+            assert_eq!(equation, "y squared plus one");
             assert_eq!(residual, 2.0);
             assert!(
                 matches!(*source, BdfError::NewtonFailed { .. }),

@@ -1,10 +1,14 @@
 //! Every user- or model-caused failure of the Radau integrator is a typed error naming what the
 //! user wrote, never a panic.
 
+#[path = "common/no_solution.rs"]
+mod no_solution;
+
 use dpc_core::bdf::Tolerance;
 use dpc_core::linear_solver::{FaerDenseLu, NalgebraLu};
 use dpc_core::radau::{Options, Radau, RadauError, StageSystem, StepFailure};
 use dpc_core::{ImplicitDae, MatrixSink};
+use no_solution::NoSolution;
 
 /// `x' + x = 0` and a second equation chosen by `kind`:
 /// 0: `0 = x - 1` (the unknown `z` appears nowhere: singular column);
@@ -249,31 +253,6 @@ fn bad_input_is_rejected_before_integrating() {
         r.solve_to(100.0, &mut y, None),
         Err(RadauError::TooManySteps { max_steps: 3, .. })
     ));
-}
-
-/// `0 = y^2 + 1`, which no real `y` satisfies.
-struct NoSolution;
-
-impl ImplicitDae for NoSolution {
-    fn dimension(&self) -> usize {
-        1
-    }
-    fn residual(&self, _: f64, y: &[f64], _: &[f64], out: &mut [f64]) {
-        out[0] = y[0] * y[0] + 1.0;
-    }
-    fn iteration_matrix<S: MatrixSink + ?Sized>(
-        &self,
-        _: f64,
-        y: &[f64],
-        _: &[f64],
-        _: f64,
-        m: &mut S,
-    ) {
-        m.set(0, 0, 2.0 * y[0]);
-    }
-    fn equation_name(&self, _: usize) -> String {
-        "y squared plus one".to_string()
-    }
 }
 
 #[test]

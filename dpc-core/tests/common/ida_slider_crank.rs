@@ -332,10 +332,7 @@ impl ImplicitDae for SlCrank {
     }
 
     fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
-        for i in 0..3 {
-            m.set(i, i, 1.0);
-            m.set(3 + i, 3 + i, MASS[i]);
-        }
+        write_mass(m);
         true
     }
 
@@ -353,6 +350,15 @@ impl ImplicitDae for SlCrank {
         UNKNOWNS
             .get(i)
             .map_or_else(|| format!("y[{i}]"), |s| s.to_string())
+    }
+}
+
+/// `dF/dy'` of both forms: the identity on the positions, the masses and moments of inertia on
+/// the velocities, zero on the multipliers.
+fn write_mass<S: MatrixSink + ?Sized>(m: &mut S) {
+    for i in 0..3 {
+        m.set(i, i, 1.0);
+        m.set(3 + i, 3 + i, MASS[i]);
     }
 }
 
@@ -396,10 +402,7 @@ impl ImplicitDae for SlCrankIndex3 {
     }
 
     fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, _: &[f64], _: &[f64], m: &mut S) -> bool {
-        for i in 0..3 {
-            m.set(i, i, 1.0);
-            m.set(3 + i, 3 + i, MASS[i]);
-        }
+        write_mass(m);
         true
     }
 
