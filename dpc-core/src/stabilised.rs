@@ -255,8 +255,9 @@ impl<D: ImplicitDae> Stabilised<D> {
     /// matrices at `c = 0` and `c = 2^20` (their difference is `2^20 dF/dy'`). With the result
     /// integrate with [`crate::radau::Radau`] and [`Self::index`] as its
     /// [`index`](crate::radau::Options::index): the documented default for a DAE of index 3
-    /// (docs/integrators.md gives the accuracy of both forms); the DAE as declared, with the
-    /// index-3 error scaling, is the alternative.
+    /// (docs/integrators.md gives the accuracy of both forms; [`crate::radau::Radau::stabilised`]
+    /// does all of it in one call); the DAE as declared, with the index-3 error scaling, is the
+    /// alternative.
     ///
     /// ```
     /// use dpc_core::stabilised::Stabilised;
