@@ -723,6 +723,10 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
     }
 }
 
+/// Above this many unknowns [`start_violation`] is not made: its structure is read from dense
+/// `n x n` iteration matrices (8 MB each at this size).
+pub(crate) const START_CHECK_MAX: usize = 1000;
+
 /// A constraint the initial values miss by more than the tolerances allow: [`start_violation`].
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct ConstraintViolation {
@@ -752,7 +756,9 @@ pub(crate) struct ConstraintViolation {
 /// remove a larger residual), and [`crate::index_estimate::INCONSISTENT_FACTOR`] times its
 /// round-off bound `10 eps sum_j |dh/dy_j| max_k |y_k|`. The worst is the largest ratio of
 /// residual to bound. Costs the structure's sampled matrices (six dense iteration matrices)
-/// and the stabilised form's residual and iteration matrix: for set-up, not for a step.
+/// and the stabilised form's residual and iteration matrix: for set-up, not for a step; above
+/// [`START_CHECK_MAX`] unknowns it is not made (`None`), as dense `n x n` matrices would cost
+/// more memory and time than the integration.
 pub(crate) fn start_violation<D: ImplicitDae>(
     dae: &D,
     t: f64,
@@ -761,6 +767,9 @@ pub(crate) fn start_violation<D: ImplicitDae>(
     tolerance: impl Fn(usize) -> f64,
 ) -> Option<ConstraintViolation> {
     let n = dae.dimension();
+    if n > START_CHECK_MAX {
+        return None;
+    }
     let found = detect::structure(dae, t, y, yp).ok()?;
     if !found.constrained {
         return None;

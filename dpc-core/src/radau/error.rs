@@ -231,7 +231,7 @@ pub enum RadauError {
     /// there would jump onto the constraint within its first step and return the solution of
     /// other initial values, without an error. Checked by `new` only (not by `reinit`, the
     /// allocation-free restart), from the structure [`crate::stabilised::Stabilised::detect`]
-    /// reads.
+    /// reads, for DAEs of at most 1 000 unknowns (the structure is read from dense matrices).
     #[error(
         "the initial values miss {equation}: its residual at t = {} is {}, more than moving \
          every unknown by its tolerance (rtol |y| + atol) can change ({}); an integrator \
