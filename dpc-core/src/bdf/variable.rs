@@ -1257,45 +1257,6 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
     if n > LEADING_CHECK_MAX {
         return (true, 0);
     }
-    // A diagonal mass matrix from the model (`ImplicitDae::mass_matrix`): the diagonal case
-    // below without any dense matrix, from one iteration matrix's block `dF_Z/dy_Z` alone.
-    let mut mass = DiagonalSink {
-        diagonal: vec![0.0; n],
-        off_diagonal: false,
-    };
-    if dae.mass_matrix(t, y, yp, &mut mass)
-        && !mass.off_diagonal
-        && mass.diagonal.iter().all(|v| v.is_finite())
-    {
-        let largest = mass.diagonal.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let tol = 1e3 * n as f64 * f64::EPSILON * largest;
-        let z: Vec<usize> = (0..n)
-            .filter(|&j| mass.diagonal[j].abs() <= tol || largest == 0.0)
-            .collect();
-        if z.is_empty() {
-            return (false, 0);
-        }
-        let mut block = Selection::new(n, n, &z, Some(&z));
-        dae.iteration_matrix(t, y, yp, 0.0, &mut block);
-        let values = block.values();
-        if values.iter().any(|v| !v.is_finite()) {
-            return (true, 1);
-        }
-        let k = z.len();
-        let block = nalgebra::DMatrix::from_row_slice(k, k, values);
-        let diagonal = block.col_piv_qr().unpack_r().diagonal();
-        let largest = diagonal.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let tol = 1e3 * n as f64 * f64::EPSILON * largest;
-        let regular = largest > 0.0 && diagonal.iter().all(|v| v.abs() > tol);
-        return (regular, 1);
-    }
-    let (Ok(g0), Ok(g1)) = (
-        crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0),
-        crate::dae::dense_iteration_matrix(dae, t, y, yp, 1.0),
-    ) else {
-        return (true, 2);
-    };
-    let leading = g1 - &g0;
     let negligible = |r: &nalgebra::DVector<f64>| {
         let largest = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let tol = 1e3 * n as f64 * f64::EPSILON * largest;
@@ -1308,6 +1269,37 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
             .iter()
             .any(|z| *z)
     };
+    // A diagonal mass matrix from the model (`ImplicitDae::mass_matrix`): the diagonal case
+    // below without any dense matrix, from one iteration matrix's block `dF_Z/dy_Z` alone.
+    let mut mass = DiagonalSink {
+        diagonal: vec![0.0; n],
+        off_diagonal: false,
+    };
+    if dae.mass_matrix(t, y, yp, &mut mass)
+        && !mass.off_diagonal
+        && mass.diagonal.iter().all(|v| v.is_finite())
+    {
+        let zero = negligible(&nalgebra::DVector::from_vec(mass.diagonal));
+        let z: Vec<usize> = (0..n).filter(|&j| zero[j]).collect();
+        if z.is_empty() {
+            return (false, 0);
+        }
+        let mut block = Selection::new(n, n, &z, Some(&z));
+        dae.iteration_matrix(t, y, yp, 0.0, &mut block);
+        let values = block.values();
+        if values.iter().any(|v| !v.is_finite()) {
+            return (true, 1);
+        }
+        let k = z.len();
+        return (regular(nalgebra::DMatrix::from_row_slice(k, k, values)), 1);
+    }
+    let (Ok(g0), Ok(g1)) = (
+        crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0),
+        crate::dae::dense_iteration_matrix(dae, t, y, yp, 1.0),
+    ) else {
+        return (true, 2);
+    };
+    let leading = g1 - &g0;
     // A diagonal dF/dy' (every implicit ODE `y' - f`, the identity, and every semi-explicit
     // DAE) is its own R up to signs: its diagonal is read directly instead of decomposing (for
     // a 20 x 20 ODE the QR was a fifth of a whole solve at loose tolerances). Its null space is
