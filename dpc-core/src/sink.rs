@@ -232,10 +232,58 @@ impl<A: MatrixSink + ?Sized, B: MatrixSink + ?Sized> MatrixSink for Tee<'_, A, B
     }
 }
 
+/// A sink that adds `factor` times every entry written to another sink: [`set`](MatrixSink::set)
+/// and [`add`](MatrixSink::add) both become `add(factor * value)`.
+///
+/// For moving an iteration matrix `dF/dy + c dF/dy'` to another `c` with the mass matrix
+/// alone: the mass matrix written through `Scaled { sink, factor: c_new - c }` (each
+/// structural entry written once, as [`ImplicitDae::mass_matrix`](crate::ImplicitDae::mass_matrix)
+/// writes it). [`fill_zero`](MatrixSink::fill_zero) does nothing: the destination's entries are
+/// what is being added to.
+pub struct Scaled<'a, S: ?Sized> {
+    /// The destination.
+    pub sink: &'a mut S,
+    /// The factor of every entry written.
+    pub factor: f64,
+}
+
+impl<S: MatrixSink + ?Sized> MatrixSink for Scaled<'_, S> {
+    fn rows(&self) -> usize {
+        self.sink.rows()
+    }
+    fn cols(&self) -> usize {
+        self.sink.cols()
+    }
+    #[inline]
+    fn set(&mut self, row: usize, col: usize, value: f64) {
+        self.sink.add(row, col, self.factor * value);
+    }
+    #[inline]
+    fn add(&mut self, row: usize, col: usize, value: f64) {
+        self.sink.add(row, col, self.factor * value);
+    }
+    fn fill_zero(&mut self) {}
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::SMatrix;
+
+    #[test]
+    fn scaled_adds_the_multiple_of_every_entry_written() {
+        let mut m = SMatrix::<f64, 2, 2>::new(1.0, 2.0, 3.0, 4.0);
+        let mut s = Scaled {
+            sink: &mut m,
+            factor: -0.5,
+        };
+        s.set(0, 1, 4.0);
+        s.add(1, 0, 2.0);
+        s.add(1, 0, 2.0);
+        s.fill_zero();
+        assert_eq!((s.rows(), s.cols()), (2, 2));
+        assert_eq!(m, SMatrix::<f64, 2, 2>::new(1.0, 0.0, 1.0, 4.0));
+    }
 
     #[test]
     fn faer_sink_matches_nalgebra_sink() {

@@ -12,7 +12,7 @@ mod heat2d;
 mod problems;
 
 use counting_allocator::allocations;
-use dpc_core::bdf::{Bdf, FixedBdf, Options};
+use dpc_core::bdf::{Bdf, FixedBdf, MatrixUpdate, Options};
 use dpc_core::linear_solver::{FaerDenseLu, NalgebraLu};
 use problems::{robertson_options, Pendulum, Robertson, PENDULUM_INDEX};
 
@@ -61,6 +61,32 @@ fn steps_after_setup_do_not_allocate() {
         bdf.solve_to(0.1 * f64::from(k), &mut y, None).unwrap();
     }
     assert_eq!(allocations() - before, 0);
+
+    // Matrices moved to new `cj` with the mass matrix (`MatrixUpdate::Move`): the point of
+    // evaluation is stored in vectors made at construction.
+    let opts = Options {
+        matrix_update: MatrixUpdate::Move { max_age: 20 },
+        ..robertson_options(rtol)
+    };
+    let mut bdf = Bdf::new(
+        Robertson,
+        NalgebraLu::<3>::new(),
+        opts,
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[-0.04, 0.04, 0.0],
+    )
+    .unwrap();
+    let mut y = [0.0; 3];
+    bdf.solve_to(1e-6, &mut y, None).unwrap();
+    let before = allocations();
+    bdf.solve_to(1e10, &mut y, None).unwrap();
+    let stats = bdf.stats();
+    assert!(
+        stats.factorisations > stats.jacobian_evaluations,
+        "{stats:?}"
+    );
+    assert_eq!(allocations() - before, 0, "moved matrices");
 
     // The faer dense back end also keeps its workspace from construction on.
     let opts = robertson_options(rtol);

@@ -15,7 +15,7 @@ mod testset_index3;
 #[path = "common/wheelset.rs"]
 mod wheelset;
 
-use dpc_core::bdf::{self, Bdf};
+use dpc_core::bdf::{self, Bdf, MatrixUpdate};
 use dpc_core::linear_solver::NalgebraLu;
 use dpc_core::radau::{self, Radau};
 use dpc_core::ImplicitDae;
@@ -40,17 +40,28 @@ fn run(tol: f64, radau: bool) -> Result<Vec<f64>, String> {
             .map_err(|e| e.to_string())?;
         println!("  Radau tol {tol:e}: {:?}", s.stats());
     } else {
-        let opts = bdf::Options {
-            index,
-            ..bdf::Options::with_tolerances(tol, tol)
-        };
-        let mut s = Bdf::new(Wheelset, ls, opts, 0.0, &y0, &yp0).map_err(|e| e.to_string())?;
-        s.set_stop_time(WHEEL_T_END).map_err(|e| e.to_string())?;
-        s.solve_to(WHEEL_T_END, &mut y, None)
-            .map_err(|e| e.to_string())?;
-        println!("  BDF tol {tol:e}: {:?}", s.stats());
+        y = run_bdf(tol, MatrixUpdate::Evaluate)?.0;
     }
     Ok(y)
+}
+
+/// The BDF as in [`run`] with the iteration matrix updated by `update`: `y(t_end)` and the
+/// statistics, or the error's message.
+fn run_bdf(tol: f64, update: MatrixUpdate) -> Result<(Vec<f64>, bdf::Stats), String> {
+    let (y0, yp0) = Wheelset::initial();
+    let opts = bdf::Options {
+        index: WHEEL_INDEX.to_vec(),
+        matrix_update: update,
+        ..bdf::Options::with_tolerances(tol, tol)
+    };
+    let ls = NalgebraLu::<WHEEL_DIM>::new();
+    let mut s = Bdf::new(Wheelset, ls, opts, 0.0, &y0, &yp0).map_err(|e| e.to_string())?;
+    s.set_stop_time(WHEEL_T_END).map_err(|e| e.to_string())?;
+    let mut y = vec![0.0; WHEEL_DIM];
+    s.solve_to(WHEEL_T_END, &mut y, None)
+        .map_err(|e| e.to_string())?;
+    println!("  BDF ({update:?}) tol {tol:e}: {:?}", s.stats());
+    Ok((y, s.stats()))
 }
 
 /// The median over `f = 0.9, 1, 1.1` of the scd of `run(tol f)` on all 17 unknowns; a failed
@@ -80,6 +91,28 @@ fn bdf_reaches_test_set_accuracy() {
     let d = digits(1e-6, false);
     println!("wheelset BDF tol 1e-6: median scd {d:.2}");
     assert!(d >= 2.25, "scd {d}");
+}
+
+#[test]
+fn bdf_moving_its_matrix_evaluates_a_fraction_of_the_matrices() {
+    // `MatrixUpdate::Move`: the matrix (34 residuals by central differences) moved to new
+    // `cj` with the mass matrix. Measured at 1e-6: 266 evaluations and 1 569 moves where
+    // `Evaluate` evaluates 1 884 (5.5 times fewer over 15 tolerance factors); median scd
+    // 2.43 (`Evaluate`: 2.75). Floor half a digit below.
+    let update = MatrixUpdate::Move { max_age: 50 };
+    let all: Vec<usize> = (0..WHEEL_DIM).collect();
+    let d = median_scd_over_jitter(1e-6, |t| run_bdf(t, update).map(|r| r.0), &WHEEL_REF, &all);
+    println!("wheelset BDF (moved matrices) tol 1e-6: median scd {d:.2}");
+    assert!(d >= 1.93, "scd {d}");
+    let (_, moved) = run_bdf(1e-6, update).expect("runs");
+    let (_, evaluated) = run_bdf(1e-6, MatrixUpdate::Evaluate).expect("runs");
+    // Every matrix is factorised; only the evaluated ones count as Jacobian evaluations.
+    assert_eq!(evaluated.factorisations, evaluated.jacobian_evaluations);
+    assert!(
+        moved.factorisations > 4 * moved.jacobian_evaluations,
+        "{moved:?}"
+    );
+    assert!(4 * moved.jacobian_evaluations < evaluated.jacobian_evaluations);
 }
 
 #[test]

@@ -20,6 +20,7 @@ use crate::newton::{
     first_non_finite, wrms, Convergence, Corrected, Iterate, NewtonFailure, NewtonSystem,
     NewtonWorkspace, Verdict,
 };
+use crate::sink::Scaled;
 use crate::{ImplicitDae, MatrixSink};
 
 /// What the iteration matrix was formed with, and the rate estimate carried between steps.
@@ -51,6 +52,64 @@ impl JacState {
             self.ss = 100.0;
             self.cj_last = cj;
         }
+    }
+}
+
+/// Where `dF/dy` of the matrix in the linear solver was evaluated, for
+/// [`MatrixUpdate::Move`](super::MatrixUpdate::Move): when `cj` leaves the window of the
+/// factorised value and the model supplies its mass matrix `dF/dy'`
+/// ([`ImplicitDae::mass_matrix`]), the matrix is moved to the new `cj` by adding
+/// `(cj - cj_factored) dF/dy'` at this point and factorised again: the matrix the model would
+/// give at this point, for the price of a mass matrix.
+#[derive(Debug, Clone)]
+pub(crate) struct MatrixPoint {
+    t: f64,
+    y: Vec<f64>,
+    yp: Vec<f64>,
+    /// The solver's matrix is the model's iteration matrix at this point (with `cj_factored`).
+    valid: bool,
+    /// The model supplies its mass matrix (until it declines once).
+    mass: bool,
+    /// Corrector solves since `dF/dy` was evaluated.
+    age: usize,
+}
+
+impl MatrixPoint {
+    fn new(n: usize) -> Self {
+        Self {
+            t: 0.0,
+            y: vec![0.0; n],
+            yp: vec![0.0; n],
+            valid: false,
+            mass: true,
+            age: 0,
+        }
+    }
+
+    /// The model's iteration matrix was just evaluated at `(t, y, y')`.
+    fn record(&mut self, t: f64, y: &[f64], yp: &[f64]) {
+        self.t = t;
+        self.y.copy_from_slice(y);
+        self.yp.copy_from_slice(yp);
+        self.valid = true;
+        self.age = 0;
+    }
+
+    /// Move the matrix `m`, the model's at this point with `cj_old`, to `cj` with the
+    /// model's mass matrix; `false` (and `m` untouched) when the model supplies none.
+    fn shift<D: ImplicitDae, M: MatrixSink + ?Sized>(
+        &mut self,
+        dae: &D,
+        m: &mut M,
+        cj_old: f64,
+        cj: f64,
+    ) -> bool {
+        let mut shift = Scaled {
+            sink: m,
+            factor: cj - cj_old,
+        };
+        self.mass = dae.mass_matrix(self.t, &self.y, &self.yp, &mut shift);
+        self.mass
     }
 }
 
@@ -161,6 +220,9 @@ pub(crate) struct NewtonProblem {
     pub residual_tolerance: f64,
     /// Force a fresh iteration matrix before the first iteration.
     pub force_setup: bool,
+    /// Corrector solves one evaluation of `dF/dy` may serve, moved to new values of `cj`
+    /// with the mass matrix (0: evaluate at every new matrix, IDA's rule).
+    pub max_matrix_age: usize,
 }
 
 /// Everything the corrector works in, allocated once for an integrator: the Newton workspace
@@ -178,6 +240,10 @@ pub(crate) struct Corrector<L: LinearSolver> {
     pub ee: Vec<f64>,
     /// Scratch: `y' + e` for the filtered error estimate.
     pub yp_e: Vec<f64>,
+    /// Where the matrix's `dF/dy` was evaluated (for moving it to a new `cj`).
+    point: MatrixPoint,
+    /// Matrices moved to a new `cj` with the mass matrix (factorised, not evaluated).
+    moves: usize,
     /// The fallback weights of Newton's test (see [`RateTest::fallback`]), set with the
     /// weights when [`NewtonProblem::fallback`] is.
     pub w_scaled: Vec<f64>,
@@ -193,14 +259,37 @@ struct StepSystem<'a, D> {
     y: &'a mut [f64],
     yp: &'a mut [f64],
     ee: &'a mut [f64],
+    /// Where `dF/dy` was evaluated, kept under [`MatrixUpdate::Move`](super::MatrixUpdate::Move).
+    point: Option<&'a mut MatrixPoint>,
+    /// The next matrix may be moved from the last one with the mass matrix (see
+    /// [`MatrixPoint`]); only the first matrix of a solve, the one asked for by a change of
+    /// `cj`: a refresh the rate test asks for wants `dF/dy` at the iterate.
+    reform: bool,
+    /// Matrices moved (not evaluated) in this attempt.
+    moved: usize,
+    /// The model's iteration matrix was evaluated in this attempt.
+    evaluated: bool,
 }
 
 impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, D> {
     fn evaluate(&mut self, res: &mut [f64], residual: bool, matrix: Option<&mut M>) {
         if let Some(m) = matrix {
-            m.fill_zero();
-            self.dae
-                .iteration_matrix(self.t, self.y, self.yp, self.cj, m);
+            let reform = std::mem::take(&mut self.reform);
+            let moved = reform
+                && self.point.as_deref_mut().is_some_and(|point| {
+                    point.shift(self.dae, &mut *m, *self.cj_factored, self.cj)
+                });
+            if moved {
+                self.moved += 1;
+            } else {
+                m.fill_zero();
+                self.dae
+                    .iteration_matrix(self.t, self.y, self.yp, self.cj, m);
+                if let Some(point) = self.point.as_deref_mut() {
+                    point.record(self.t, self.y, self.yp);
+                }
+                self.evaluated = true;
+            }
             *self.cj_factored = self.cj;
         }
         if residual {
@@ -263,6 +352,9 @@ pub(crate) struct RateTest<'a> {
     /// to the next steps it accepts first updates of `10^5` tolerance units and more, with the
     /// matrix aged, and leaves the constraints unmet (see `variable.rs`, `MIN_CARRIED_RATE`).
     pub min_carried: f64,
+    /// The first matrix formed in this solve will be moved to the new `cj` with the mass
+    /// matrix (see [`MatrixPoint`]), not evaluated: it does not reset the rate factor.
+    pub moved: bool,
     epcon: f64,
     max_iterations: usize,
     residual_tolerance: f64,
@@ -281,6 +373,7 @@ impl RateTest<'_> {
             formed: false,
             predictive: false,
             min_carried: 0.0,
+            moved: false,
             epcon,
             max_iterations,
             residual_tolerance,
@@ -317,8 +410,14 @@ impl<S, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
 
     fn after_residual(&mut self, _sys: &mut S, it: Iterate<'_, L>) -> Verdict {
         if it.fresh {
-            self.ss = 20.0;
-            self.formed = true;
+            if self.moved {
+                // A matrix moved to the new `cj` keeps an older `dF/dy`: it has not earned
+                // the trust IDA gives a fresh one, the carried factor stays.
+                self.moved = false;
+            } else {
+                self.ss = 20.0;
+                self.formed = true;
+            }
         }
         if !self.residual_pending {
             return Verdict::Continue;
@@ -408,6 +507,8 @@ impl<L: LinearSolver> Corrector<L> {
             ee: vec![0.0; n],
             yp_e: vec![0.0; n],
             w_scaled: vec![0.0; n],
+            point: MatrixPoint::new(n),
+            moves: 0,
         }
     }
 
@@ -415,6 +516,7 @@ impl<L: LinearSolver> Corrector<L> {
     pub fn reset(&mut self) {
         self.jac = JacState::default();
         self.newton.valid = false;
+        self.point.valid = false;
     }
 
     /// Solve for `y`, `yp` (and the correction `ee = y - y_pred`) from the predictor, with
@@ -431,7 +533,17 @@ impl<L: LinearSolver> Corrector<L> {
             let r = p.cj / self.jac.cj_factored;
             !(0.6..=1.0 / 0.6).contains(&r)
         };
+        // Moving the last matrix to the new `cj` (MatrixUpdate::Move) is allowed when only
+        // `cj` asks for a new one.
+        let keep_point = p.max_matrix_age > 0;
+        let mut reform = keep_point
+            && !p.force_setup
+            && self.point.valid
+            && self.point.mass
+            && self.point.age < p.max_matrix_age;
+        self.point.age += 1;
         let before = self.newton.counts;
+        let moves_before = self.moves;
         let outcome = loop {
             self.y.copy_from_slice(&self.y_pred);
             self.yp.copy_from_slice(&self.yp_pred);
@@ -444,22 +556,33 @@ impl<L: LinearSolver> Corrector<L> {
                 y: &mut self.y,
                 yp: &mut self.yp,
                 ee: &mut self.ee,
+                point: keep_point.then_some(&mut self.point),
+                reform,
+                moved: 0,
+                evaluated: false,
             };
             let mut test =
                 RateTest::new(self.jac.ss, p.epcon, p.max_iterations, p.residual_tolerance);
             test.predictive = p.predictive;
             test.min_carried = p.min_carried;
+            test.moved = reform && (fresh || !self.newton.valid);
             test.fallback = p.fallback.then_some(&self.w_scaled[..]);
             let outcome = self
                 .newton
                 .solve(&mut self.ls, &mut system, &mut test, fresh);
             self.jac.ss = test.ss;
-            if !retry_with_fresh_matrix(&outcome, fresh, self.newton.formed) {
+            self.moves += system.moved;
+            let evaluated = system.evaluated;
+            // A failure with a matrix whose `dF/dy` was not evaluated in this attempt (kept,
+            // or moved to the new `cj`) is tried again with a fresh one, as IDA does.
+            if !retry_with_fresh_matrix(&outcome, false, evaluated) {
                 break outcome;
             }
             fresh = true;
+            reform = false;
         };
         stats.add_newton(before, self.newton.counts);
+        stats.jacobian_evaluations -= self.moves - moves_before;
         outcome
     }
 }

@@ -801,6 +801,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 min_carried: if index1 { 0.0 } else { MIN_CARRIED_RATE },
                 residual_tolerance: f64::INFINITY,
                 force_setup: self.nst() == 0 && ncf == 0 && nef == 0,
+                max_matrix_age: self.opts.max_matrix_age(),
             };
             let outcome = self.corrector.solve(&self.dae, &mut self.stats, &problem);
             match outcome {
