@@ -256,8 +256,8 @@ impl<D: ImplicitDae> Stabilised<D> {
     /// integrate with [`crate::radau::Radau`] and [`Self::index`] as its
     /// [`index`](crate::radau::Options::index): the documented default for a DAE of index 3
     /// (docs/integrators.md gives the accuracy of both forms; [`crate::radau::Radau::stabilised`]
-    /// does all of it in one call); the DAE as declared, with the index-3 error scaling, is the
-    /// alternative.
+    /// does all of it in one call, [`crate::bdf::Bdf::stabilised`] with the BDF); the DAE as
+    /// declared, with the index-3 error scaling, is the alternative.
     ///
     /// ```
     /// use dpc_core::stabilised::Stabilised;

@@ -693,3 +693,27 @@ fn radau_stabilised_is_the_documented_recipe_in_one_call() {
     .err();
     assert!(matches!(e, Some(radau::RadauError::Structure(_))), "{e:?}");
 }
+
+#[test]
+fn bdf_stabilised_is_the_documented_recipe_in_one_call() {
+    // `Bdf::stabilised`, the BDF's counterpart, against the same recipe: bit for bit.
+    use dpc_core::linear_solver::FaerLu;
+    let case = slider_crank_case();
+    let (y0, yp0) = case.mechanism.initial(&case.start.0, &case.start.1);
+    let opts = bdf::Options::with_tolerances(1e-6, 1e-6);
+    let dae = || IndexThree(case.mechanism.clone());
+    let mut one = Bdf::stabilised(dae(), opts.clone(), 0.0, &y0, &yp0).unwrap();
+    let s = Stabilised::detect(dae(), 0.0, &y0, &yp0).unwrap();
+    let (y, yp) = s.extend(&y0, &yp0);
+    let ls = FaerLu::for_dae(&s);
+    let (index, constraints) = (s.index(), s.constraint_rows().len());
+    let mut recipe = Bdf::new(s, ls, bdf::Options { index, ..opts }, 0.0, &y, &yp).unwrap();
+    assert_eq!(one.y().len(), y0.len() + constraints);
+    let (mut a, mut b) = (vec![0.0; y.len()], vec![0.0; y.len()]);
+    one.solve_to(case.t_end, &mut a, None).unwrap();
+    recipe.solve_to(case.t_end, &mut b, None).unwrap();
+    assert_eq!(a, b);
+    assert_eq!(one.stats(), recipe.stats());
+    let e = Bdf::stabilised(dae(), bdf::Options::default(), 0.0, &y0[1..], &yp0).err();
+    assert!(matches!(e, Some(bdf::BdfError::Structure(_))), "{e:?}");
+}

@@ -202,6 +202,10 @@ pub enum BdfError {
         #[source]
         source: Box<BdfError>,
     },
+    /// [`crate::bdf::Bdf::stabilised`]: the constraint structure of the DAE cannot be read at
+    /// the start ([`crate::stabilised::Stabilised::detect`]'s error).
+    #[error("the DAE's constraint structure cannot be read at the start: {0}")]
+    Structure(#[from] crate::stabilised::StabilisedError),
     /// The integrator was given initial values, for a DAE declared with unknowns of index 2
     /// or 3, that miss a constraint by more than the tolerances allow: a constraint row
     /// (an equation without derivatives and without algebraic unknowns, which restricts the

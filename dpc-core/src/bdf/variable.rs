@@ -1170,6 +1170,89 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     }
 }
 
+impl<D: ImplicitDae> Bdf<crate::stabilised::Stabilised<D>, crate::linear_solver::FaerLu> {
+    /// The BDF on the stabilised index-2 form of `dae` that
+    /// [`Stabilised::detect`](crate::stabilised::Stabilised::detect) finds at the start, in one
+    /// call: the counterpart of [`Radau::stabilised`](crate::radau::Radau::stabilised) (the
+    /// documented default for a DAE of index 3; docs/integrators.md measures both codes on
+    /// both forms), with the linear solver
+    /// [`FaerLu::for_dae`](crate::linear_solver::FaerLu::for_dae) picks for the stabilised
+    /// form. [`Bdf::new`] with the index declared in [`Options::index`] integrates the DAE as
+    /// declared.
+    ///
+    /// `(y0, yp0)` are `dae`'s (consistent, with the velocities on their hidden constraints);
+    /// `opts.index` is replaced by the stabilised form's
+    /// ([`Stabilised::index`](crate::stabilised::Stabilised::index): `dae`'s algebraic
+    /// unknowns and the multipliers have index 2, out of the error test under the default
+    /// [`HigherIndexControl::Exclude`]), the other options are kept. The unknowns are `dae`'s
+    /// followed by one stabilising multiplier `mu` per position constraint (zero on exact
+    /// solutions): [`y`](Self::y), [`yp`](Self::yp) and the output of
+    /// [`solve_to`](Self::solve_to) have that length, and their first `dae.dimension()` entries
+    /// are `dae`'s unknowns.
+    ///
+    /// ```
+    /// use dpc_core::bdf::{Bdf, Options};
+    /// use dpc_core::{ImplicitDae, MatrixSink};
+    ///
+    /// /// The pendulum of length 1, index 3: x' = u, y' = v, u' = -x l, v' = -y l - 1,
+    /// /// 0 = x^2 + y^2 - 1.
+    /// struct Pendulum;
+    /// impl ImplicitDae for Pendulum {
+    ///     fn dimension(&self) -> usize { 5 }
+    ///     fn residual(&self, _t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+    ///         out[0] = yp[0] - y[2];
+    ///         out[1] = yp[1] - y[3];
+    ///         out[2] = yp[2] + y[0] * y[4];
+    ///         out[3] = yp[3] + y[1] * y[4] + 1.0;
+    ///         out[4] = y[0] * y[0] + y[1] * y[1] - 1.0;
+    ///     }
+    ///     fn iteration_matrix<S: MatrixSink + ?Sized>(
+    ///         &self, _t: f64, y: &[f64], _yp: &[f64], c: f64, out: &mut S,
+    ///     ) {
+    ///         for i in 0..4 { out.set(i, i, c); }
+    ///         out.set(0, 2, -1.0);
+    ///         out.set(1, 3, -1.0);
+    ///         out.set(2, 0, y[4]);
+    ///         out.set(2, 4, y[0]);
+    ///         out.set(3, 1, y[4]);
+    ///         out.set(3, 4, y[1]);
+    ///         out.set(4, 0, 2.0 * y[0]);
+    ///         out.set(4, 1, 2.0 * y[1]);
+    ///     }
+    /// }
+    ///
+    /// // Horizontal at rest: x = 1, y = 0, l = 0, and u' = 0, v' = -1.
+    /// let (y0, yp0) = ([1.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, -1.0, 0.0]);
+    /// let mut bdf = Bdf::stabilised(Pendulum, Options::with_tolerances(1e-6, 1e-6), 0.0, &y0, &yp0)
+    ///     .unwrap();
+    /// let mut y = vec![0.0; bdf.y().len()]; // 5 unknowns and one mu
+    /// bdf.solve_to(1.0, &mut y, None).unwrap();
+    /// // Still on the circle.
+    /// assert!((y[0] * y[0] + y[1] * y[1] - 1.0).abs() < 1e-6);
+    /// ```
+    ///
+    /// # Errors
+    /// [`BdfError::Structure`] when the structure cannot be read at the start (lengths that
+    /// differ from the DAE's dimension, a non-finite iteration matrix there); then as
+    /// [`Bdf::new`].
+    pub fn stabilised(
+        dae: D,
+        opts: Options,
+        t0: f64,
+        y0: &[f64],
+        yp0: &[f64],
+    ) -> Result<Self, BdfError> {
+        let s = crate::stabilised::Stabilised::detect(dae, t0, y0, yp0)?;
+        let (y, yp) = s.extend(y0, yp0);
+        let ls = crate::linear_solver::FaerLu::for_dae(&s);
+        let opts = Options {
+            index: s.index(),
+            ..opts
+        };
+        Bdf::new(s, ls, opts, t0, &y, &yp)
+    }
+}
+
 /// [`Bdf::predict`] at order `K` (1..=[`MAXORD`]): `y = phi_0 + phi_1 + ... + phi_K`,
 /// `y' = 0 + gamma_1 phi_1 + ... + gamma_K phi_K`, component by component.
 fn predict_order<const K: usize>(phi: &History, gamma: &[f64], y: &mut [f64], yp: &mut [f64]) {
