@@ -86,6 +86,42 @@ impl std::fmt::Display for Time {
     }
 }
 
+/// Unknowns with their differentiation index, as an error message lists them: the first
+/// [`IndexedUnknowns::SHOWN`] by name (`` `y[3]` of index 2 ``), then how many more there are
+/// (the error's field holds them all). A circuit's error named all 95 of its floating node
+/// potentials in one line.
+///
+/// ```
+/// use dpc_core::numeric::IndexedUnknowns;
+///
+/// let two = [("x".to_string(), 2), ("lambda".to_string(), 3)];
+/// assert_eq!(IndexedUnknowns(&two).to_string(), "`x` of index 2, `lambda` of index 3");
+/// let many: Vec<(String, u8)> = (0..12).map(|i| (format!("y[{i}]"), 2)).collect();
+/// assert!(IndexedUnknowns(&many).to_string().ends_with("`y[7]` of index 2 and 4 more"));
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub struct IndexedUnknowns<'a>(pub &'a [(String, u8)]);
+
+impl IndexedUnknowns<'_> {
+    /// How many unknowns are named before the count of the rest.
+    pub const SHOWN: usize = 8;
+}
+
+impl std::fmt::Display for IndexedUnknowns<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (i, (name, index)) in self.0.iter().take(Self::SHOWN).enumerate() {
+            if i > 0 {
+                f.write_str(", ")?;
+            }
+            write!(f, "`{name}` of index {index}")?;
+        }
+        match self.0.len().saturating_sub(Self::SHOWN) {
+            0 => Ok(()),
+            more => write!(f, " and {more} more"),
+        }
+    }
+}
+
 /// Visit two points near `(t, y, y')`, each coordinate and `t` moved by up to 10 % of
 /// `1 + |value|` by a fixed deterministic sequence (xorshift64*): where a structure is read off
 /// a model, entries that vanish at the given point by coincidence (a pendulum hanging straight

@@ -1,6 +1,6 @@
 //! The integrator's error type.
 
-use crate::numeric::{Readable, Time};
+use crate::numeric::{IndexedUnknowns, Readable, Time};
 
 /// Everything that can stop the BDF integrator. No model- or user-caused condition panics.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -159,7 +159,7 @@ pub enum BdfError {
          dpc_core::radau::Radau (with the same option) or in the stabilised form of \
          dpc_core::stabilised::Stabilised::detect",
         Time(*t),
-        unknowns.iter().map(|(u, m)| format!("`{u}` of index {m}")).collect::<Vec<_>>().join(", ")
+        IndexedUnknowns(unknowns)
     )]
     UndeclaredIndex {
         /// Time of the last point reached, where the index was estimated.
@@ -186,7 +186,7 @@ pub enum BdfError {
          the solution cannot continue), which declaring an index does not remove; look at \
          the model near t = {}",
         Time(*t),
-        unknowns.iter().map(|(u, m)| format!("`{u}` (index {m})")).collect::<Vec<_>>().join(", "),
+        IndexedUnknowns(unknowns),
         Time(*t_start),
         Time(*t)
     )]

@@ -3,7 +3,7 @@
 use core::fmt;
 
 use crate::error::InvalidOption;
-use crate::numeric::{Readable, Time};
+use crate::numeric::{IndexedUnknowns, Readable, Time};
 
 /// Which of the two linear systems of the transformed stage equations failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -175,7 +175,7 @@ pub enum RadauError {
         "{source}; at t = {} the DAE has unknowns of higher index than `Options::index` \
          declares (every unknown of index 1): {}; declare them in `index`",
         Time(*t),
-        unknowns.iter().map(|(u, m)| format!("`{u}` of index {m}")).collect::<Vec<_>>().join(", ")
+        IndexedUnknowns(unknowns)
     )]
     UndeclaredIndex {
         /// Time of the last point reached, where the index was estimated.
@@ -202,7 +202,7 @@ pub enum RadauError {
          the solution cannot continue), which declaring an index does not remove; look at \
          the model near t = {}",
         Time(*t),
-        unknowns.iter().map(|(u, m)| format!("`{u}` (index {m})")).collect::<Vec<_>>().join(", "),
+        IndexedUnknowns(unknowns),
         Time(*t_start),
         Time(*t)
     )]
