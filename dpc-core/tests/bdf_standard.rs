@@ -47,7 +47,10 @@ fn robertson_with_tolerances_at_the_round_off_of_its_constraint() {
     let mut y = [0.0; 3];
     bdf.solve_to(ROBERTSON_T_END, &mut y, None).unwrap();
     let scd = significant_digits(&y, &ROBERTSON_REF, &[0, 1, 2]);
-    println!("Robertson at rtol 1e-10, atol 1e-16: {scd:.2} digits, {:?}", bdf.stats());
+    println!(
+        "Robertson at rtol 1e-10, atol 1e-16: {scd:.2} digits, {:?}",
+        bdf.stats()
+    );
     assert!(scd >= 7.39, "{scd} digits");
 }
 
