@@ -98,7 +98,7 @@ pub enum BdfError {
     },
     /// Newton's method failed repeatedly, down to the minimum step (variable-step mode) or at
     /// the given step (fixed-step mode).
-    #[error("Newton iteration failed at t = {} with step {}", Time(*t), Readable(*h))]
+    #[error("Newton iteration failed at t = {} with step {}", Time(*t), Time(*h))]
     NewtonFailed {
         /// Time the step tried to reach.
         t: f64,
@@ -117,7 +117,7 @@ pub enum BdfError {
          at t = {} with step {}; integrate it with dpc_core::radau::Radau, which solves index-3 \
          DAEs as declared, or set higher_index: HigherIndexControl::Scale",
         Time(*t),
-        Readable(*h)
+        Time(*h)
     )]
     IndexThreeStart {
         /// Time the first step tried to reach.
@@ -128,7 +128,7 @@ pub enum BdfError {
         unknown: String,
     },
     /// The local error test failed repeatedly, down to the minimum step.
-    #[error("error test failed repeatedly at t = {} with step {}", Time(*t), Readable(*h))]
+    #[error("error test failed repeatedly at t = {} with step {}", Time(*t), Time(*h))]
     ErrorTestFailed {
         /// Time the step tried to reach.
         t: f64,

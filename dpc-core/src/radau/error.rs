@@ -83,7 +83,7 @@ pub enum RadauError {
     #[error(
         "singular {system} stage matrix at t = {} (step {}): {}; {}",
         Time(*t),
-        Readable(*h),
+        Time(*h),
         unknown.as_deref().map_or("the vanishing pivot is not identified".to_string(), |u| format!("the pivot of unknown `{u}` vanished")),
         equation.as_deref().map_or("no equation's row is zero".to_string(), |e| format!("the row of equation `{e}` is zero"))
     )]
@@ -133,7 +133,7 @@ pub enum RadauError {
         unknown: String,
     },
     /// The step size fell below its minimum (`max(min_step, 4 eps |t|)`).
-    #[error("step size {} too small at t = {}: {cause}", Readable(*h), Time(*t))]
+    #[error("step size {} too small at t = {}: {cause}", Time(*h), Time(*t))]
     StepTooSmall {
         /// Start of the step.
         t: f64,
@@ -143,7 +143,7 @@ pub enum RadauError {
         cause: StepFailure,
     },
     /// More consecutive failures in one step than the options allow.
-    #[error("{failures} consecutive failures ({cause}) at t = {}, last step {}", Time(*t), Readable(*h))]
+    #[error("{failures} consecutive failures ({cause}) at t = {}, last step {}", Time(*t), Time(*h))]
     RepeatedFailures {
         /// Start of the step.
         t: f64,
