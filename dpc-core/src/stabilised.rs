@@ -212,6 +212,16 @@ pub struct Stabilised<D> {
     scratch: RefCell<Scratch>,
 }
 
+/// What [`Stabilised::start`] reads: the stabilised form, its initial values, the index of
+/// its unknowns and its linear solver.
+pub(crate) struct StabilisedStart<D> {
+    pub form: Stabilised<D>,
+    pub y: Vec<f64>,
+    pub yp: Vec<f64>,
+    pub ls: crate::linear_solver::FaerLu,
+    pub index: Vec<u8>,
+}
+
 impl<D: ImplicitDae> Stabilised<D> {
     /// Stabilise `dae`'s position constraints `rows` (equations that depend on positions
     /// only), with, per position unknown `q_j` that they involve, its kinematic row:
@@ -418,6 +428,34 @@ impl<D: ImplicitDae> Stabilised<D> {
     /// Number of position constraints (and of multipliers `mu`).
     pub fn n_constraints(&self) -> usize {
         self.rows.len()
+    }
+
+    /// Everything an integrator on the stabilised form of `dae` starts from, read at the
+    /// consistent point `(t, y, y')` of `dae`: the form ([`Self::detect`]), its initial values
+    /// ([`Self::extend`]), its index per unknown ([`Self::index`]) and the linear solver
+    /// [`FaerLu::for_dae`](crate::linear_solver::FaerLu::for_dae) picks for it. What
+    /// [`Radau::stabilised`](crate::radau::Radau::stabilised) and
+    /// [`Bdf::stabilised`](crate::bdf::Bdf::stabilised) do before their `new`.
+    ///
+    /// # Errors
+    /// [`Self::detect`]'s.
+    pub(crate) fn start(
+        dae: D,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<StabilisedStart<D>, StabilisedError> {
+        let form = Self::detect(dae, t, y, yp)?;
+        let (y, yp) = form.extend(y, yp);
+        let ls = crate::linear_solver::FaerLu::for_dae(&form);
+        let index = form.index();
+        Ok(StabilisedStart {
+            form,
+            y,
+            yp,
+            ls,
+            index,
+        })
     }
 
     /// The stabilised unknowns `(y, mu = 0)` and derivatives `(y', 0)` from a consistent

@@ -1257,14 +1257,12 @@ impl<D: ImplicitDae> Bdf<crate::stabilised::Stabilised<D>, crate::linear_solver:
         y0: &[f64],
         yp0: &[f64],
     ) -> Result<Self, BdfError> {
-        let s = crate::stabilised::Stabilised::detect(dae, t0, y0, yp0)?;
-        let (y, yp) = s.extend(y0, yp0);
-        let ls = crate::linear_solver::FaerLu::for_dae(&s);
+        let s = crate::stabilised::Stabilised::start(dae, t0, y0, yp0)?;
         let opts = Options {
-            index: s.index(),
+            index: s.index,
             ..opts
         };
-        Bdf::new(s, ls, opts, t0, &y, &yp)
+        Bdf::new(s.form, s.ls, opts, t0, &s.y, &s.yp)
     }
 }
 

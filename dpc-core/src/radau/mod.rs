@@ -1064,14 +1064,12 @@ impl<D: ImplicitDae> Radau<crate::stabilised::Stabilised<D>, crate::linear_solve
         y0: &[f64],
         yp0: &[f64],
     ) -> Result<Self, RadauError> {
-        let s = crate::stabilised::Stabilised::detect(dae, t0, y0, yp0)?;
-        let (y, yp) = s.extend(y0, yp0);
-        let ls = crate::linear_solver::FaerLu::for_dae(&s);
+        let s = crate::stabilised::Stabilised::start(dae, t0, y0, yp0)?;
         let opts = Options {
-            index: s.index(),
+            index: s.index,
             ..opts
         };
-        Radau::new(s, ls, opts, t0, &y, &yp)
+        Radau::new(s.form, s.ls, opts, t0, &s.y, &s.yp)
     }
 }
 
