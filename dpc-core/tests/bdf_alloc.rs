@@ -14,7 +14,7 @@ mod problems;
 use counting_allocator::allocations;
 use dpc_core::bdf::{Bdf, FixedBdf, MatrixUpdate, Options};
 use dpc_core::linear_solver::{FaerDenseLu, NalgebraLu};
-use problems::{robertson_options, Pendulum, Robertson, PENDULUM_INDEX};
+use problems::{robertson_bdf, robertson_options, Pendulum, Robertson, PENDULUM_INDEX};
 
 #[test]
 fn steps_after_setup_do_not_allocate() {
@@ -22,15 +22,7 @@ fn steps_after_setup_do_not_allocate() {
     // Jacobian refreshes and interpolation.
     let rtol = 1e-6;
     let opts = robertson_options(rtol);
-    let mut bdf = Bdf::new(
-        Robertson,
-        NalgebraLu::<3>::new(),
-        opts,
-        0.0,
-        &[1.0, 0.0, 0.0],
-        &[-0.04, 0.04, 0.0],
-    )
-    .unwrap();
+    let mut bdf = robertson_bdf(Robertson, NalgebraLu::<3>::new(), opts).unwrap();
     let mut y = [0.0; 3];
     let mut yp = [0.0; 3];
     bdf.solve_to(1e-6, &mut y, Some(&mut yp)).unwrap();
@@ -68,15 +60,7 @@ fn steps_after_setup_do_not_allocate() {
         matrix_update: MatrixUpdate::Move { max_age: 20 },
         ..robertson_options(rtol)
     };
-    let mut bdf = Bdf::new(
-        Robertson,
-        NalgebraLu::<3>::new(),
-        opts,
-        0.0,
-        &[1.0, 0.0, 0.0],
-        &[-0.04, 0.04, 0.0],
-    )
-    .unwrap();
+    let mut bdf = robertson_bdf(Robertson, NalgebraLu::<3>::new(), opts).unwrap();
     let mut y = [0.0; 3];
     bdf.solve_to(1e-6, &mut y, None).unwrap();
     let before = allocations();
@@ -90,15 +74,7 @@ fn steps_after_setup_do_not_allocate() {
 
     // The faer dense back end also keeps its workspace from construction on.
     let opts = robertson_options(rtol);
-    let mut bdf = Bdf::new(
-        Robertson,
-        FaerDenseLu::new(3),
-        opts,
-        0.0,
-        &[1.0, 0.0, 0.0],
-        &[-0.04, 0.04, 0.0],
-    )
-    .unwrap();
+    let mut bdf = robertson_bdf(Robertson, FaerDenseLu::new(3), opts).unwrap();
     let mut y = [0.0; 3];
     bdf.solve_to(1e-6, &mut y, None).unwrap();
     let before = allocations();

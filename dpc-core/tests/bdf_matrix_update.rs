@@ -7,10 +7,10 @@
 #[path = "common/bdf_problems.rs"]
 mod problems;
 
-use dpc_core::bdf::{Bdf, BdfError, MatrixUpdate, Options, Stats};
+use dpc_core::bdf::{BdfError, MatrixUpdate, Options, Stats};
 use dpc_core::linear_solver::NalgebraLu;
 use dpc_core::{ImplicitDae, MatrixSink};
-use problems::{robertson_options, Robertson, ROBERTSON_REF, ROBERTSON_T_END};
+use problems::{robertson_bdf, robertson_options, Robertson, ROBERTSON_REF, ROBERTSON_T_END};
 
 /// Robertson's DAE with its mass matrix hidden (the trait's default: none supplied).
 struct WithoutMass;
@@ -41,8 +41,7 @@ fn run<D: ImplicitDae>(dae: D, update: MatrixUpdate) -> ([f64; 3], Stats) {
         matrix_update: update,
         ..robertson_options(1e-6)
     };
-    let ls = NalgebraLu::<3>::new();
-    let mut bdf = Bdf::new(dae, ls, opts, 0.0, &[1.0, 0.0, 0.0], &[-0.04, 0.04, 0.0]).unwrap();
+    let mut bdf = robertson_bdf(dae, NalgebraLu::<3>::new(), opts).unwrap();
     let mut y = [0.0; 3];
     bdf.solve_to(ROBERTSON_T_END, &mut y, None).unwrap();
     (y, bdf.stats())
@@ -105,16 +104,9 @@ fn max_age_zero_is_refused() {
         matrix_update: MatrixUpdate::Move { max_age: 0 },
         ..Options::default()
     };
-    let err = Bdf::new(
-        Robertson,
-        NalgebraLu::<3>::new(),
-        opts,
-        0.0,
-        &[1.0, 0.0, 0.0],
-        &[-0.04, 0.04, 0.0],
-    )
-    .err()
-    .expect("refused");
+    let err = robertson_bdf(Robertson, NalgebraLu::<3>::new(), opts)
+        .err()
+        .expect("refused");
     assert!(matches!(err, BdfError::InvalidOption(_)), "{err:?}");
     assert!(err.to_string().contains("max_age"), "{err}");
 }

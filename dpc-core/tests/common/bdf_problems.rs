@@ -76,6 +76,19 @@ pub fn robertson_atol(rtol: f64) -> Vec<f64> {
     vec![1e-8 * s, 1e-14 * s, 1e-6 * s]
 }
 
+/// Robertson's start `y = (1, 0, 0)`, `y' = (-0.04, 0.04, 0)`.
+pub const ROBERTSON_START: ([f64; 3], [f64; 3]) = ([1.0, 0.0, 0.0], [-0.04, 0.04, 0.0]);
+
+/// The BDF on `dae` (Robertson's equations) from [`ROBERTSON_START`] at `t = 0`.
+pub fn robertson_bdf<D: ImplicitDae, L: dpc_core::linear_solver::LinearSolver>(
+    dae: D,
+    ls: L,
+    opts: Options,
+) -> Result<Bdf<D, L>, dpc_core::bdf::BdfError> {
+    let (y0, yp0) = ROBERTSON_START;
+    Bdf::new(dae, ls, opts, 0.0, &y0, &yp0)
+}
+
 /// The BDF's options for Robertson at `rtol`: IDA's `atol` ([`robertson_atol`]).
 pub fn robertson_options(rtol: f64) -> Options {
     Options {
