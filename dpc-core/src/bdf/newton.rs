@@ -264,7 +264,7 @@ struct StepSystem<'a, D> {
     /// The next matrix may be moved from the last one with the mass matrix (see
     /// [`MatrixPoint`]); only the first matrix of a solve, the one asked for by a change of
     /// `cj`: a refresh the rate test asks for wants `dF/dy` at the iterate.
-    reform: bool,
+    may_move: bool,
     /// Matrices moved (not evaluated) in this attempt.
     moved: usize,
     /// The model's iteration matrix was evaluated in this attempt.
@@ -274,8 +274,8 @@ struct StepSystem<'a, D> {
 impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, D> {
     fn evaluate(&mut self, res: &mut [f64], residual: bool, matrix: Option<&mut M>) {
         if let Some(m) = matrix {
-            let reform = std::mem::take(&mut self.reform);
-            let moved = reform
+            let may_move = std::mem::take(&mut self.may_move);
+            let moved = may_move
                 && self.point.as_deref_mut().is_some_and(|point| {
                     point.shift(self.dae, &mut *m, *self.cj_factored, self.cj)
                 });
@@ -536,7 +536,7 @@ impl<L: LinearSolver> Corrector<L> {
         // Moving the last matrix to the new `cj` (MatrixUpdate::Move) is allowed when only
         // `cj` asks for a new one.
         let keep_point = p.max_matrix_age > 0;
-        let mut reform = keep_point
+        let mut may_move = keep_point
             && !p.force_setup
             && self.point.valid
             && self.point.mass
@@ -557,7 +557,7 @@ impl<L: LinearSolver> Corrector<L> {
                 yp: &mut self.yp,
                 ee: &mut self.ee,
                 point: keep_point.then_some(&mut self.point),
-                reform,
+                may_move,
                 moved: 0,
                 evaluated: false,
             };
@@ -565,7 +565,7 @@ impl<L: LinearSolver> Corrector<L> {
                 RateTest::new(self.jac.ss, p.epcon, p.max_iterations, p.residual_tolerance);
             test.predictive = p.predictive;
             test.min_carried = p.min_carried;
-            test.moved = reform && (fresh || !self.newton.valid);
+            test.moved = may_move && (fresh || !self.newton.valid);
             test.fallback = p.fallback.then_some(&self.w_scaled[..]);
             let outcome = self
                 .newton
@@ -579,7 +579,7 @@ impl<L: LinearSolver> Corrector<L> {
                 break outcome;
             }
             fresh = true;
-            reform = false;
+            may_move = false;
         };
         stats.add_newton(before, self.newton.counts);
         stats.jacobian_evaluations -= self.moves - moves_before;
