@@ -97,18 +97,18 @@ impl MatrixPoint {
 
     /// Move the matrix `m`, the model's at this point with `cj_old`, to `cj` with the
     /// model's mass matrix; `false` (and `m` untouched) when the model supplies none.
-    fn shift<D: ImplicitDae, M: MatrixSink + ?Sized>(
+    fn move_to<D: ImplicitDae, M: MatrixSink + ?Sized>(
         &mut self,
         dae: &D,
         m: &mut M,
         cj_old: f64,
         cj: f64,
     ) -> bool {
-        let mut shift = Scaled {
+        let mut moved = Scaled {
             sink: m,
             factor: cj - cj_old,
         };
-        self.mass = dae.mass_matrix(self.t, &self.y, &self.yp, &mut shift);
+        self.mass = dae.mass_matrix(self.t, &self.y, &self.yp, &mut moved);
         self.mass
     }
 }
@@ -277,7 +277,7 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
             let may_move = std::mem::take(&mut self.may_move);
             let moved = may_move
                 && self.point.as_deref_mut().is_some_and(|point| {
-                    point.shift(self.dae, &mut *m, *self.cj_factored, self.cj)
+                    point.move_to(self.dae, &mut *m, *self.cj_factored, self.cj)
                 });
             if moved {
                 self.moved += 1;
