@@ -286,6 +286,11 @@ impl StartPoint {
         self.t
     }
 
+    /// The start `(t, y, y')`.
+    pub(crate) fn point(&self) -> (f64, &[f64], &[f64]) {
+        (self.t, &self.y, &self.yp)
+    }
+
     /// A new start of the same dimension, without allocating.
     pub(crate) fn set(&mut self, t: f64, y: &[f64], yp: &[f64]) {
         self.t = t;

@@ -268,6 +268,40 @@ pub enum BdfError {
         #[source]
         source: Box<BdfError>,
     },
+    /// A step failed before the first step was taken ([`BdfError::NewtonFailed`],
+    /// [`BdfError::ErrorTestFailed`], [`BdfError::TooManySteps`]), and the
+    /// initial values meet a constraint (an equation without derivatives and without
+    /// algebraic unknowns, or a position constraint's hidden velocity constraint) only to a
+    /// large share of what the tolerances allow it: at least a tenth of `sum_j |dh/dy_j|
+    /// (rtol_j |y_j| + atol_j)`, the most moving every unknown by its tolerance can change it.
+    /// The first step must put the unknowns on the constraint and spends that much of their
+    /// tolerance doing so, at every step size. Named when no equation is off by more than
+    /// round-off permits ([`BdfError::InconsistentStart`] first); checked for DAEs of at most
+    /// 1 000 unknowns, whatever index is declared.
+    #[error(
+        "{source}; the initial values meet {equation} only to {} at t = {}, {:.2} of what \
+         the tolerances allow it ({}): the first step must also move the unknowns onto it. \
+         Start from values consistent to well within the tolerances (or loosen them)",
+        Readable(*residual),
+        Time(*t),
+        residual.abs() / bound,
+        Readable(*bound)
+    )]
+    StartNearTolerance {
+        /// The start time.
+        t: f64,
+        /// The constraint's name ([`crate::ImplicitDae::equation_name`]; "the hidden velocity
+        /// constraint of ..." for the derivative of a position constraint).
+        equation: String,
+        /// Its residual at the start.
+        residual: f64,
+        /// What moving every unknown by its tolerance can change it by, `sum_j |dh/dy_j|
+        /// (rtol_j |y_j| + atol_j)` (at least 1 000 times its round-off bound).
+        bound: f64,
+        /// The failure itself.
+        #[source]
+        source: Box<BdfError>,
+    },
     /// Consistent initialisation's Newton iteration did not converge.
     #[error(
         "consistent initialisation failed: Newton did not converge ({iterations} iterations, residual 2-norm {})",

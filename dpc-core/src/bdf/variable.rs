@@ -541,9 +541,20 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         Ok(self.state.tn)
     }
 
+    /// The constraint the initial values meet only to [`crate::stabilised::NEAR_TOLERANCE_SHARE`]
+    /// or more of what the tolerances allow ([`crate::stabilised::start_near_tolerance`]), for
+    /// the diagnosis of a failure before the first step. Error path only (dense matrices).
+    fn start_near_tolerance(&self) -> Option<crate::stabilised::ConstraintViolation> {
+        let (t, y, yp) = self.start.point();
+        let tolerance = |j: usize| self.opts.rtol.get(j) * y[j].abs() + self.opts.atol.get(j);
+        crate::stabilised::start_near_tolerance(&self.dae, t, y, yp, tolerance)
+    }
+
     /// `e`, or, when it is a failure to step before the first step of an integration from
     /// initial values that do not satisfy an equation, `e` wrapped in
-    /// [`BdfError::InconsistentStart`] ([`crate::index_estimate::inconsistent_start`]);
+    /// [`BdfError::InconsistentStart`] ([`crate::index_estimate::inconsistent_start`]), or that
+    /// meet a constraint only to a large share of what the tolerances allow, in
+    /// [`BdfError::StartNearTolerance`];
     /// otherwise, when it is a failure to step (Newton, the error test, too many steps) of a
     /// DAE declared with every unknown of index at most 1 whose iteration matrix at the last
     /// point reached shows unknowns of index 2 or 3, `e` wrapped in
@@ -569,6 +580,15 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                     equation: self.dae.equation_name(w.equation),
                     residual: w.residual,
                     bound: w.bound,
+                    source: Box::new(e),
+                };
+            }
+            if let Some(v) = self.start_near_tolerance() {
+                return BdfError::StartNearTolerance {
+                    t: self.start.t(),
+                    equation: v.equation,
+                    residual: v.residual,
+                    bound: v.bound,
                     source: Box::new(e),
                 };
             }

@@ -522,9 +522,20 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         Ok(self.t)
     }
 
+    /// The constraint the initial values meet only to [`crate::stabilised::NEAR_TOLERANCE_SHARE`]
+    /// or more of what the tolerances allow ([`crate::stabilised::start_near_tolerance`]), for
+    /// the diagnosis of a failure before the first step. Error path only (dense matrices).
+    fn start_near_tolerance(&self) -> Option<crate::stabilised::ConstraintViolation> {
+        let (t, y, yp) = self.start.point();
+        let tolerance = |j: usize| self.opts.rtol.get(j) * y[j].abs() + self.opts.atol.get(j);
+        crate::stabilised::start_near_tolerance(&self.dae, t, y, yp, tolerance)
+    }
+
     /// `e`, or, when it is a failure to step before the first step of an integration from
     /// initial values that do not satisfy an equation, `e` wrapped in
-    /// [`RadauError::InconsistentStart`] ([`crate::index_estimate::inconsistent_start`]);
+    /// [`RadauError::InconsistentStart`] ([`crate::index_estimate::inconsistent_start`]), or that
+    /// meet a constraint only to a large share of what the tolerances allow, in
+    /// [`RadauError::StartNearTolerance`];
     /// otherwise, when it is a failure to step of a DAE declared with every unknown of index
     /// at most 1 whose iteration matrix at the last point reached shows unknowns of index 2
     /// or 3, `e` wrapped in [`RadauError::UndeclaredIndex`] (the start of the integration
@@ -548,6 +559,15 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                     equation: self.dae.equation_name(w.equation),
                     residual: w.residual,
                     bound: w.bound,
+                    source: Box::new(e),
+                };
+            }
+            if let Some(v) = self.start_near_tolerance() {
+                return RadauError::StartNearTolerance {
+                    t: self.start.t(),
+                    equation: v.equation,
+                    residual: v.residual,
+                    bound: v.bound,
                     source: Box::new(e),
                 };
             }
