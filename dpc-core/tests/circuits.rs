@@ -219,3 +219,25 @@ fn nand_and_pump_at_all_tolerances() {
         }
     }
 }
+
+#[test]
+fn nand_radau_passes_the_corners_at_tight_tolerances() {
+    // At rtol = atol = 1e-10 Radau stopped at the input's corner t = 25 after ten consecutive
+    // Newton failures (each halving the step; eleven were needed). With the default of twenty
+    // (IDA's ten failures quarter the step each) it runs; median scd on y5 over
+    // tol x (0.9, 1, 1.1) measured 9.29 (1 997 steps at tol). Floor half a digit below.
+    let d = digits(1e-10, |t| nand_run(t, true), &NAND_REF, &NAND_SCORED);
+    println!("NAND Radau tol 1e-10: median scd (y5) {d:.2}");
+    assert!(d >= 8.8, "scd {d}");
+    // The same run with the old limit still fails there: the count, not luck, is the change.
+    let (y0, yp0) = Nand::initial();
+    let opts = radau::Options {
+        max_newton_failures: 10,
+        ..radau::Options::with_tolerances(1e-10, 1e-10)
+    };
+    let failed = radau_piecewise::<14, _>(Nand, (&y0, &yp0), opts, &nand_breaks());
+    assert!(
+        failed.as_ref().is_err_and(|e| e.contains("t = 25")),
+        "{failed:?}"
+    );
+}

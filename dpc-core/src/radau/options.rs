@@ -62,7 +62,12 @@ pub struct Options {
     /// velocities at the nominal tolerance.
     pub newton_growth_bound: bool,
     /// Consecutive failed attempts (Newton, singular matrix or non-finite residual) allowed in
-    /// one step before giving up (default 10).
+    /// one step before giving up (default 20). A failure halves the step (a diverging
+    /// iteration cuts it by up to ten), so twenty span the step range of IDA's ten failures,
+    /// each of which quarters it (`MXNCF`; RADAU5 itself has no count, only the smallest
+    /// step). With ten, Radau stopped on the Test Set's NAND gate at `rtol = 1e-10` at the
+    /// input's corner `t = 25` (eleven halvings from the carried step needed) and runs to ten
+    /// digits with twenty.
     pub max_newton_failures: usize,
     /// Consecutive error-test failures allowed in one step before giving up (default 10).
     pub max_error_test_failures: usize,
@@ -93,7 +98,7 @@ impl Default for Options {
             safety: 0.9,
             predictive: true,
             newton_growth_bound: false,
-            max_newton_failures: 10,
+            max_newton_failures: 20,
             max_error_test_failures: 10,
             index: Vec::new(),
         }
