@@ -24,6 +24,34 @@
 
 use crate::linear_solver::{FactorError, LinearSolver};
 
+/// The least rate factor `s = rho / (1 - rho)` with which a Newton solve on a DAE with unknowns
+/// of index 2 or 3 judges its first update: the BDF's corrector (`RateTest::min_carried` in
+/// `bdf/newton.rs`) and Radau's stage iteration (RADAU5's `FACCON`, `radau/newton.rs`). IDA and
+/// RADAU5 judge it with the factor carried from the last solve, however small.
+///
+/// On the stabilised form of Andrews' mechanism that factor fell to `1e-8` (a solve whose first
+/// update, 10^5 tolerance units in the plain weights of the accelerations and multipliers, was
+/// followed by a tiny one), and the next steps accepted single updates of that size with the
+/// matrix aged: their solutions missed the hidden velocity constraints by 15 tolerance units of
+/// the velocities, a defect no step size removes, so the following step failed the error test
+/// five times down to `h / 400` and climbed back over twenty steps, three times in the run.
+/// With the floor `1e-4` (first updates up to `epcon / 1e-4 = 3 300` units still accepted at
+/// once): at `rtol = 1e-4 / 1e-6 / 1e-8` 339 / 685 / 1 176 steps -> 257 / 434 / 946, 3.00 /
+/// 4.35 / 6.42 digits -> 3.39 / 5.62 / 6.08, instructions -5 % / -13 % / +5 %; the index-3
+/// pendulum at `1e-6 / 1e-8` 269 / 605 steps -> 161 / 310, 2.68 / 4.93 digits -> 5.03 / 6.00,
+/// Andrews' index-3 form at `1e-8` 702 -> 418 steps, 3.36 -> 4.98 digits. DAEs of index 1
+/// keep IDA's test (with `INDEX1_NEWTON_FACTOR`).
+///
+/// Radau (2026-12-05): on the Test Set's water tube at `1e-8` a step that carried a pipe's
+/// flow across the laminar/turbulent switch was accepted on one update with the factor carried
+/// from the smooth steps before, left the friction factor's Colebrook row with the residual
+/// 0.05, and the next step's error estimate (which evaluates `F` at the step's start) failed at
+/// every step size: 5 of 15 tolerance factors stopped there. With the floor all 15 run (2.72
+/// digits, median; 2.77 over the ten that ran before); over the whole table at factor 1 only
+/// the car axis (one step), the water tube and the spherical pendulum at `1e-8` (7.26 -> 6.39
+/// digits at that factor, 6.18 -> 6.07 median over 15) move.
+pub(crate) const MIN_CARRIED_RATE: f64 = 1e-4;
+
 /// Why a Newton solve stopped without a solution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum NewtonFailure {

@@ -350,7 +350,7 @@ pub(crate) struct RateTest<'a> {
     /// equations hold linearly (the accelerations and multipliers of a mechanical DAE, whose
     /// predictions are far off in their plain weights and are put right by one update); carried
     /// to the next steps it accepts first updates of `10^5` tolerance units and more, with the
-    /// matrix aged, and leaves the constraints unmet (see `variable.rs`, `MIN_CARRIED_RATE`).
+    /// matrix aged, and leaves the constraints unmet (see `crate::newton::MIN_CARRIED_RATE`).
     pub min_carried: f64,
     /// The first matrix formed in this solve will be moved to the new `cj` with the mass
     /// matrix (see [`MatrixPoint`]), not evaluated: it does not reset the rate factor.

@@ -68,24 +68,6 @@ const IDA_ORDER_ONE_FAILURES: usize = 3;
 /// (Robertson's `y3 = 1 - y1 - y2` at `atol = 1e-16`) no step size meets the tenth.
 const INDEX1_NEWTON_FACTOR: f64 = 0.1;
 
-/// The least rate factor `s = rho / (1 - rho)` with which the corrector judges the first update
-/// of a solve on a DAE with unknowns of index 2 or 3 (`RateTest::min_carried` in `newton.rs`);
-/// IDA judges it with the factor carried from the last solve, however small.
-///
-/// On the stabilised form of Andrews' mechanism that factor fell to `1e-8` (a solve whose first
-/// update, 10^5 tolerance units in the plain weights of the accelerations and multipliers, was
-/// followed by a tiny one), and the next steps accepted single updates of that size with the
-/// matrix aged: their solutions missed the hidden velocity constraints by 15 tolerance units of
-/// the velocities, a defect no step size removes, so the following step failed the error test
-/// five times down to `h / 400` and climbed back over twenty steps, three times in the run.
-/// With the floor `1e-4` (first updates up to `epcon / 1e-4 = 3 300` units still accepted at
-/// once): at `rtol = 1e-4 / 1e-6 / 1e-8` 339 / 685 / 1 176 steps -> 257 / 434 / 946, 3.00 /
-/// 4.35 / 6.42 digits -> 3.39 / 5.62 / 6.08, instructions -5 % / -13 % / +5 %; the index-3
-/// pendulum at `1e-6 / 1e-8` 269 / 605 steps -> 161 / 310, 2.68 / 4.93 digits -> 5.03 / 6.00,
-/// Andrews' index-3 form at `1e-8` 702 -> 418 steps, 3.36 -> 4.98 digits. DAEs of index 1
-/// keep IDA's test (with `INDEX1_NEWTON_FACTOR`).
-const MIN_CARRIED_RATE: f64 = 1e-4;
-
 /// Variable-step, variable-order BDF integrator for `F(t, y, y') = 0`.
 ///
 /// All work vectors are allocated in [`Bdf::new`]; with an allocation-free linear solver
@@ -671,7 +653,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     }
 
     /// Every unknown has index at most 1 ([`Options::index`]); DAEs with unknowns of index 2
-    /// or 3 keep IDA's test with `MIN_CARRIED_RATE` and the fallback.
+    /// or 3 keep IDA's test with `crate::newton::MIN_CARRIED_RATE` and the fallback.
     fn index_at_most_one(&self) -> bool {
         self.state.index1
     }
@@ -823,7 +805,11 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 fallback: !index1
                     && (self.opts.higher_index == HigherIndexControl::Exclude
                         || self.state.any_newton_plain),
-                min_carried: if index1 { 0.0 } else { MIN_CARRIED_RATE },
+                min_carried: if index1 {
+                    0.0
+                } else {
+                    crate::newton::MIN_CARRIED_RATE
+                },
                 residual_tolerance: f64::INFINITY,
                 force_setup: self.nst() == 0 && ncf == 0 && nef == 0,
                 max_matrix_age: self.opts.max_matrix_age(),

@@ -847,6 +847,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 max_iterations: self.opts.max_newton_iterations,
                 fnewt: self.fnewt,
                 transformed_norm: self.higher_index,
+                min_carried: if self.higher_index {
+                    crate::newton::MIN_CARRIED_RATE
+                } else {
+                    0.0
+                },
             };
             let outcome = newton::solve(
                 &self.dae,

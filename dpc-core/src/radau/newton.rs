@@ -93,6 +93,10 @@ pub(crate) struct StageProblem<'a> {
     pub fnewt: f64,
     /// Test the transformed increments `ΔW` (higher-index problems) instead of `ΔZ`.
     pub transformed_norm: bool,
+    /// The least carried `FACCON` the first update is judged with
+    /// ([`crate::newton::MIN_CARRIED_RATE`] on a DAE with unknowns of index 2 or 3, else 0:
+    /// RADAU5's test).
+    pub min_carried: f64,
 }
 
 /// Weighted RMS norm over the three stages.
@@ -256,7 +260,12 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
                 *a += b;
             }
         }
-        if *faccon * dyno <= p.fnewt {
+        let carried = if newt == 1 {
+            faccon.max(p.min_carried)
+        } else {
+            *faccon
+        };
+        if carried * dyno <= p.fnewt {
             stage_derivatives(tab, p.h, &work.z, &mut work.yp);
             return NewtonOutcome::Converged {
                 iterations: newt,
