@@ -825,13 +825,16 @@ pub(crate) fn start_violation<D: ImplicitDae>(
 /// the likely cause of a failure before the first step. Round-off does not excuse it here (a
 /// residual at the round-off of large terms that fills the tolerances asks for looser ones).
 /// For the integrators' error paths; the costs of [`start_violation`].
+/// Read at an integration's recorded `start` with its tolerances (`rtol_j |y_j| + atol_j` at
+/// the start's values).
 pub(crate) fn start_near_tolerance<D: ImplicitDae>(
     dae: &D,
-    t: f64,
-    y: &[f64],
-    yp: &[f64],
-    tolerance: impl Fn(usize) -> f64,
+    start: &crate::index_estimate::StartPoint,
+    rtol: &crate::bdf::Tolerance,
+    atol: &crate::bdf::Tolerance,
 ) -> Option<ConstraintViolation> {
+    let (t, y, yp) = start.point();
+    let tolerance = |j: usize| rtol.get(j) * y[j].abs() + atol.get(j);
     worst_constraint(dae, (t, y, yp), tolerance, |tolerated, _| {
         (NEAR_TOLERANCE_SHARE * tolerated, tolerated)
     })
@@ -1186,7 +1189,9 @@ mod tests {
             let (mut off, mut off_p) = (y, yp);
             off[1] += by;
             off_p[0] += by;
-            let v = start_near_tolerance(&Moving, t, &off, &off_p, tolerance(&off));
+            let start = crate::index_estimate::StartPoint::new(t, &off, &off_p);
+            let tol = crate::bdf::Tolerance::Scalar(1e-6);
+            let v = start_near_tolerance(&Moving, &start, &tol, &tol);
             assert_eq!(v.is_some(), named, "{by}: {v:?}");
             if let Some(v) = v {
                 let share = v.residual.abs() / v.bound;

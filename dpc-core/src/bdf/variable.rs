@@ -523,15 +523,6 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         Ok(self.state.tn)
     }
 
-    /// The constraint the initial values meet only to [`crate::stabilised::NEAR_TOLERANCE_SHARE`]
-    /// or more of what the tolerances allow ([`crate::stabilised::start_near_tolerance`]), for
-    /// the diagnosis of a failure before the first step. Error path only (dense matrices).
-    fn start_near_tolerance(&self) -> Option<crate::stabilised::ConstraintViolation> {
-        let (t, y, yp) = self.start.point();
-        let tolerance = |j: usize| self.opts.rtol.get(j) * y[j].abs() + self.opts.atol.get(j);
-        crate::stabilised::start_near_tolerance(&self.dae, t, y, yp, tolerance)
-    }
-
     /// `e`, or, when it is a failure to step before the first step of an integration from
     /// initial values that do not satisfy an equation, `e` wrapped in
     /// [`BdfError::InconsistentStart`] ([`crate::index_estimate::inconsistent_start`]), or that
@@ -565,7 +556,10 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                     source: Box::new(e),
                 };
             }
-            if let Some(v) = self.start_near_tolerance() {
+            let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
+            if let Some(v) =
+                crate::stabilised::start_near_tolerance(&self.dae, &self.start, rtol, atol)
+            {
                 return BdfError::StartNearTolerance {
                     t: self.start.t(),
                     equation: v.equation,
