@@ -762,6 +762,13 @@ impl<D> StepSystem<'_, D> {
     }
 }
 
+/// The fixed-step integrator evaluates every matrix it forms.
+impl<D> super::newton::MatrixOrigin for StepSystem<'_, D> {
+    fn last_matrix_moved(&self) -> bool {
+        false
+    }
+}
+
 impl<D: FixedStepDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, D> {
     fn evaluate(&mut self, res: &mut [f64], _residual: bool, matrix: Option<&mut M>) {
         self.update_yp();

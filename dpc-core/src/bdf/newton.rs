@@ -267,8 +267,23 @@ struct StepSystem<'a, D> {
     may_move: bool,
     /// Matrices moved (not evaluated) in this attempt.
     moved: usize,
+    /// The last matrix formed was moved, not evaluated (read by [`RateTest`]).
+    last_moved: bool,
     /// The model's iteration matrix was evaluated in this attempt.
     evaluated: bool,
+}
+
+/// Where the last iteration matrix a Newton system formed came from, for the rate test.
+pub(crate) trait MatrixOrigin {
+    /// The last matrix formed was moved to the new `cj` with the mass matrix (see
+    /// [`MatrixPoint`]), not evaluated by the model.
+    fn last_matrix_moved(&self) -> bool;
+}
+
+impl<D> MatrixOrigin for StepSystem<'_, D> {
+    fn last_matrix_moved(&self) -> bool {
+        self.last_moved
+    }
 }
 
 impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, D> {
@@ -279,6 +294,7 @@ impl<D: ImplicitDae, M: MatrixSink + ?Sized> NewtonSystem<M> for StepSystem<'_, 
                 && self.point.as_deref_mut().is_some_and(|point| {
                     point.move_to(self.dae, &mut *m, *self.cj_factored, self.cj)
                 });
+            self.last_moved = moved;
             if moved {
                 self.moved += 1;
             } else {
@@ -352,9 +368,6 @@ pub(crate) struct RateTest<'a> {
     /// to the next steps it accepts first updates of `10^5` tolerance units and more, with the
     /// matrix aged, and leaves the constraints unmet (see `crate::newton::MIN_CARRIED_RATE`).
     pub min_carried: f64,
-    /// The first matrix formed in this solve will be moved to the new `cj` with the mass
-    /// matrix (see [`MatrixPoint`]), not evaluated: it does not reset the rate factor.
-    pub moved: bool,
     epcon: f64,
     max_iterations: usize,
     residual_tolerance: f64,
@@ -373,7 +386,6 @@ impl RateTest<'_> {
             formed: false,
             predictive: false,
             min_carried: 0.0,
-            moved: false,
             epcon,
             max_iterations,
             residual_tolerance,
@@ -400,7 +412,7 @@ impl RateTest<'_> {
     }
 }
 
-impl<S, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
+impl<S: MatrixOrigin, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
     fn screen(&mut self, _sys: &mut S, res: &[f64]) -> Result<(), NewtonFailure> {
         match first_non_finite(res) {
             Some(i) => Err(NewtonFailure::NonFinite(i)),
@@ -408,12 +420,11 @@ impl<S, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
         }
     }
 
-    fn after_residual(&mut self, _sys: &mut S, it: Iterate<'_, L>) -> Verdict {
+    fn after_residual(&mut self, sys: &mut S, it: Iterate<'_, L>) -> Verdict {
         if it.fresh {
-            if self.moved {
+            if sys.last_matrix_moved() {
                 // A matrix moved to the new `cj` keeps an older `dF/dy`: it has not earned
                 // the trust IDA gives a fresh one, the carried factor stays.
-                self.moved = false;
             } else {
                 self.ss = 20.0;
                 self.formed = true;
@@ -534,9 +545,11 @@ impl<L: LinearSolver> Corrector<L> {
             !(0.6..=1.0 / 0.6).contains(&r)
         };
         // Moving the last matrix to the new `cj` (MatrixUpdate::Move) is allowed when only
-        // `cj` asks for a new one.
+        // `cj` asks for a new one, at the solve's start (a refresh the rate test asks for later
+        // wants `dF/dy` at the iterate).
         let keep_point = p.max_matrix_age > 0;
         let mut may_move = keep_point
+            && (fresh || !self.newton.valid)
             && !p.force_setup
             && self.point.valid
             && self.point.mass
@@ -559,13 +572,13 @@ impl<L: LinearSolver> Corrector<L> {
                 point: keep_point.then_some(&mut self.point),
                 may_move,
                 moved: 0,
+                last_moved: false,
                 evaluated: false,
             };
             let mut test =
                 RateTest::new(self.jac.ss, p.epcon, p.max_iterations, p.residual_tolerance);
             test.predictive = p.predictive;
             test.min_carried = p.min_carried;
-            test.moved = may_move && (fresh || !self.newton.valid);
             test.fallback = p.fallback.then_some(&self.w_scaled[..]);
             let outcome = self
                 .newton
@@ -584,5 +597,89 @@ impl<L: LinearSolver> Corrector<L> {
         stats.add_newton(before, self.newton.counts);
         stats.jacobian_evaluations -= self.moves - moves_before;
         outcome
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linear_solver::NalgebraLu;
+
+    /// `y' + y = 0`, with or without its mass matrix `dF/dy' = 1`.
+    struct Decay {
+        mass: bool,
+    }
+
+    impl ImplicitDae for Decay {
+        fn dimension(&self) -> usize {
+            1
+        }
+        fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+            out[0] = yp[0] + y[0];
+        }
+        fn iteration_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            _: f64,
+            _: &[f64],
+            _: &[f64],
+            c: f64,
+            m: &mut S,
+        ) {
+            m.set(0, 0, c + 1.0);
+        }
+        fn mass_matrix<S: MatrixSink + ?Sized>(
+            &self,
+            _: f64,
+            _: &[f64],
+            _: &[f64],
+            m: &mut S,
+        ) -> bool {
+            if self.mass {
+                m.add(0, 0, 1.0);
+            }
+            self.mass
+        }
+    }
+
+    /// Newton iterations of the second of two solves under `MatrixUpdate::Move`, the first at
+    /// `cj = 1` (an evaluated matrix), the second at `cj = 10` (a new matrix: moved when the
+    /// model supplies its mass matrix, else evaluated), whose one (exact) update is 0.02
+    /// tolerance units.
+    fn second_solve_iterations(dae: &Decay) -> usize {
+        let mut corrector = Corrector::new(NalgebraLu::<1>::new(), 1);
+        corrector.newton.w[0] = 1.0;
+        let mut stats = Stats::default();
+        let problem = |cj: f64| NewtonProblem {
+            t: 0.0,
+            cj,
+            max_iterations: 4,
+            epcon: 1.0,
+            predictive: false,
+            fallback: false,
+            min_carried: 0.0,
+            residual_tolerance: f64::INFINITY,
+            force_setup: false,
+            max_matrix_age: 50,
+        };
+        corrector.y_pred[0] = 1.0;
+        corrector.yp_pred[0] = -1.0;
+        corrector.solve(dae, &mut stats, &problem(1.0)).unwrap();
+        // The solution of `y' + y = 0` with `y' = y'_pred + 10 (y - y_pred)` is
+        // `y = 1 - 0.22 / 11`: one update of 0.02.
+        corrector.yp_pred[0] = -1.0 + 0.22;
+        let before = stats.newton_iterations;
+        corrector.solve(dae, &mut stats, &problem(10.0)).unwrap();
+        assert!((corrector.y[0] - 0.98).abs() < 1e-14, "{}", corrector.y[0]);
+        stats.newton_iterations - before
+    }
+
+    #[test]
+    fn only_a_matrix_actually_moved_keeps_the_carried_rate_factor() {
+        // Evaluated (the model declines its mass matrix when the move asks for it): IDA's
+        // factor 20 for a fresh matrix, 20 x 0.02 <= 1, the first update is accepted.
+        assert_eq!(second_solve_iterations(&Decay { mass: false }), 1);
+        // Moved: the factor carried from the new `cj`'s pessimistic start (100) stays,
+        // 100 x 0.02 > 1, and a second update confirms convergence.
+        assert_eq!(second_solve_iterations(&Decay { mass: true }), 2);
     }
 }
