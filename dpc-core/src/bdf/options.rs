@@ -85,9 +85,10 @@ pub enum MatrixUpdate {
     /// Move the matrix to the new `cj` with the model's mass matrix: add
     /// `(cj - cj_old) dF/dy'`, taken at the point where `dF/dy` was evaluated
     /// ([`ImplicitDae::mass_matrix`](crate::ImplicitDae::mass_matrix)), and factorise again.
-    /// The model's matrix is evaluated when Newton fails with a moved or older matrix, and
-    /// for a new matrix asked for `max_age` or more corrector solves after the last
-    /// evaluation (CVODE keeps its Jacobian the same way, for at most 51 steps). For
+    /// Only the matrix a solve asks for at its start (for the new `cj`) is moved; the model's
+    /// matrix is evaluated when Newton's rate test asks for a fresh one within a solve, when
+    /// Newton fails with a moved or older matrix, and for a new matrix asked for `max_age` or
+    /// more corrector solves after the last evaluation (CVODE keeps its Jacobian the same way, for at most 51 steps). For
     /// models whose iteration matrix costs many residuals (difference quotients) and whose
     /// mass matrix is cheap; a model that supplies no mass matrix is integrated as with
     /// [`Evaluate`](Self::Evaluate).
