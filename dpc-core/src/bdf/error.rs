@@ -152,7 +152,8 @@ pub enum BdfError {
     /// ([`crate::index_estimate::unknown_indices`]; those read so at both points are named):
     /// the likely cause, since the error test and Newton's test then hold those unknowns to a
     /// tolerance they cannot meet as `h` shrinks. Where only the last point reads them so,
-    /// the error is [`BdfError::SingularPoint`].
+    /// the error is [`BdfError::SingularPoint`]. Read for DAEs of at most 500 unknowns (the
+    /// estimate decomposes dense `n x n` matrices); a larger DAE's failure is reported as it is.
     #[error(
         "{source}; at t = {} the DAE has unknowns of higher index than `Options::index` \
          declares (every unknown of index 1): {}; declare them in `index`, or integrate with \

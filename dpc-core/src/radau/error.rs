@@ -170,7 +170,9 @@ pub enum RadauError {
     /// index 2 or 3 at the last point reached and at the integration's start
     /// ([`crate::index_estimate::unknown_indices`]; those read so at both points are named):
     /// the likely cause, since their errors are then not scaled by the step. Where only the
-    /// last point reads them so, the error is [`RadauError::SingularPoint`].
+    /// last point reads them so, the error is [`RadauError::SingularPoint`]. Read for DAEs of
+    /// at most 500 unknowns (the estimate decomposes dense `n x n` matrices); a larger DAE's
+    /// failure is reported as it is.
     #[error(
         "{source}; at t = {} the DAE has unknowns of higher index than `Options::index` \
          declares (every unknown of index 1): {}; declare them in `index`",
