@@ -256,19 +256,17 @@ pub(crate) fn sparse_iteration_matrix<D: ImplicitDae + ?Sized>(
     }
 }
 
-/// Walk two lists sorted by a key together: `f(key, a, b)` for every key in either, `a` and
-/// `b` its values in each (zero where absent), keys ascending. `entry` splits an element into
-/// its key and value.
+/// Walk two sequences sorted by a key together: `f(key, a, b)` for every key in either, `a`
+/// and `b` its values in each (zero where absent), keys ascending. `entry` splits an element
+/// into its key and value.
 pub(crate) fn merge_sorted<T, K: Ord + Copy>(
-    a: &[T],
-    b: &[T],
-    entry: impl Fn(&T) -> (K, f64),
+    a: impl IntoIterator<Item = T>,
+    b: impl IntoIterator<Item = T>,
+    entry: impl Fn(T) -> (K, f64),
     mut f: impl FnMut(K, f64, f64),
 ) {
-    let (mut a, mut b) = (
-        a.iter().map(&entry).peekable(),
-        b.iter().map(&entry).peekable(),
-    );
+    let mut a = a.into_iter().map(&entry).peekable();
+    let mut b = b.into_iter().map(&entry).peekable();
     loop {
         match (a.peek().copied(), b.peek().copied()) {
             (Some((ka, va)), Some((kb, vb))) => {

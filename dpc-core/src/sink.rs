@@ -224,22 +224,56 @@ impl MatrixSink for Selection {
 }
 
 /// The entries of a few rows and columns of a matrix, as [`Selection`] captures them, kept
-/// sparse: per selected row the entries written, by column, so memory and the cost of
-/// clearing and reading grow with the entries written, not with the selected rows times the
-/// selected columns (the constraint rows of a DAE with thousands of constraints and
-/// positions).
+/// sparse when the selected block is large: per selected row the entries written, by column,
+/// so memory and the cost of clearing and reading grow with the entries written, not with the
+/// selected rows times the selected columns (the constraint rows of a DAE with thousands of
+/// constraints and positions). A block of at most [`DENSE_BLOCK_MAX`] entries is held densely,
+/// as [`Selection`] holds it (reading and writing an entry costs an index).
 ///
-/// [`fill_zero`](MatrixSink::fill_zero) keeps the positions written (with value zero), so a
-/// writer that writes the same entries at every evaluation allocates only at the first.
-/// Reading an entry costs a binary search in its row.
+/// Sparse, [`fill_zero`](MatrixSink::fill_zero) keeps the positions written (with value
+/// zero), so a writer that writes the same entries at every evaluation allocates only at the
+/// first, and reading an entry costs a binary search in its row.
 #[derive(Debug, Clone)]
 pub(crate) struct SparseSelection {
     rows: usize,
     cols: usize,
     row_slot: Vec<usize>,
     col_slot: Vec<usize>,
+    storage: BlockStorage,
+}
+
+/// The largest selected block (rows times columns) [`SparseSelection`] holds densely (64 KB):
+/// the stabilised form of small models keeps the speed of dense reads (sparse blocks cost
+/// 10-18 % of the run time of Radau on one and four stabilised pendulums, 5 and 20 unknowns;
+/// dense ones with the hot loops reading rows as slices, 3 %).
+pub(crate) const DENSE_BLOCK_MAX: usize = 8192;
+
+/// How a [`SparseSelection`] holds its entries.
+#[derive(Debug, Clone)]
+enum BlockStorage {
+    /// Every selected entry, row by row (`width` selected columns).
+    Dense { width: usize, values: Vec<f64> },
     /// Per selected row, `(column slot, value)` of the positions written, by column slot.
-    entries: Vec<Vec<(usize, f64)>>,
+    Sparse(Vec<Vec<(usize, f64)>>),
+}
+
+/// The entries of a row of a [`SparseSelection`], `(column slot, value)` by column slot.
+pub(crate) enum RowEntries<'a> {
+    /// Every selected column of a dense block (zeros included).
+    Dense(std::iter::Enumerate<std::slice::Iter<'a, f64>>),
+    /// The positions written.
+    Sparse(std::slice::Iter<'a, (usize, f64)>),
+}
+
+impl Iterator for RowEntries<'_> {
+    type Item = (usize, f64);
+    #[inline]
+    fn next(&mut self) -> Option<(usize, f64)> {
+        match self {
+            RowEntries::Dense(it) => it.next().map(|(k, &v)| (k, v)),
+            RowEntries::Sparse(it) => it.next().copied(),
+        }
+    }
 }
 
 impl SparseSelection {
@@ -250,57 +284,102 @@ impl SparseSelection {
         selected_rows: &[usize],
         selected_cols: Option<&[usize]>,
     ) -> Self {
-        let ((row_slot, height), (col_slot, _)) =
+        let ((row_slot, height), (col_slot, width)) =
             selection_slots(rows, cols, selected_rows, selected_cols);
+        let storage = match height.checked_mul(width) {
+            Some(size) if size <= DENSE_BLOCK_MAX => BlockStorage::Dense {
+                width,
+                values: vec![0.0; size],
+            },
+            _ => BlockStorage::Sparse(vec![Vec::new(); height]),
+        };
         Self {
             rows,
             cols,
             row_slot,
             col_slot,
-            entries: vec![Vec::new(); height],
+            storage,
         }
+    }
+
+    /// The slots `(selected row, selected column)` of `(row, col)`, `None` outside the
+    /// selection.
+    #[inline]
+    fn slots(&self, row: usize, col: usize) -> Option<(usize, usize)> {
+        let r = *self.row_slot.get(row)?;
+        let c = *self.col_slot.get(col)?;
+        (r != NONE && c != NONE).then_some((r, c))
     }
 
     /// The captured entry `(row, col)` (indices of the full matrix); zero for an entry outside
     /// the selection or not written.
+    #[inline]
     pub(crate) fn get(&self, row: usize, col: usize) -> f64 {
-        let (Some(&r), Some(&c)) = (self.row_slot.get(row), self.col_slot.get(col)) else {
+        let Some((r, c)) = self.slots(row, col) else {
             return 0.0;
         };
-        if r == NONE || c == NONE {
-            return 0.0;
+        match &self.storage {
+            BlockStorage::Dense { width, values } => values[r * width + c],
+            BlockStorage::Sparse(rows) => {
+                let e = &rows[r];
+                e.binary_search_by_key(&c, |&(k, _)| k)
+                    .map_or(0.0, |at| e[at].1)
+            }
         }
-        let e = &self.entries[r];
-        e.binary_search_by_key(&c, |&(k, _)| k)
-            .map_or(0.0, |at| e[at].1)
     }
 
-    /// The positions written in the `r`-th selected row, `(column slot, value)` by column slot
-    /// (the position of the column in the selected list; its index when every column is
-    /// selected). Empty for `r` beyond the selected rows.
-    pub(crate) fn row(&self, r: usize) -> &[(usize, f64)] {
-        self.entries.get(r).map_or(&[], |e| e.as_slice())
+    /// The entries of the `r`-th selected row, `(column slot, value)` by column slot (the
+    /// position of the column in the selected list; its index when every column is
+    /// selected): every selected column of a dense block, the positions written of a sparse
+    /// one (zero values among them either way). Empty for `r` beyond the selected rows.
+    pub(crate) fn row(&self, r: usize) -> RowEntries<'_> {
+        match &self.storage {
+            BlockStorage::Dense { width, values } => {
+                let row = values.get(r * width..(r + 1) * width).unwrap_or(&[]);
+                RowEntries::Dense(row.iter().enumerate())
+            }
+            BlockStorage::Sparse(rows) => {
+                RowEntries::Sparse(rows.get(r).map_or(&[][..], |e| e.as_slice()).iter())
+            }
+        }
     }
 
-    /// The value at `(row, col)`, inserted as zero when not yet written; `None` outside the
-    /// selection.
+    /// The `r`-th selected row of a dense block, every selected column by slot; `None` for a
+    /// sparse block (or `r` beyond the selected rows). For the hot loops of a small block,
+    /// which read it as [`Selection::values`] is read.
+    #[inline]
+    pub(crate) fn dense_row(&self, r: usize) -> Option<&[f64]> {
+        match &self.storage {
+            BlockStorage::Dense { width, values } => values.get(r * width..(r + 1) * width),
+            BlockStorage::Sparse(_) => None,
+        }
+    }
+
+    /// The value at `(row, col)` (inserted as zero into a sparse block when not yet written);
+    /// `None` outside the selection.
     #[inline]
     fn entry(&mut self, row: usize, col: usize) -> Option<&mut f64> {
-        let r = *self.row_slot.get(row)?;
-        let c = *self.col_slot.get(col)?;
-        if r == NONE || c == NONE {
-            return None;
+        let (r, c) = self.slots(row, col)?;
+        match &mut self.storage {
+            BlockStorage::Dense { width, values } => Some(&mut values[r * *width + c]),
+            BlockStorage::Sparse(rows) => Some(sparse_entry(&mut rows[r], c)),
         }
-        let e = &mut self.entries[r];
-        let at = match e.binary_search_by_key(&c, |&(k, _)| k) {
-            Ok(at) => at,
-            Err(at) => {
-                e.insert(at, (c, 0.0));
-                at
-            }
-        };
-        Some(&mut e[at].1)
     }
+}
+
+/// The value at column slot `c` of a sparse row (`(column slot, value)` by slot), inserted as
+/// zero when not yet written; out of line, so that a dense block's writes stay small enough to
+/// inline into the writer.
+#[inline(never)]
+fn sparse_entry(row: &mut Vec<(usize, f64)>, c: usize) -> &mut f64 {
+    let at = match row.binary_search_by_key(&c, |&(k, _)| k) {
+        Ok(at) => at,
+        Err(at) => {
+            row.insert(at, (c, 0.0));
+            at
+        }
+    };
+    &mut row[at].1
 }
 
 impl MatrixSink for SparseSelection {
@@ -323,9 +402,14 @@ impl MatrixSink for SparseSelection {
         }
     }
     fn fill_zero(&mut self) {
-        for e in &mut self.entries {
-            for (_, v) in e.iter_mut() {
-                *v = 0.0;
+        match &mut self.storage {
+            BlockStorage::Dense { values, .. } => values.fill(0.0),
+            BlockStorage::Sparse(rows) => {
+                for e in rows {
+                    for (_, v) in e.iter_mut() {
+                        *v = 0.0;
+                    }
+                }
             }
         }
     }
@@ -505,39 +589,55 @@ mod tests {
 
     #[test]
     fn sparse_selection_keeps_what_a_selection_keeps() {
-        let (rows, cols) = ([3, 1, 9, 1], [0, 4, 4, 2]);
-        let mut dense = Selection::new(4, 5, &rows, Some(&cols));
-        let mut sparse = SparseSelection::new(4, 5, &rows, Some(&cols));
-        for s in [
-            &mut dense as &mut dyn MatrixSink,
-            &mut sparse as &mut dyn MatrixSink,
-        ] {
-            for r in (0..4).rev() {
-                for k in 0..5 {
-                    s.add(r, k, (10 * r + k) as f64);
+        // A small block is held densely, a large one sparsely: the same entries either way.
+        for cols in [5, DENSE_BLOCK_MAX] {
+            let (rows, selected) = ([3, 1, 9, 1], [0, 4, 4, 2]);
+            let all: Vec<usize> = (0..cols).collect();
+            let selected_cols = if cols == 5 { &selected[..] } else { &all[..] };
+            let mut dense = Selection::new(4, cols, &rows, Some(selected_cols));
+            let mut sparse = SparseSelection::new(4, cols, &rows, Some(selected_cols));
+            let held_dense = matches!(sparse.storage, BlockStorage::Dense { .. });
+            assert_eq!(held_dense, cols == 5);
+            for s in [
+                &mut dense as &mut dyn MatrixSink,
+                &mut sparse as &mut dyn MatrixSink,
+            ] {
+                for r in (0..4).rev() {
+                    for k in 0..5 {
+                        s.add(r, k, (10 * r + k) as f64);
+                    }
+                }
+                s.set(1, 4, 0.5);
+                s.add(3, 2, 0.25);
+                s.set(9, 0, 1.0);
+            }
+            assert_eq!((sparse.rows(), sparse.cols()), (4, cols));
+            for r in 0..6 {
+                for k in 0..6 {
+                    let (a, b) = (sparse.get(r, k), dense.get(r, k));
+                    assert_eq!(a.to_bits(), b.to_bits(), "({r}, {k})");
                 }
             }
-            s.set(1, 4, 0.5);
-            s.add(3, 2, 0.25);
-            s.set(9, 0, 1.0);
-        }
-        assert_eq!((sparse.rows(), sparse.cols()), (4, 5));
-        for r in 0..6 {
-            for k in 0..6 {
-                assert_eq!(
-                    sparse.get(r, k).to_bits(),
-                    dense.get(r, k).to_bits(),
-                    "({r}, {k})"
-                );
+            let non_zero = |r| {
+                sparse
+                    .row(r)
+                    .filter(|e| e.1 != 0.0)
+                    .collect::<Vec<(usize, f64)>>()
+            };
+            if cols == 5 {
+                // Row 3 is the first selected, its columns 0, 4, 2 in the slots 0, 1, 2.
+                assert_eq!(non_zero(0), [(0, 30.0), (1, 34.0), (2, 32.25)]);
+                assert_eq!(non_zero(1), [(0, 10.0), (1, 0.5), (2, 12.0)]);
+            } else {
+                let row3 = [(0, 30.0), (1, 31.0), (2, 32.25), (3, 33.0), (4, 34.0)];
+                assert_eq!(non_zero(0), row3);
+                assert_eq!(sparse.row(1).count(), 5);
             }
+            assert_eq!(sparse.row(2).count(), 0);
+            sparse.fill_zero();
+            assert!(sparse.row(1).all(|e| e.1 == 0.0));
+            assert_eq!(sparse.get(1, 4), 0.0);
         }
-        // Row 3 is the first selected, its columns 0, 4, 2 in the slots 0, 1, 2.
-        assert_eq!(sparse.row(0), &[(0, 30.0), (1, 34.0), (2, 32.25)]);
-        assert_eq!(sparse.row(1), &[(0, 10.0), (1, 0.5), (2, 12.0)]);
-        assert!(sparse.row(2).is_empty());
-        sparse.fill_zero();
-        assert_eq!(sparse.row(1), &[(0, 0.0), (1, 0.0), (2, 0.0)]);
-        assert_eq!(sparse.get(1, 4), 0.0);
     }
 
     #[test]

@@ -561,7 +561,7 @@ impl<D: ImplicitDae> Stabilised<D> {
             // Constraint `a`'s row is the `a`-th selected row, pair `p`'s position its column
             // slot `p` (rows and unknowns are distinct, checked in `new`).
             for a in 0..self.rows.len() {
-                for &(p, d) in sc.curv.row(a) {
+                for (p, d) in sc.curv.row(a) {
                     if d != 0.0 && d.is_finite() {
                         out.add(n + a, self.kinematic[p].0, d);
                     }
@@ -592,10 +592,21 @@ impl<D: ImplicitDae> Stabilised<D> {
             }
         }
         for a in 0..self.rows.len() {
+            let dense = (sc.grad_plus.dense_row(a), sc.grad_minus.dense_row(a));
+            if let (Some(plus), Some(minus)) = dense {
+                // Small blocks, held densely: every pair in order.
+                for ((&(k, _), &gp), &gm) in self.kinematic.iter().zip(plus).zip(minus) {
+                    let d = (gp - gm) / (2.0 * eps);
+                    if d != 0.0 && d.is_finite() {
+                        out.add(n + a, k, d);
+                    }
+                }
+                continue;
+            }
             crate::dae::merge_sorted(
                 sc.grad_plus.row(a),
                 sc.grad_minus.row(a),
-                |&e| e,
+                |e| e,
                 |p, plus, minus| {
                     let d = (plus - minus) / (2.0 * eps);
                     if d != 0.0 && d.is_finite() {
@@ -667,7 +678,18 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         // its entries by pair, as a dense row would be read.
         let (wrapped, hidden_rows) = out.split_at_mut(n);
         for (a, (&m, hidden)) in mu.iter().zip(hidden_rows).enumerate() {
-            for &(p, gj) in sc.grad.row(a) {
+            if let Some(g_row) = sc.grad.dense_row(a) {
+                // A small block, held densely: its row read without look-ups.
+                let pairs = g_row.iter().zip(&self.kinematic).zip(&sc.pair_phi);
+                for (((&gj, &(_, i)), &v), &cj) in pairs.zip(&sc.coef) {
+                    if gj != 0.0 {
+                        *hidden += gj * v;
+                        wrapped[i] += cj * gj * m;
+                    }
+                }
+                continue;
+            }
+            for (p, gj) in sc.grad.row(a) {
                 if gj != 0.0 {
                     *hidden += gj * sc.pair_phi[p];
                     wrapped[self.kinematic[p].1] += sc.coef[p] * gj * m;
@@ -711,7 +733,7 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         sc.by_pair_start.clear();
         sc.by_pair_start.resize(pairs + 1, 0);
         for a in 0..self.rows.len() {
-            for &(p, gj) in sc.grad.row(a) {
+            for (p, gj) in sc.grad.row(a) {
                 if gj != 0.0 {
                     sc.by_pair_start[p + 1] += 1;
                 }
@@ -726,7 +748,7 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         sc.by_pair.clear();
         sc.by_pair.resize(sc.by_pair_start[pairs], (0, 0.0));
         for a in 0..self.rows.len() {
-            for &(p, gj) in sc.grad.row(a) {
+            for (p, gj) in sc.grad.row(a) {
                 if gj != 0.0 {
                     sc.by_pair[sc.by_pair_next[p]] = (a, gj);
                     sc.by_pair_next[p] += 1;
@@ -736,12 +758,11 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
         // `kin_c` selects the kinematic rows, all columns: pair `p`'s row is its `p`-th
         // selected row (rows are distinct, checked in `new`), its column slots the columns.
         for (p, (&(j, i), &cj)) in self.kinematic.iter().zip(&sc.coef).enumerate() {
-            let kin_row = sc.kin_c.row(p);
             for &(a, gj) in &sc.by_pair[sc.by_pair_start[p]..sc.by_pair_start[p + 1]] {
                 out.add(i, n + a, cj * gj);
                 // d/dy + c d/dy' of G_aj (q_j' - F_i / c_j) at fixed G and c_j.
                 out.add(n + a, j, gj * c);
-                for &(k, v) in kin_row {
+                for (k, v) in sc.kin_c.row(p) {
                     if v != 0.0 {
                         out.add(n + a, k, -gj * v / cj);
                     }
