@@ -233,38 +233,55 @@ impl ConstraintStructure {
     /// Classify the rows of a model with the structure `s` (what [`Self::of`] reads of it).
     pub fn from_structure(s: &Structure) -> Self {
         let (ne, nx) = (s.n_equations(), s.n_states());
-        let row_cols = |p: &[(usize, usize)], i: usize| -> Vec<usize> {
-            p.iter().filter(|(r, _)| *r == i).map(|(_, c)| *c).collect()
+        // Per row, the columns of a pattern's entries in the pattern's order: one pass over
+        // the entries (a scan of the whole pattern per row was quadratic in the dimension).
+        let by_row = |p: &[(usize, usize)]| -> Vec<Vec<usize>> {
+            let mut rows = vec![Vec::new(); ne];
+            for &(r, c) in p {
+                if let Some(row) = rows.get_mut(r) {
+                    row.push(c);
+                }
+            }
+            rows
         };
+        let (f_xdot, f_z, f_u, f_x) = (
+            by_row(&s.pattern_f_xdot),
+            by_row(&s.pattern_f_z),
+            by_row(&s.pattern_f_u),
+            by_row(&s.pattern_f_x),
+        );
         let mut kinematic: Vec<Option<usize>> = vec![None; nx]; // state -> row
         let mut constraints = Vec::new();
         let mut prescribed = Vec::new();
         for i in 0..ne {
-            let xd = row_cols(&s.pattern_f_xdot, i);
-            let zc = row_cols(&s.pattern_f_z, i);
+            let (xd, zc) = (&f_xdot[i], &f_z[i]);
             if zc.is_empty() && xd.len() == 1 && kinematic[xd[0]].is_none() {
                 kinematic[xd[0]] = Some(i);
             }
             if xd.is_empty() && zc.is_empty() {
-                if row_cols(&s.pattern_f_u, i).is_empty() {
+                if f_u[i].is_empty() {
                     constraints.push(i);
                 } else {
                     prescribed.push(i);
                 }
             }
         }
-        let states_of = |i: usize| row_cols(&s.pattern_f_x, i);
+        let states_of = |i: usize| f_x[i].iter().copied();
         let (position, velocity): (Vec<usize>, Vec<usize>) = constraints
             .iter()
-            .partition(|&&i| states_of(i).iter().all(|&j| kinematic[j].is_some()));
+            .partition(|&&i| states_of(i).all(|j| kinematic[j].is_some()));
         let mut pos_states: Vec<usize> = position.iter().flat_map(|&i| states_of(i)).collect();
         pos_states.sort_unstable();
         pos_states.dedup();
+        let mut is_position = vec![false; nx];
+        for &j in &pos_states {
+            is_position[j] = true;
+        }
         let mut vel_states: Vec<usize> = pos_states
             .iter()
             .filter_map(|&j| kinematic[j])
             .flat_map(states_of)
-            .filter(|j| !pos_states.contains(j))
+            .filter(|&j| !is_position.get(j).copied().unwrap_or(false))
             .collect();
         vel_states.sort_unstable();
         vel_states.dedup();

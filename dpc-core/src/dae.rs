@@ -4,7 +4,7 @@
 //! (Brenan, Campbell & Petzold 1989, ch. 5). The closed loop wraps a generated model with
 //! its held inputs in one (`simulate`); hand-written test problems implement it directly.
 
-use crate::sink::MatrixSink;
+use crate::sink::{MatrixSink, Triplets};
 
 /// An implicit differential-algebraic system `F(t, y, y') = 0`.
 pub trait ImplicitDae {
@@ -223,5 +223,74 @@ pub(crate) fn dense_iteration_matrix<D: ImplicitDae + ?Sized>(
         // Column-major: entry k is row k % n, column k / n.
         Some(k) => Err((k % n, k / n)),
         None => Ok(m),
+    }
+}
+
+/// Entries `(row, column, value)` of a matrix, sorted by row and column.
+pub(crate) type Entries = Vec<(usize, usize, f64)>;
+
+/// The iteration matrix `dF/dy + c dF/dy'` of `dae` at `(t, y, y')` as its written entries
+/// `(row, column, value)`, sorted by row and column ([`Triplets::entries`]: the values a
+/// zeroed dense matrix would hold), or the entry `(row, column)` that is not finite and comes
+/// first in column-major order (the one [`dense_iteration_matrix`] names). For set-up and
+/// analysis of DAEs of any size: its cost grows with the entries written, not with `n^2`.
+pub(crate) fn sparse_iteration_matrix<D: ImplicitDae + ?Sized>(
+    dae: &D,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+    c: f64,
+) -> Result<Entries, (usize, usize)> {
+    let n = dae.dimension();
+    let mut m = Triplets::new(n, n);
+    dae.iteration_matrix(t, y, yp, c, &mut m);
+    let entries = m.entries();
+    match entries
+        .iter()
+        .filter(|e| !e.2.is_finite())
+        .map(|&(i, j, _)| (j, i))
+        .min()
+    {
+        Some((j, i)) => Err((i, j)),
+        None => Ok(entries),
+    }
+}
+
+/// Walk two sequences sorted by a key together: `f(key, a, b)` for every key in either, `a`
+/// and `b` its values in each (zero where absent), keys ascending. `entry` splits an element
+/// into its key and value.
+pub(crate) fn merge_sorted<T, K: Ord + Copy>(
+    a: impl IntoIterator<Item = T>,
+    b: impl IntoIterator<Item = T>,
+    entry: impl Fn(T) -> (K, f64),
+    mut f: impl FnMut(K, f64, f64),
+) {
+    let mut a = a.into_iter().map(&entry).peekable();
+    let mut b = b.into_iter().map(&entry).peekable();
+    loop {
+        match (a.peek().copied(), b.peek().copied()) {
+            (Some((ka, va)), Some((kb, vb))) => {
+                if ka == kb {
+                    f(ka, va, vb);
+                    a.next();
+                    b.next();
+                } else if ka < kb {
+                    f(ka, va, 0.0);
+                    a.next();
+                } else {
+                    f(kb, 0.0, vb);
+                    b.next();
+                }
+            }
+            (Some((ka, va)), None) => {
+                f(ka, va, 0.0);
+                a.next();
+            }
+            (None, Some((kb, vb))) => {
+                f(kb, 0.0, vb);
+                b.next();
+            }
+            (None, None) => break,
+        }
     }
 }

@@ -133,8 +133,10 @@ fn equilibrate(dfdy: &mut DMatrix<f64>, dfdyp: &mut DMatrix<f64>) {
 /// (see `Stabilised::detect`), and the largest is taken: an entry that vanishes at the point by
 /// coincidence does not hide an index.
 ///
-/// Costs two evaluations of the iteration matrix and two singular value decompositions of an
-/// `n x n` matrix: meant for set-up and diagnostics, not for every step.
+/// Costs two evaluations of the iteration matrix and singular value decompositions of a dense
+/// `n x n` matrix per decade of `c` at each of the three points (`n^2` memory, `n^3` time):
+/// meant for set-up and diagnostics of DAEs of up to a few hundred unknowns, not for every
+/// step (the integrators' failure diagnosis stops at `DIAGNOSIS_MAX` = 500 unknowns).
 ///
 /// ```
 /// use dpc::core::index_estimate::unknown_indices;
@@ -326,8 +328,9 @@ pub(crate) struct Inconsistency {
 /// slider speed, `1.1e-16`) carries their rounding, not its own (its bound from its own size
 /// was `2.5e-31`, and it was named instead of the velocity that was off by `1e-2`). `None`
 /// when no residual is so far above its bound, or when a residual or an iteration matrix at
-/// the start is not finite (another error names that). Costs a residual and two dense
-/// iteration matrices; meant for error paths only.
+/// the start is not finite (another error names that). Costs a residual and two iteration
+/// matrices, read as the entries the DAE writes (memory and time grow with the non-zeros, not
+/// with `n^2`, so DAEs of any size are checked); meant for error paths only.
 pub(crate) fn inconsistent_start<D: ImplicitDae + ?Sized>(
     dae: &D,
     start: &StartPoint,
@@ -339,15 +342,25 @@ pub(crate) fn inconsistent_start<D: ImplicitDae + ?Sized>(
     if res.iter().any(|r| !r.is_finite()) {
         return None;
     }
-    let j0 = crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0).ok()?;
-    let j1 = crate::dae::dense_iteration_matrix(dae, t, y, yp, 1.0).ok()?;
+    let j0 = crate::dae::sparse_iteration_matrix(dae, t, y, yp, 0.0).ok()?;
+    let j1 = crate::dae::sparse_iteration_matrix(dae, t, y, yp, 1.0).ok()?;
+    // Per row `sum_j |dF_i/dy_j|` and `sum_j |dF_i/dy'_j|`, summed over the columns in order
+    // (the entries not written add nothing).
+    let (mut row_dy, mut row_dyp) = (vec![0.0; n], vec![0.0; n]);
+    crate::dae::merge_sorted(
+        &j0,
+        &j1,
+        |e| ((e.0, e.1), e.2),
+        |(i, _), a, b| {
+            row_dy[i] += a.abs();
+            row_dyp[i] += (b - a).abs();
+        },
+    );
     let largest = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let (y_max, yp_max) = (largest(y), largest(yp));
     let mut worst: Option<Inconsistency> = None;
     for (i, &r) in res.iter().enumerate() {
-        let (dy, dyp) = (0..n).fold((0.0, 0.0), |(a, b), j| {
-            (a + j0[(i, j)].abs(), b + (j1[(i, j)] - j0[(i, j)]).abs())
-        });
+        let (dy, dyp) = (row_dy[i], row_dyp[i]);
         let bound = 10.0 * f64::EPSILON * (dy * y_max + dyp * yp_max);
         if r == 0.0 || r.abs() <= INCONSISTENT_FACTOR * bound {
             continue;
@@ -362,6 +375,11 @@ pub(crate) fn inconsistent_start<D: ImplicitDae + ?Sized>(
     }
     worst
 }
+
+/// The most unknowns [`diagnose_failure`] reads the index of: its estimate decomposes dense
+/// `n x n` matrices some forty times (about a second at this size in release mode, 2 MB
+/// each); a larger DAE's failure is reported without the diagnosis.
+pub(crate) const DIAGNOSIS_MAX: usize = 500;
 
 /// What [`diagnose_failure`] finds for a step failure of a DAE declared with every unknown
 /// of index at most 1.
@@ -392,13 +410,19 @@ pub(crate) enum FailureDiagnosis {
 /// whose algebraic part becomes nearly singular where it fails (a capacitance or mass that
 /// nearly vanishes, an impasse point) reads index 2 there only, and declaring that index
 /// would not help: that case is told apart ([`FailureDiagnosis::OnlyHere`]) rather than
-/// reported as an undeclared index. Costs the estimate at both points (decompositions of
-/// `n x n` matrices); meant for the integrators' error paths only.
+/// reported as an undeclared index. Costs the estimate at both points (singular value
+/// decompositions of dense `n x n` matrices, some forty of them); meant for the integrators'
+/// error paths only, and made for DAEs of at most [`DIAGNOSIS_MAX`] unknowns: above, the
+/// answer is [`FailureDiagnosis::None`] (the integrator's error is reported without a cause
+/// added, never with a wrong one).
 pub(crate) fn diagnose_failure<D: ImplicitDae + ?Sized>(
     dae: &D,
     start: &StartPoint,
     (t, y, yp): (f64, &[f64], &[f64]),
 ) -> FailureDiagnosis {
+    if dae.dimension() > DIAGNOSIS_MAX {
+        return FailureDiagnosis::None;
+    }
     let Ok(here) = unknown_indices(dae, t, y, yp) else {
         return FailureDiagnosis::None;
     };

@@ -33,7 +33,7 @@
 //!
 //! * `G` from the wrapped DAE's iteration matrix at `c = 0`, and `c_j` from it at `c = 1`
 //!   (with exact gradients, `c_j` from one residual with `q'` moved: the kinematic rows are
-//!   linear in `q_j'`); only the entries needed are kept (a [`Selection`]). `c_j` is evaluated
+//!   linear in `q_j'`); only the entries needed are kept (sparse, by row). `c_j` is evaluated
 //!   with each iteration matrix and held by the residuals until the next one (the first
 //!   residual before any matrix evaluates its own): any non-zero `c_j` gives the same
 //!   solutions (`mu = 0`, `F = 0`), only the scaling of the multipliers' terms and the
@@ -114,7 +114,7 @@
 
 use std::cell::RefCell;
 
-use crate::sink::{Selection, Tee};
+use crate::sink::{SparseSelection, Tee, Triplets};
 use crate::{ImplicitDae, MatrixSink};
 
 /// A malformed description of the constraints of [`Stabilised::new`].
@@ -160,7 +160,8 @@ pub enum StabilisedError {
 }
 
 /// Work of one evaluation: the wrapped DAE's residual and the few entries of its Jacobians
-/// the stabilisation reads (nothing here grows with the square of the dimension).
+/// the stabilisation reads, kept sparse (nothing here grows with the square of the dimension,
+/// nor with the constraints times the positions).
 struct Scratch {
     res: Vec<f64>,
     /// The residual at `t + dt` and `t - dt` (the constraints' time derivative by
@@ -173,10 +174,10 @@ struct Scratch {
     dgdt: Vec<f64>,
     /// `G` (constraint rows, position columns) and, when `G` comes from the iteration matrix
     /// at `c = 0`, `dF_i/dq_j` of the kinematic rows.
-    grad: Selection,
+    grad: SparseSelection,
     /// The same entries of `dF/dy'` (for `c_j`, when the DAE supplies it) or of the iteration
     /// matrix at `c = 1` (for `c_j` when neither it nor `G` is supplied).
-    grad_c1: Selection,
+    grad_c1: SparseSelection,
     /// `c_j = dF_i/dq_j'` per kinematic pair.
     coef: Vec<f64>,
     /// `coef` was evaluated with the last iteration matrix and is held by the residual.
@@ -186,13 +187,19 @@ struct Scratch {
     /// The velocities `phi_j` the kinematic rows give, per unknown (zero off the positions).
     phi: Vec<f64>,
     /// The kinematic rows of `dF/dy + c dF/dy'`, every column.
-    kin_c: Selection,
+    kin_c: SparseSelection,
     /// The constraints' curvature (constraint rows, position columns), when supplied.
-    curv: Selection,
+    curv: SparseSelection,
     /// `y` moved along the velocities, and `G` there (forwards and backwards).
     y_moved: Vec<f64>,
-    grad_plus: Selection,
-    grad_minus: Selection,
+    grad_plus: SparseSelection,
+    grad_minus: SparseSelection,
+    /// The non-zero entries of `G` by kinematic pair: pair `p`'s `(constraint, G_ap)` at
+    /// `by_pair[by_pair_start[p]..by_pair_start[p + 1]]`, constraints ascending
+    /// (`by_pair_next` the fill's cursor per pair).
+    by_pair: Vec<(usize, f64)>,
+    by_pair_start: Vec<usize>,
+    by_pair_next: Vec<usize>,
 }
 
 /// The GGL-stabilised index-2 form of an index-3 DAE (see the [module documentation](self)).
@@ -367,24 +374,27 @@ impl<D: ImplicitDae> Stabilised<D> {
         let positions: Vec<usize> = kinematic.iter().map(|&(j, _)| j).collect();
         let kin_rows: Vec<usize> = kinematic.iter().map(|&(_, i)| i).collect();
         let both: Vec<usize> = rows.iter().chain(&kin_rows).copied().collect();
-        let constraint_block = || Selection::new(n, n, &rows, Some(&positions));
+        let constraint_block = || SparseSelection::new(n, n, &rows, Some(&positions));
         let scratch = RefCell::new(Scratch {
             res: vec![0.0; n],
             res_plus: vec![0.0; n],
             res_minus: vec![0.0; n],
             yp_moved: vec![0.0; n],
             dgdt: vec![0.0; n],
-            grad: Selection::new(n, n, &both, Some(&positions)),
-            grad_c1: Selection::new(n, n, &both, Some(&positions)),
+            grad: SparseSelection::new(n, n, &both, Some(&positions)),
+            grad_c1: SparseSelection::new(n, n, &both, Some(&positions)),
             coef: vec![0.0; kinematic.len()],
             coef_held: false,
             pair_phi: vec![0.0; kinematic.len()],
             phi: vec![0.0; n],
-            kin_c: Selection::new(n, n, &kin_rows, None),
+            kin_c: SparseSelection::new(n, n, &kin_rows, None),
             curv: constraint_block(),
             y_moved: vec![0.0; n],
             grad_plus: constraint_block(),
             grad_minus: constraint_block(),
+            by_pair: Vec::new(),
+            by_pair_start: Vec::new(),
+            by_pair_next: Vec::new(),
         });
         Ok(Self {
             dae,
@@ -548,11 +558,12 @@ impl<D: ImplicitDae> Stabilised<D> {
         let (q_max, phi_max) = self.velocities(y, yp, sc);
         sc.curv.fill_zero();
         if self.dae.constraint_curvature(t, y, &sc.phi, &mut sc.curv) {
-            for (a, &g) in self.rows.iter().enumerate() {
-                for &(k, _) in &self.kinematic {
-                    let d = sc.curv.get(g, k);
+            // Constraint `a`'s row is the `a`-th selected row, pair `p`'s position its column
+            // slot `p` (rows and unknowns are distinct, checked in `new`).
+            for a in 0..self.rows.len() {
+                for (p, d) in sc.curv.row(a) {
                     if d != 0.0 && d.is_finite() {
-                        out.add(n + a, k, d);
+                        out.add(n + a, self.kinematic[p].0, d);
                     }
                 }
             }
@@ -580,13 +591,29 @@ impl<D: ImplicitDae> Stabilised<D> {
                 self.dae.iteration_matrix(t_moved, &sc.y_moved, yp, 0.0, m);
             }
         }
-        for (a, &g) in self.rows.iter().enumerate() {
-            for &(k, _) in &self.kinematic {
-                let d = (sc.grad_plus.get(g, k) - sc.grad_minus.get(g, k)) / (2.0 * eps);
-                if d != 0.0 && d.is_finite() {
-                    out.add(n + a, k, d);
+        for a in 0..self.rows.len() {
+            let dense = (sc.grad_plus.dense_row(a), sc.grad_minus.dense_row(a));
+            if let (Some(plus), Some(minus)) = dense {
+                // Small blocks, held densely: every pair in order.
+                for ((&(k, _), &gp), &gm) in self.kinematic.iter().zip(plus).zip(minus) {
+                    let d = (gp - gm) / (2.0 * eps);
+                    if d != 0.0 && d.is_finite() {
+                        out.add(n + a, k, d);
+                    }
                 }
+                continue;
             }
+            crate::dae::merge_sorted(
+                sc.grad_plus.row(a),
+                sc.grad_minus.row(a),
+                |e| e,
+                |p, plus, minus| {
+                    let d = (plus - minus) / (2.0 * eps);
+                    if d != 0.0 && d.is_finite() {
+                        out.add(n + a, self.kinematic[p].0, d);
+                    }
+                },
+            );
         }
     }
 }
@@ -647,16 +674,25 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
             *v = yp[j] - out[i] / cj;
         }
         // `G` in `sc.grad`: constraint `a`'s row is its `a`-th selected row, position `q_j`
-        // of pair `p` its `p`-th column (rows and unknowns are distinct, checked in `new`).
-        let width = self.kinematic.len().max(1);
-        let grad = sc.grad.values().chunks_exact(width);
+        // of pair `p` its column slot `p` (rows and unknowns are distinct, checked in `new`);
+        // its entries by pair, as a dense row would be read.
         let (wrapped, hidden_rows) = out.split_at_mut(n);
-        for ((&m, hidden), g_row) in mu.iter().zip(hidden_rows).zip(grad) {
-            let pairs = g_row.iter().zip(&self.kinematic).zip(&sc.pair_phi);
-            for (((&gj, &(_, i)), &v), &cj) in pairs.zip(&sc.coef) {
+        for (a, (&m, hidden)) in mu.iter().zip(hidden_rows).enumerate() {
+            if let Some(g_row) = sc.grad.dense_row(a) {
+                // A small block, held densely: its row read without look-ups.
+                let pairs = g_row.iter().zip(&self.kinematic).zip(&sc.pair_phi);
+                for (((&gj, &(_, i)), &v), &cj) in pairs.zip(&sc.coef) {
+                    if gj != 0.0 {
+                        *hidden += gj * v;
+                        wrapped[i] += cj * gj * m;
+                    }
+                }
+                continue;
+            }
+            for (p, gj) in sc.grad.row(a) {
                 if gj != 0.0 {
-                    *hidden += gj * v;
-                    wrapped[i] += cj * gj * m;
+                    *hidden += gj * sc.pair_phi[p];
+                    wrapped[self.kinematic[p].1] += sc.coef[p] * gj * m;
                 }
             }
         }
@@ -690,19 +726,43 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
                 *cj = (sc.kin_c.get(i, j) - sc.grad.get(i, j)) / c;
             }
         }
-        // `kin_c` selects the kinematic rows, all columns: pair `p`'s row is its `p`-th row of
-        // `n` values (rows are distinct, checked in `new`), read without per-entry look-ups.
-        let kin_rows = sc.kin_c.values().chunks_exact(n.max(1));
-        for ((&(j, i), &cj), kin_row) in self.kinematic.iter().zip(&sc.coef).zip(kin_rows) {
-            for (a, &g) in self.rows.iter().enumerate() {
-                let gj = sc.grad.get(g, j);
-                if gj == 0.0 {
-                    continue;
+        // The non-zero entries of `G` by pair, constraints ascending: the order in which a
+        // dense `G` is read pair by pair, so that `out` receives the same additions in the same
+        // order.
+        let pairs = self.kinematic.len();
+        sc.by_pair_start.clear();
+        sc.by_pair_start.resize(pairs + 1, 0);
+        for a in 0..self.rows.len() {
+            for (p, gj) in sc.grad.row(a) {
+                if gj != 0.0 {
+                    sc.by_pair_start[p + 1] += 1;
                 }
+            }
+        }
+        for p in 0..pairs {
+            sc.by_pair_start[p + 1] += sc.by_pair_start[p];
+        }
+        sc.by_pair_next.clear();
+        sc.by_pair_next
+            .extend_from_slice(&sc.by_pair_start[..pairs]);
+        sc.by_pair.clear();
+        sc.by_pair.resize(sc.by_pair_start[pairs], (0, 0.0));
+        for a in 0..self.rows.len() {
+            for (p, gj) in sc.grad.row(a) {
+                if gj != 0.0 {
+                    sc.by_pair[sc.by_pair_next[p]] = (a, gj);
+                    sc.by_pair_next[p] += 1;
+                }
+            }
+        }
+        // `kin_c` selects the kinematic rows, all columns: pair `p`'s row is its `p`-th
+        // selected row (rows are distinct, checked in `new`), its column slots the columns.
+        for (p, (&(j, i), &cj)) in self.kinematic.iter().zip(&sc.coef).enumerate() {
+            for &(a, gj) in &sc.by_pair[sc.by_pair_start[p]..sc.by_pair_start[p + 1]] {
                 out.add(i, n + a, cj * gj);
                 // d/dy + c d/dy' of G_aj (q_j' - F_i / c_j) at fixed G and c_j.
                 out.add(n + a, j, gj * c);
-                for (k, &v) in kin_row.iter().enumerate() {
+                for (k, v) in sc.kin_c.row(p) {
                     if v != 0.0 {
                         out.add(n + a, k, -gj * v / cj);
                     }
@@ -761,10 +821,6 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
     }
 }
 
-/// Above this many unknowns [`start_violation`] is not made: its structure is read from dense
-/// `n x n` iteration matrices (8 MB each at this size).
-pub(crate) const START_CHECK_MAX: usize = 1000;
-
 /// The share of what the tolerances allow a constraint's residual at which the diagnosis of a
 /// failure before the first step names it ([`start_near_tolerance`]; the start check,
 /// [`start_violation`], refuses at the whole). The Test Set's slider crank (initial values
@@ -800,10 +856,10 @@ pub(crate) struct ConstraintViolation {
 /// atol_j`: by Hölder's inequality, no change of the unknowns within their tolerances can
 /// remove a larger residual), and [`crate::index_estimate::INCONSISTENT_FACTOR`] times its
 /// round-off bound `10 eps sum_j |dh/dy_j| max_k |y_k|`. The worst is the largest ratio of
-/// residual to bound. Costs the structure's sampled matrices (six dense iteration matrices)
-/// and the stabilised form's residual and iteration matrix: for set-up, not for a step; above
-/// [`START_CHECK_MAX`] unknowns it is not made (`None`), as dense `n x n` matrices would cost
-/// more memory and time than the integration.
+/// residual to bound. Costs the structure's sampled matrices (six iteration matrices)
+/// and the stabilised form's residual and iteration matrix, each read as the entries written
+/// (memory and time grow with the non-zeros, not with `n^2`, so DAEs of any size are
+/// checked): for set-up, not for a step.
 pub(crate) fn start_violation<D: ImplicitDae>(
     dae: &D,
     t: f64,
@@ -851,28 +907,28 @@ fn worst_constraint<D: ImplicitDae>(
     limit: impl Fn(f64, f64) -> (f64, f64),
 ) -> Option<ConstraintViolation> {
     let n = dae.dimension();
-    if n > START_CHECK_MAX {
-        return None;
-    }
     let found = detect::structure(dae, t, y, yp).ok()?;
     if !found.constrained {
         return None;
     }
     let y_max = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut worst: Option<(f64, ConstraintViolation)> = None;
-    // The rows `rows` of a DAE of dimension `m` at `(ys, yps)`: residual and `dF/dy` there.
-    let mut check = |dae: &dyn Fn(&mut [f64], &mut Selection),
+    // The rows `rows` of a DAE of dimension `m` at `(ys, yps)`: residual and `dF/dy` there,
+    // the latter as the entries written (a dense row per constraint would cost `rows x m`).
+    let mut check = |dae: &dyn Fn(&mut [f64], &mut Triplets),
                      m: usize,
                      rows: &[usize],
                      name: &dyn Fn(usize) -> String| {
         let mut res = vec![0.0; m];
-        let mut grad = Selection::new(m, m, rows, None);
+        let mut grad = Triplets::new(m, m);
         dae(&mut res, &mut grad);
-        let width = grad.values().len() / rows.len().max(1);
-        for (k, &i) in rows.iter().enumerate() {
-            let row = &grad.values()[k * width..(k + 1) * width];
+        let entries = grad.entries();
+        for &i in rows {
+            // The row's entries, by column (the order a dense row is summed in).
+            let first = entries.partition_point(|e| e.0 < i);
+            let row = entries[first..].iter().take_while(|e| e.0 == i);
             let (mut tolerated, mut size) = (0.0, 0.0);
-            for (j, g) in row.iter().enumerate().take(n) {
+            for &(_, j, g) in row.filter(|e| e.1 < n) {
                 tolerated += g.abs() * tolerance(j);
                 size += g.abs();
             }
@@ -936,12 +992,14 @@ fn worst_constraint<D: ImplicitDae>(
 mod detect {
     use std::borrow::Cow;
 
-    use nalgebra::DMatrix;
-
     use super::StabilisedError;
     use crate::consistent::ConstraintStructure;
+    use crate::dae::Entries;
     use crate::model::{Names, Structure, Units};
     use crate::ImplicitDae;
+
+    /// Positions `(row, column)` of a matrix, sorted.
+    type Positions = Vec<(usize, usize)>;
 
     /// `c` of the second iteration matrix: `M(c) - M(0) = c dF/dy'` stays non-zero where
     /// `dF/dy'` is, even beside a large `dF/dy` (a power of two, so `c dF/dy'` is exact).
@@ -958,43 +1016,46 @@ mod detect {
         pub(super) constrained: bool,
     }
 
-    /// The iteration matrices at `c = 0` and `c = C` at one point, or the first non-finite
-    /// entry `(row, column)`.
+    /// The iteration matrices at `c = 0` and `c = C` at one point as their sorted entries
+    /// (`crate::dae::sparse_iteration_matrix`), or the first non-finite entry `(row, column)`.
     fn matrices<D: ImplicitDae>(
         dae: &D,
         t: f64,
         y: &[f64],
         yp: &[f64],
-    ) -> Result<(DMatrix<f64>, DMatrix<f64>), (usize, usize)> {
+    ) -> Result<(Entries, Entries), (usize, usize)> {
         Ok((
-            crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0)?,
-            crate::dae::dense_iteration_matrix(dae, t, y, yp, C)?,
+            crate::dae::sparse_iteration_matrix(dae, t, y, yp, 0.0)?,
+            crate::dae::sparse_iteration_matrix(dae, t, y, yp, C)?,
         ))
     }
 
     /// Entries of `dF/dy` and `dF/dy'` that are non-zero at `(t, y, y')` or at one of two
     /// points near it (moved by up to 10 % of `1 + |value|` in every coordinate and in time;
-    /// a point where the matrix is not finite is moved less, four times, then skipped).
+    /// a point where the matrix is not finite is moved less, four times, then skipped), as
+    /// positions `(row, column)` sorted by row and column: memory and time grow with the
+    /// entries the DAE writes, not with `n^2`.
     fn sampled_pattern<D: ImplicitDae>(
         dae: &D,
         t: f64,
         y: &[f64],
         yp: &[f64],
-    ) -> Result<(DMatrix<bool>, DMatrix<bool>), StabilisedError> {
-        let n = dae.dimension();
-        let (mut f_y, mut f_yp) = (
-            DMatrix::from_element(n, n, false),
-            DMatrix::from_element(n, n, false),
-        );
-        let mut mark = |m0: &DMatrix<f64>, m1: &DMatrix<f64>| {
-            for ((a, b), (p, q)) in m0
-                .iter()
-                .zip(m1.iter())
-                .zip(f_y.iter_mut().zip(f_yp.iter_mut()))
-            {
-                *p |= *a != 0.0;
-                *q |= *b != *a;
-            }
+    ) -> Result<(Positions, Positions), StabilisedError> {
+        let (mut f_y, mut f_yp) = (Vec::new(), Vec::new());
+        let mut mark = |m0: &[(usize, usize, f64)], m1: &[(usize, usize, f64)]| {
+            crate::dae::merge_sorted(
+                m0,
+                m1,
+                |e| ((e.0, e.1), e.2),
+                |(i, j), a, b| {
+                    if a != 0.0 {
+                        f_y.push((i, j));
+                    }
+                    if b != a {
+                        f_yp.push((i, j));
+                    }
+                },
+            );
         };
         let (m0, m1) = matrices(dae, t, y, yp).map_err(|(i, j)| StabilisedError::NonFinite {
             equation: dae.equation_name(i),
@@ -1006,6 +1067,10 @@ mod detect {
                 .map(|(m0, m1)| mark(&m0, &m1))
                 .is_ok()
         });
+        for m in [&mut f_y, &mut f_yp] {
+            m.sort_unstable();
+            m.dedup();
+        }
         Ok((f_y, f_yp))
     }
 
@@ -1018,17 +1083,26 @@ mod detect {
     ) -> Result<Found, StabilisedError> {
         let n = dae.dimension();
         let (f_y, f_yp) = sampled_pattern(dae, t, y, yp)?;
-        let differential: Vec<bool> = (0..n).map(|j| f_yp.column(j).iter().any(|&e| e)).collect();
+        let mut differential = vec![false; n];
+        for &(_, j) in &f_yp {
+            differential[j] = true;
+        }
         // The unknowns as a model's states (the differential ones) and algebraic unknowns, in
-        // the DAE's order within each group.
+        // the DAE's order within each group; per unknown its position in its group.
         let (states, algebraic): (Vec<usize>, Vec<usize>) = (0..n).partition(|&j| differential[j]);
-        let pattern = |m: &DMatrix<bool>, cols: &[usize]| -> Cow<'static, [(usize, usize)]> {
-            let entries =
-                (0..n).flat_map(|i| cols.iter().enumerate().map(move |(k, &j)| (i, k, j)));
+        let mut slot = vec![0; n];
+        for group in [&states, &algebraic] {
+            for (k, &j) in group.iter().enumerate() {
+                slot[j] = k;
+            }
+        }
+        // The entries `(row, position in the group)` of the columns of one group, by row and
+        // position (the positions ascend with the columns within a group).
+        let pattern = |m: &[(usize, usize)], in_group: bool| -> Cow<'static, [(usize, usize)]> {
             Cow::Owned(
-                entries
-                    .filter(|&(i, _, j)| m[(i, j)])
-                    .map(|(i, k, _)| (i, k))
+                m.iter()
+                    .filter(|&&(_, j)| differential[j] == in_group)
+                    .map(|&(i, j)| (i, slot[j]))
                     .collect(),
             )
         };
@@ -1042,9 +1116,9 @@ mod detect {
             params: Names::Static(&[]),
             equations: Names::Owned((0..n).map(|i| dae.equation_name(i)).collect()),
             units: Units::Static(&[]),
-            pattern_f_xdot: pattern(&f_yp, &states),
-            pattern_f_x: pattern(&f_y, &states),
-            pattern_f_z: pattern(&f_y, &algebraic),
+            pattern_f_xdot: pattern(&f_yp, true),
+            pattern_f_x: pattern(&f_y, true),
+            pattern_f_z: pattern(&f_y, false),
             pattern_f_u: Cow::Borrowed(&[]),
             pattern_h_x: Cow::Borrowed(&[]),
         };

@@ -31,7 +31,7 @@ use super::{BdfError, HigherIndexControl, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
 use crate::newton::{first_non_finite, wrms, NewtonFailure};
-use crate::sink::Selection;
+use crate::sink::Triplets;
 use crate::ImplicitDae;
 
 const MAXORD: usize = 5;
@@ -1333,9 +1333,14 @@ fn error_norms(e: &[f64], w: &[f64], p_k: &[f64], p_km1: &[f64], k: usize) -> (f
     ((s0 / m).sqrt(), (s1 / m).sqrt(), (s2 / m).sqrt())
 }
 
-/// Above this many unknowns [`dae_rules_apply`] does not decompose `dF/dy'` and answers `true`
-/// (the DAE rules, which were the rules for every index-1 problem before the distinction): a
-/// dense `n x n` decomposition at set-up would cost more than it saves.
+/// The most unknowns of a DAE whose matrices [`dae_rules_apply`] decomposes densely (a
+/// column-pivoted QR of at most this many columns, 0.5 MB): the block `dF_Z/dy_Z` of the
+/// algebraic unknowns `Z`, and `dF/dy'` itself when it is not diagonal. Above it nothing is
+/// decomposed: a diagonal `dF/dy'` and a diagonal block are read from their diagonals, and a
+/// DAE that would need a decomposition counts as one of index 1 (the DAE rules, which were the
+/// rules for every index-1 problem before the distinction, and which every DAE above this
+/// size had before the classification was made sparse: the Test Set's two bit adding unit, 350
+/// unknowns with index-2 node groups, keeps them).
 const LEADING_CHECK_MAX: usize = 256;
 
 /// Whether the DAE rules apply to a DAE declared with every unknown of index at most 1, read
@@ -1357,17 +1362,18 @@ const LEADING_CHECK_MAX: usize = 256;
 ///
 /// A model that supplies a diagonal mass matrix ([`ImplicitDae::mass_matrix`]: every
 /// semi-explicit DAE of the tests) is read from it and from the block `dF_Z/dy_Z` of one
-/// iteration matrix at `c = 0` (`Z` the zero diagonal entries), without a dense matrix; other
-/// models from the two dense iteration matrices at `c = 0` and `c = 1`.
+/// iteration matrix at `c = 0` (`Z` the zero diagonal entries); other models from the two
+/// iteration matrices at `c = 0` and `c = 1`. Both are read as the entries the DAE writes
+/// (`crate::dae::sparse_iteration_matrix`), so memory and time grow with the non-zeros, not
+/// with `n^2` (SUNDIALS' heat example on a `100 x 100` grid without a mass matrix: 10 000
+/// unknowns, docs/integrators.md).
 ///
-/// A matrix that is not finite, or a DAE above [`LEADING_CHECK_MAX`] unknowns, counts as a
-/// DAE of index 1: an implicit ODE misread as one only keeps the rules every index-1 problem
-/// had before.
+/// A matrix that is not finite counts as a DAE of index 1, and so does a DAE of more than
+/// [`LEADING_CHECK_MAX`] unknowns whose test would need a dense decomposition (a non-diagonal
+/// block `dF_Z/dy_Z`, or a non-diagonal `dF/dy'`): an implicit ODE misread as one only keeps
+/// the rules every index-1 problem had before.
 fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (bool, usize) {
     let n = dae.dimension();
-    if n > LEADING_CHECK_MAX {
-        return (true, 0);
-    }
     let negligible = |r: &nalgebra::DVector<f64>| {
         let largest = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let tol = 1e3 * n as f64 * f64::EPSILON * largest;
@@ -1395,22 +1401,35 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
         if z.is_empty() {
             return (false, 0);
         }
-        let mut block = Selection::new(n, n, &z, Some(&z));
-        dae.iteration_matrix(t, y, yp, 0.0, &mut block);
-        let values = block.values();
-        if values.iter().any(|v| !v.is_finite()) {
-            return (true, 1);
-        }
-        let k = z.len();
-        return (regular(nalgebra::DMatrix::from_row_slice(k, k, values)), 1);
+        let mut g0 = Triplets::new(n, n);
+        dae.iteration_matrix(t, y, yp, 0.0, &mut g0);
+        // Only the block's entries need be finite.
+        return (
+            block_regular(&g0.entries(), &z, n, regular).unwrap_or(true),
+            1,
+        );
     }
     let (Ok(g0), Ok(g1)) = (
-        crate::dae::dense_iteration_matrix(dae, t, y, yp, 0.0),
-        crate::dae::dense_iteration_matrix(dae, t, y, yp, 1.0),
+        crate::dae::sparse_iteration_matrix(dae, t, y, yp, 0.0),
+        crate::dae::sparse_iteration_matrix(dae, t, y, yp, 1.0),
     ) else {
         return (true, 2);
     };
-    let leading = g1 - &g0;
+    // `dF/dy' = G(1) - G(0)`: its diagonal, and whether an entry off it is non-zero.
+    let mut leading_diagonal = vec![0.0; n];
+    let mut off_diagonal = false;
+    crate::dae::merge_sorted(
+        &g0,
+        &g1,
+        |e| ((e.0, e.1), e.2),
+        |(i, j), a, b| {
+            if i == j {
+                leading_diagonal[i] = b - a;
+            } else if b - a != 0.0 {
+                off_diagonal = true;
+            }
+        },
+    );
     // A diagonal dF/dy' (every implicit ODE `y' - f`, the identity, and every semi-explicit
     // DAE) is its own R up to signs: its diagonal is read directly instead of decomposing (for
     // a 20 x 20 ODE the QR was a fifth of a whole solve at loose tolerances). Its null space is
@@ -1419,21 +1438,28 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
     // rows and columns: `G1` is regular exactly when the block `dF_Z/dy_Z` is (a `|Z| x |Z|` QR
     // instead of two `n x n` ones: `Bdf::new` on SUNDIALS' heat example, 100 unknowns, 0.48 ms
     // with them, 0.08 ms so, against 1.5 ms for its whole run at `1e-7`).
-    let diagonal_only = leading
-        .iter()
-        .enumerate()
-        .all(|(k, v)| k % n == k / n || *v == 0.0);
-    if diagonal_only {
-        let zero = negligible(&leading.diagonal());
+    if !off_diagonal {
+        let zero = negligible(&nalgebra::DVector::from_vec(leading_diagonal));
         let z: Vec<usize> = (0..n).filter(|&j| zero[j]).collect();
         if z.is_empty() {
             return (false, 2);
         }
-        let block = nalgebra::DMatrix::from_fn(z.len(), z.len(), |a, b| g0[(z[a], z[b])]);
-        return (regular(block), 2);
+        return (block_regular(&g0, &z, n, regular).unwrap_or(true), 2);
     }
-    // The general case: the trailing columns of the `Q` of a column-pivoted QR of
-    // `(dF/dy')^T` span `ker dF/dy'`.
+    if n > LEADING_CHECK_MAX {
+        return (true, 2);
+    }
+    // The general case, dense (at most `LEADING_CHECK_MAX` unknowns): the trailing columns of
+    // the `Q` of a column-pivoted QR of `(dF/dy')^T` span `ker dF/dy'`.
+    let dense = |entries: &[(usize, usize, f64)]| {
+        let mut m = nalgebra::DMatrix::zeros(n, n);
+        for &(i, j, v) in entries {
+            m[(i, j)] = v;
+        }
+        m
+    };
+    let (g0, g1) = (dense(&g0), dense(&g1));
+    let leading = g1 - &g0;
     let qr = leading.transpose().col_piv_qr();
     let q = qr.q();
     let zero = negligible(&qr.unpack_r().diagonal());
@@ -1451,6 +1477,52 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
     };
     let g1 = leading * scale + &g0 * null_space * null_space.transpose();
     (regular(g1), 2)
+}
+
+/// Whether the block `dF_Z/dy_Z` of the iteration matrix at `c = 0` (its sorted entries `g0`;
+/// `Z` = `z`, ascending, of the `n` unknowns) is regular, for [`dae_rules_apply`]: by
+/// `regular` (a column-pivoted QR) when the DAE has at most [`LEADING_CHECK_MAX`] unknowns;
+/// above, a diagonal block by its diagonal (the same test: the `R` of a diagonal matrix holds
+/// its entries), and any other block counts as regular (the DAE as one of index 1, as every
+/// DAE of that size did before). `None` when an entry of the block is not finite.
+fn block_regular(
+    g0: &[(usize, usize, f64)],
+    z: &[usize],
+    n: usize,
+    regular: impl Fn(nalgebra::DMatrix<f64>) -> bool,
+) -> Option<bool> {
+    let k = z.len();
+    let mut slot = vec![usize::MAX; n];
+    for (a, &j) in z.iter().enumerate() {
+        slot[j] = a;
+    }
+    let in_block: Vec<(usize, usize, f64)> = g0
+        .iter()
+        .filter(|e| slot[e.0] != usize::MAX && slot[e.1] != usize::MAX)
+        .map(|&(i, j, v)| (slot[i], slot[j], v))
+        .collect();
+    if in_block.iter().any(|e| !e.2.is_finite()) {
+        return None;
+    }
+    if n <= LEADING_CHECK_MAX {
+        let mut block = nalgebra::DMatrix::zeros(k, k);
+        for &(a, b, v) in &in_block {
+            block[(a, b)] = v;
+        }
+        return Some(regular(block));
+    }
+    let mut diagonal = vec![0.0; k];
+    for &(a, b, v) in &in_block {
+        if a != b && v != 0.0 {
+            return Some(true);
+        }
+        if a == b {
+            diagonal[a] = v;
+        }
+    }
+    let largest = diagonal.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let tol = 1e3 * n as f64 * f64::EPSILON * largest;
+    Some(largest > 0.0 && diagonal.iter().all(|v| v.abs() > tol))
 }
 
 /// A [`MatrixSink`] that keeps the diagonal of what is written and notes any non-zero entry off

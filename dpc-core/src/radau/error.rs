@@ -170,7 +170,9 @@ pub enum RadauError {
     /// index 2 or 3 at the last point reached and at the integration's start
     /// ([`crate::index_estimate::unknown_indices`]; those read so at both points are named):
     /// the likely cause, since their errors are then not scaled by the step. Where only the
-    /// last point reads them so, the error is [`RadauError::SingularPoint`].
+    /// last point reads them so, the error is [`RadauError::SingularPoint`]. Read for DAEs of
+    /// at most 500 unknowns (the estimate decomposes dense `n x n` matrices); a larger DAE's
+    /// failure is reported as it is.
     #[error(
         "{source}; at t = {} the DAE has unknowns of higher index than `Options::index` \
          declares (every unknown of index 1): {}; declare them in `index`",
@@ -231,7 +233,8 @@ pub enum RadauError {
     /// there would jump onto the constraint within its first step and return the solution of
     /// other initial values, without an error. Checked by `new` only (not by `reinit`, the
     /// allocation-free restart), from the structure [`crate::stabilised::Stabilised::detect`]
-    /// reads, for DAEs of at most 1 000 unknowns (the structure is read from dense matrices).
+    /// reads, for DAEs of any size (the structure is read from the entries the DAE writes,
+    /// never from dense `n x n` matrices).
     #[error(
         "the initial values miss {equation}: its residual at t = {} is {}, more than moving \
          every unknown by its tolerance (rtol |y| + atol) can change ({}); an integrator \
@@ -292,8 +295,8 @@ pub enum RadauError {
     /// (rtol_j |y_j| + atol_j)`, the most moving every unknown by its tolerance can change it.
     /// The first step must put the unknowns on the constraint and spends that much of their
     /// tolerance doing so, at every step size. Named when no equation is off by more than
-    /// round-off permits ([`RadauError::InconsistentStart`] first); checked for DAEs of at most
-    /// 1 000 unknowns, whatever index is declared.
+    /// round-off permits ([`RadauError::InconsistentStart`] first); checked for DAEs of any
+    /// size, whatever index is declared.
     #[error(
         "{source}; the initial values meet {equation} only to {} at t = {}, {:.2} of what \
          the tolerances allow it ({}): the first step must also move the unknowns onto it. \
