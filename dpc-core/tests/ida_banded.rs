@@ -15,6 +15,8 @@
 
 #[path = "common/food_web.rs"]
 mod food_web;
+#[path = "common/grid_heat.rs"]
+mod grid_heat;
 #[path = "common/heat2d.rs"]
 mod heat2d;
 #[path = "common/matrix_check.rs"]
@@ -29,8 +31,9 @@ use dpc_core::linear_solver::{
     half_bandwidths, BandLu, FaerLu, FaerSparseLu, LinearSolver, BAND_MAX_FILL,
 };
 use dpc_core::radau::Radau;
-use dpc_core::{bdf, radau, ImplicitDae, MatrixSink};
+use dpc_core::{bdf, radau, ImplicitDae};
 use food_web::*;
+use grid_heat::GridHeat;
 use heat2d::*;
 use matrix_check::{check_mass_matrix, matrix_error, perturbed};
 use std::time::Instant;
@@ -332,93 +335,12 @@ fn radau_solves_the_heat_equation() {
 }
 
 /// The heat equation of `common/heat2d.rs` on an `m x m` grid (edges algebraic), for
-/// [`band_against_sparse_on_growing_grids`].
-struct GridHeat(usize);
-impl GridHeat {
-    fn edge(&self, k: usize) -> bool {
-        let m = self.0;
-        let (i, j) = (k % m, k / m);
-        i == 0 || j == 0 || i == m - 1 || j == m - 1
-    }
-    fn c(&self) -> f64 {
-        ((self.0 - 1) * (self.0 - 1)) as f64
-    }
-}
-impl ImplicitDae for GridHeat {
-    fn dimension(&self) -> usize {
-        self.0 * self.0
-    }
-    fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-        let m = self.0;
-        for k in 0..m * m {
-            out[k] = if self.edge(k) {
-                y[k]
-            } else {
-                yp[k] - self.c() * (y[k - 1] + y[k + 1] + y[k - m] + y[k + m] - 4.0 * y[k])
-            };
-        }
-    }
-    fn iteration_matrix<S: MatrixSink + ?Sized>(
-        &self,
-        _: f64,
-        _: &[f64],
-        _: &[f64],
-        c: f64,
-        out: &mut S,
-    ) {
-        let m = self.0;
-        for k in 0..m * m {
-            if self.edge(k) {
-                out.set(k, k, 1.0);
-            } else {
-                out.set(k, k, c + 4.0 * self.c());
-                for q in [k - m, k - 1, k + 1, k + m] {
-                    out.set(k, q, -self.c());
-                }
-            }
-        }
-    }
-    fn is_differential(&self, i: usize) -> bool {
-        !self.edge(i)
-    }
-    fn iteration_pattern(&self) -> Option<Vec<(usize, usize)>> {
-        let m = self.0;
-        let mut p = Vec::new();
-        for k in 0..m * m {
-            if self.edge(k) {
-                p.push((k, k));
-            } else {
-                for q in [k - m, k - 1, k, k + 1, k + m] {
-                    p.push((k, q));
-                }
-            }
-        }
-        Some(p)
-    }
-}
-
 /// The BDF at `1e-6` on [`GridHeat`] to `t = 0.16` with `ls`: (wall time in ms,
 /// factorisations).
 fn grid_run<L: LinearSolver>(m: usize, ls: L) -> (f64, usize) {
     let h = GridHeat(m);
     let n = m * m;
-    let dx = 1.0 / (m - 1) as f64;
-    let y: Vec<f64> = (0..n)
-        .map(|k| {
-            let (x, z) = ((k % m) as f64 * dx, (k / m) as f64 * dx);
-            if h.edge(k) {
-                0.0
-            } else {
-                16.0 * x * (1.0 - x) * z * (1.0 - z)
-            }
-        })
-        .collect();
-    // y' from the residual at y' = 0 (the edges' rows do not hold y').
-    let mut r = vec![0.0; n];
-    h.residual(0.0, &y, &vec![0.0; n], &mut r);
-    let yp: Vec<f64> = (0..n)
-        .map(|k| if h.edge(k) { 0.0 } else { -r[k] })
-        .collect();
+    let (y, yp) = h.initial();
     let start = Instant::now();
     let opts = bdf::Options::with_tolerances(1e-6, 1e-6);
     let mut s = Bdf::new(h, ls, opts, 0.0, &y, &yp).unwrap();

@@ -4,7 +4,7 @@
 //! (`start_violation`) on DAEs far too large for a dense `n x n` matrix.
 //!
 //! The problems: the 2-D heat equation of SUNDIALS' `idaHeat2D_bnd` on an `m x m` grid
-//! (`common/heat2d.rs` on any grid, written by hand without a mass matrix), and a row of
+//! (`common/grid_heat.rs`: on any grid, written by hand without a mass matrix), and a row of
 //! independent planar pendulums in index-3 form. The default tests assert, with a counting
 //! allocator, that no allocation anywhere near `n^2` values is made; the `#[ignore]`d ones run
 //! 40 000 unknowns, time the set-up on growing grids and the stabilised form's step path
@@ -17,6 +17,8 @@
 
 #[path = "common/counting_allocator.rs"]
 mod counting_allocator;
+#[path = "common/grid_heat.rs"]
+mod grid_heat;
 
 use std::time::Instant;
 
@@ -26,97 +28,7 @@ use dpc_core::bdf::{self, Bdf, BdfError};
 use dpc_core::linear_solver::{BandLu, FaerSparseLu};
 use dpc_core::stabilised::Stabilised;
 use dpc_core::{ImplicitDae, MatrixSink};
-
-/// `u_t = u_xx + u_yy` on the unit square, `u = 0` on the edges, central differences on an
-/// `m x m` grid: the interior values differential, the edges algebraic (`0 = u`), unknowns
-/// numbered `i + m j`. Exact banded iteration matrix, its pattern declared, no mass matrix.
-struct GridHeat(usize);
-
-impl GridHeat {
-    fn edge(&self, k: usize) -> bool {
-        let m = self.0;
-        let (i, j) = (k % m, k / m);
-        i == 0 || j == 0 || i == m - 1 || j == m - 1
-    }
-    fn coeff(&self) -> f64 {
-        ((self.0 - 1) * (self.0 - 1)) as f64
-    }
-    /// Consistent initial values: `16 x (1 - x) y (1 - y)` inside, 0 on the edges.
-    fn initial(&self) -> (Vec<f64>, Vec<f64>) {
-        let m = self.0;
-        let n = m * m;
-        let dx = 1.0 / (m - 1) as f64;
-        let y: Vec<f64> = (0..n)
-            .map(|k| {
-                let (x, z) = ((k % m) as f64 * dx, (k / m) as f64 * dx);
-                if self.edge(k) {
-                    0.0
-                } else {
-                    16.0 * x * (1.0 - x) * z * (1.0 - z)
-                }
-            })
-            .collect();
-        let mut r = vec![0.0; n];
-        self.residual(0.0, &y, &vec![0.0; n], &mut r);
-        let yp = (0..n)
-            .map(|k| if self.edge(k) { 0.0 } else { -r[k] })
-            .collect();
-        (y, yp)
-    }
-}
-
-impl ImplicitDae for GridHeat {
-    fn dimension(&self) -> usize {
-        self.0 * self.0
-    }
-    fn residual(&self, _: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
-        let m = self.0;
-        for k in 0..m * m {
-            out[k] = if self.edge(k) {
-                y[k]
-            } else {
-                yp[k] - self.coeff() * (y[k - 1] + y[k + 1] + y[k - m] + y[k + m] - 4.0 * y[k])
-            };
-        }
-    }
-    fn iteration_matrix<S: MatrixSink + ?Sized>(
-        &self,
-        _: f64,
-        _: &[f64],
-        _: &[f64],
-        c: f64,
-        out: &mut S,
-    ) {
-        let m = self.0;
-        for k in 0..m * m {
-            if self.edge(k) {
-                out.set(k, k, 1.0);
-            } else {
-                out.set(k, k, c + 4.0 * self.coeff());
-                for q in [k - m, k - 1, k + 1, k + m] {
-                    out.set(k, q, -self.coeff());
-                }
-            }
-        }
-    }
-    fn is_differential(&self, i: usize) -> bool {
-        !self.edge(i)
-    }
-    fn iteration_pattern(&self) -> Option<Vec<(usize, usize)>> {
-        let m = self.0;
-        let mut p = Vec::new();
-        for k in 0..m * m {
-            if self.edge(k) {
-                p.push((k, k));
-            } else {
-                for q in [k - m, k - 1, k, k + 1, k + m] {
-                    p.push((k, q));
-                }
-            }
-        }
-        Some(p)
-    }
-}
+use grid_heat::GridHeat;
 
 /// `p` independent planar pendulums of length 1 in Cartesian coordinates, index 3: per
 /// pendulum `(x, y, u, v, l)` with `x' = u`, `y' = v`, `u' = -x l`, `v' = -y l - 1`,
