@@ -421,14 +421,11 @@ impl<S: MatrixOrigin, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
     }
 
     fn after_residual(&mut self, sys: &mut S, it: Iterate<'_, L>) -> Verdict {
-        if it.fresh {
-            if sys.last_matrix_moved() {
-                // A matrix moved to the new `cj` keeps an older `dF/dy`: it has not earned
-                // the trust IDA gives a fresh one, the carried factor stays.
-            } else {
-                self.ss = 20.0;
-                self.formed = true;
-            }
+        // A matrix moved to the new `cj` keeps an older `dF/dy`: it has not earned the trust
+        // IDA gives a fresh one (the factor 20), the carried factor stays.
+        if it.fresh && !sys.last_matrix_moved() {
+            self.ss = 20.0;
+            self.formed = true;
         }
         if !self.residual_pending {
             return Verdict::Continue;
