@@ -98,82 +98,15 @@ impl MatrixSink for faer::Mat<f64> {
     }
 }
 
-/// The entries of a few rows and columns of a matrix, captured into a compact dense block;
-/// every other entry written is dropped.
-///
-/// For a caller that needs a handful of entries of a Jacobian whose writer produces all of
-/// them (the constraint rows of an iteration matrix, say): the cost of clearing and reading
-/// grows with the number of selected entries, not with the matrix's size. Writes to unselected
-/// entries cost one table look-up.
-#[derive(Debug, Clone)]
-pub struct Selection {
-    rows: usize,
-    cols: usize,
-    /// Per row of the full matrix, its row in `values` (`NONE` when not selected).
-    row_slot: Vec<usize>,
-    /// Per column of the full matrix, its column in `values` (`NONE` when not selected).
-    col_slot: Vec<usize>,
-    /// Number of selected columns (the stride of `values`).
-    width: usize,
-    /// The selected entries, row by row.
-    values: Vec<f64>,
-}
-
 const NONE: usize = usize::MAX;
-
-impl Selection {
-    /// A selection of the entries `(r, k)` of a `rows x cols` matrix with `r` in
-    /// `selected_rows` and `k` in `selected_cols` (every column when `None`), all zero.
-    /// Indices out of range or repeated are ignored (their entries are never captured twice).
-    pub fn new(
-        rows: usize,
-        cols: usize,
-        selected_rows: &[usize],
-        selected_cols: Option<&[usize]>,
-    ) -> Self {
-        let ((row_slot, height), (col_slot, width)) =
-            selection_slots(rows, cols, selected_rows, selected_cols);
-        Self {
-            rows,
-            cols,
-            row_slot,
-            col_slot,
-            width,
-            values: vec![0.0; height * width],
-        }
-    }
-
-    /// The captured entry `(row, col)` (indices of the full matrix); zero for an entry outside
-    /// the selection.
-    #[inline]
-    pub fn get(&self, row: usize, col: usize) -> f64 {
-        self.slot(row, col).map_or(0.0, |s| self.values[s])
-    }
-
-    /// The captured entries row by row: selected row `r` and column `k` (their positions in
-    /// the lists given to [`Selection::new`], repeats and indices out of range dropped) at
-    /// `r * width + k`, with `width` the number of selected columns. For a caller that reads
-    /// the same entries at every evaluation without the look-ups of [`Selection::get`].
-    #[inline]
-    pub fn values(&self) -> &[f64] {
-        &self.values
-    }
-
-    #[inline]
-    fn slot(&self, row: usize, col: usize) -> Option<usize> {
-        let r = *self.row_slot.get(row)?;
-        let c = *self.col_slot.get(col)?;
-        (r != NONE && c != NONE).then(|| r * self.width + c)
-    }
-}
 
 /// Per index, its position among the selected ones (`NONE` when not selected), and the number
 /// selected.
 type Slots = (Vec<usize>, usize);
 
-/// The [`Slots`] of the rows and of the columns of a `rows x cols` matrix: the layout of
-/// [`Selection`] and [`SparseSelection`] (indices out of range or repeated are ignored; every
-/// column when `selected_cols` is `None`).
+/// The [`Slots`] of the rows and of the columns of a `rows x cols` matrix: the layout of a
+/// [`Selection`] (indices out of range or repeated are ignored; every column when
+/// `selected_cols` is `None`).
 fn selection_slots(
     rows: usize,
     cols: usize,
@@ -199,42 +132,19 @@ fn selection_slots(
     (row, col)
 }
 
-impl MatrixSink for Selection {
-    fn rows(&self) -> usize {
-        self.rows
-    }
-    fn cols(&self) -> usize {
-        self.cols
-    }
-    #[inline]
-    fn set(&mut self, row: usize, col: usize, value: f64) {
-        if let Some(s) = self.slot(row, col) {
-            self.values[s] = value;
-        }
-    }
-    #[inline]
-    fn add(&mut self, row: usize, col: usize, value: f64) {
-        if let Some(s) = self.slot(row, col) {
-            self.values[s] += value;
-        }
-    }
-    fn fill_zero(&mut self) {
-        self.values.fill(0.0);
-    }
-}
-
-/// The entries of a few rows and columns of a matrix, as [`Selection`] captures them, kept
-/// sparse when the selected block is large: per selected row the entries written, by column,
-/// so memory and the cost of clearing and reading grow with the entries written, not with the
-/// selected rows times the selected columns (the constraint rows of a DAE with thousands of
-/// constraints and positions). A block of at most [`DENSE_BLOCK_MAX`] entries is held densely,
-/// as [`Selection`] holds it (reading and writing an entry costs an index).
+/// The entries of a few rows and columns of a matrix (the constraint rows of an iteration
+/// matrix, say); every other entry written is dropped (one table look-up). A block of at most
+/// [`DENSE_BLOCK_MAX`] entries is held densely (reading and writing an entry costs an index);
+/// a larger one sparsely: per selected row the entries written, by column, so memory and the
+/// cost of clearing and reading grow with the entries written, not with the selected rows
+/// times the selected columns (the constraint rows of a DAE with thousands of constraints and
+/// positions).
 ///
 /// Sparse, [`fill_zero`](MatrixSink::fill_zero) keeps the positions written (with value
 /// zero), so a writer that writes the same entries at every evaluation allocates only at the
 /// first, and reading an entry costs a binary search in its row.
 #[derive(Debug, Clone)]
-pub(crate) struct SparseSelection {
+pub(crate) struct Selection {
     rows: usize,
     cols: usize,
     row_slot: Vec<usize>,
@@ -242,13 +152,13 @@ pub(crate) struct SparseSelection {
     storage: BlockStorage,
 }
 
-/// The largest selected block (rows times columns) [`SparseSelection`] holds densely (64 KB):
+/// The largest selected block (rows times columns) [`Selection`] holds densely (64 KB):
 /// the stabilised form of small models keeps the speed of dense reads (sparse blocks cost
 /// 10-18 % of the run time of Radau on one and four stabilised pendulums, 5 and 20 unknowns;
 /// dense ones with the hot loops reading rows as slices, 3 %).
 pub(crate) const DENSE_BLOCK_MAX: usize = 8192;
 
-/// How a [`SparseSelection`] holds its entries.
+/// How a [`Selection`] holds its entries.
 #[derive(Debug, Clone)]
 enum BlockStorage {
     /// Every selected entry, row by row (`width` selected columns).
@@ -257,7 +167,7 @@ enum BlockStorage {
     Sparse(Vec<Vec<(usize, f64)>>),
 }
 
-/// The entries of a row of a [`SparseSelection`], `(column slot, value)` by column slot.
+/// The entries of a row of a [`Selection`], `(column slot, value)` by column slot.
 pub(crate) enum RowEntries<'a> {
     /// Every selected column of a dense block (zeros included).
     Dense(std::iter::Enumerate<std::slice::Iter<'a, f64>>),
@@ -276,8 +186,10 @@ impl Iterator for RowEntries<'_> {
     }
 }
 
-impl SparseSelection {
-    /// The selection of [`Selection::new`] with the same arguments, all zero.
+impl Selection {
+    /// A selection of the entries `(r, k)` of a `rows x cols` matrix with `r` in
+    /// `selected_rows` and `k` in `selected_cols` (every column when `None`), all zero.
+    /// Indices out of range or repeated are ignored (their entries are never captured twice).
     pub(crate) fn new(
         rows: usize,
         cols: usize,
@@ -345,8 +257,7 @@ impl SparseSelection {
     }
 
     /// The `r`-th selected row of a dense block, every selected column by slot; `None` for a
-    /// sparse block (or `r` beyond the selected rows). For the hot loops of a small block,
-    /// which read it as [`Selection::values`] is read.
+    /// sparse block (or `r` beyond the selected rows). For the hot loops of a small block.
     #[inline]
     pub(crate) fn dense_row(&self, r: usize) -> Option<&[f64]> {
         match &self.storage {
@@ -382,7 +293,7 @@ fn sparse_entry(row: &mut Vec<(usize, f64)>, c: usize) -> &mut f64 {
     &mut row[at].1
 }
 
-impl MatrixSink for SparseSelection {
+impl MatrixSink for Selection {
     fn rows(&self) -> usize {
         self.rows
     }
@@ -495,8 +406,8 @@ impl MatrixSink for Triplets {
     }
 }
 
-/// Two sinks written at once: every entry goes to both (a destination and a [`Selection`]
-/// that keeps a few of its entries for the caller, for example).
+/// Two sinks written at once: every entry goes to both (a destination and a sink that keeps a
+/// few of its entries for the caller, for example).
 pub struct Tee<'a, A: ?Sized, B: ?Sized>(pub &'a mut A, pub &'a mut B);
 
 impl<A: MatrixSink + ?Sized, B: MatrixSink + ?Sized> MatrixSink for Tee<'_, A, B> {
@@ -588,18 +499,19 @@ mod tests {
     }
 
     #[test]
-    fn sparse_selection_keeps_what_a_selection_keeps() {
-        // A small block is held densely, a large one sparsely: the same entries either way.
+    fn a_large_selection_is_held_sparsely_with_the_entries_of_a_dense_one() {
+        // A small block is held densely, a large one sparsely: the selected entries of what
+        // was written either way.
         for cols in [5, DENSE_BLOCK_MAX] {
             let (rows, selected) = ([3, 1, 9, 1], [0, 4, 4, 2]);
             let all: Vec<usize> = (0..cols).collect();
             let selected_cols = if cols == 5 { &selected[..] } else { &all[..] };
-            let mut dense = Selection::new(4, cols, &rows, Some(selected_cols));
-            let mut sparse = SparseSelection::new(4, cols, &rows, Some(selected_cols));
+            let mut full = nalgebra::DMatrix::<f64>::zeros(4, cols);
+            let mut sparse = Selection::new(4, cols, &rows, Some(selected_cols));
             let held_dense = matches!(sparse.storage, BlockStorage::Dense { .. });
             assert_eq!(held_dense, cols == 5);
             for s in [
-                &mut dense as &mut dyn MatrixSink,
+                &mut full as &mut dyn MatrixSink,
                 &mut sparse as &mut dyn MatrixSink,
             ] {
                 for r in (0..4).rev() {
@@ -609,13 +521,14 @@ mod tests {
                 }
                 s.set(1, 4, 0.5);
                 s.add(3, 2, 0.25);
-                s.set(9, 0, 1.0);
             }
+            sparse.set(9, 0, 1.0);
             assert_eq!((sparse.rows(), sparse.cols()), (4, cols));
             for r in 0..6 {
                 for k in 0..6 {
-                    let (a, b) = (sparse.get(r, k), dense.get(r, k));
-                    assert_eq!(a.to_bits(), b.to_bits(), "({r}, {k})");
+                    let kept = [1, 3].contains(&r) && k < cols && selected_cols.contains(&k);
+                    let want = if kept { full[(r, k)] } else { 0.0 };
+                    assert_eq!(sparse.get(r, k).to_bits(), want.to_bits(), "({r}, {k})");
                 }
             }
             let non_zero = |r| {

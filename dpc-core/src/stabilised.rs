@@ -114,7 +114,7 @@
 
 use std::cell::RefCell;
 
-use crate::sink::{SparseSelection, Tee, Triplets};
+use crate::sink::{Selection, Tee, Triplets};
 use crate::{ImplicitDae, MatrixSink};
 
 /// A malformed description of the constraints of [`Stabilised::new`].
@@ -174,10 +174,10 @@ struct Scratch {
     dgdt: Vec<f64>,
     /// `G` (constraint rows, position columns) and, when `G` comes from the iteration matrix
     /// at `c = 0`, `dF_i/dq_j` of the kinematic rows.
-    grad: SparseSelection,
+    grad: Selection,
     /// The same entries of `dF/dy'` (for `c_j`, when the DAE supplies it) or of the iteration
     /// matrix at `c = 1` (for `c_j` when neither it nor `G` is supplied).
-    grad_c1: SparseSelection,
+    grad_c1: Selection,
     /// `c_j = dF_i/dq_j'` per kinematic pair.
     coef: Vec<f64>,
     /// `coef` was evaluated with the last iteration matrix and is held by the residual.
@@ -187,13 +187,13 @@ struct Scratch {
     /// The velocities `phi_j` the kinematic rows give, per unknown (zero off the positions).
     phi: Vec<f64>,
     /// The kinematic rows of `dF/dy + c dF/dy'`, every column.
-    kin_c: SparseSelection,
+    kin_c: Selection,
     /// The constraints' curvature (constraint rows, position columns), when supplied.
-    curv: SparseSelection,
+    curv: Selection,
     /// `y` moved along the velocities, and `G` there (forwards and backwards).
     y_moved: Vec<f64>,
-    grad_plus: SparseSelection,
-    grad_minus: SparseSelection,
+    grad_plus: Selection,
+    grad_minus: Selection,
     /// The non-zero entries of `G` by kinematic pair: pair `p`'s `(constraint, G_ap)` at
     /// `by_pair[by_pair_start[p]..by_pair_start[p + 1]]`, constraints ascending
     /// (`by_pair_next` the fill's cursor per pair).
@@ -374,20 +374,20 @@ impl<D: ImplicitDae> Stabilised<D> {
         let positions: Vec<usize> = kinematic.iter().map(|&(j, _)| j).collect();
         let kin_rows: Vec<usize> = kinematic.iter().map(|&(_, i)| i).collect();
         let both: Vec<usize> = rows.iter().chain(&kin_rows).copied().collect();
-        let constraint_block = || SparseSelection::new(n, n, &rows, Some(&positions));
+        let constraint_block = || Selection::new(n, n, &rows, Some(&positions));
         let scratch = RefCell::new(Scratch {
             res: vec![0.0; n],
             res_plus: vec![0.0; n],
             res_minus: vec![0.0; n],
             yp_moved: vec![0.0; n],
             dgdt: vec![0.0; n],
-            grad: SparseSelection::new(n, n, &both, Some(&positions)),
-            grad_c1: SparseSelection::new(n, n, &both, Some(&positions)),
+            grad: Selection::new(n, n, &both, Some(&positions)),
+            grad_c1: Selection::new(n, n, &both, Some(&positions)),
             coef: vec![0.0; kinematic.len()],
             coef_held: false,
             pair_phi: vec![0.0; kinematic.len()],
             phi: vec![0.0; n],
-            kin_c: SparseSelection::new(n, n, &kin_rows, None),
+            kin_c: Selection::new(n, n, &kin_rows, None),
             curv: constraint_block(),
             y_moved: vec![0.0; n],
             grad_plus: constraint_block(),
