@@ -241,3 +241,46 @@ fn nand_radau_passes_the_corners_at_tight_tolerances() {
         "{failed:?}"
     );
 }
+
+#[test]
+fn radau_names_the_switch_it_cannot_step_across_on_the_pump() {
+    // Radau takes its matrix at the step's start; at t = 50.1 ns the gate charge changes
+    // branch and Newton stalls at every step size (docs/integrators.md, "Which one"). The
+    // failure says so, with the contraction and the steps it was measured over, and points at
+    // the BDF, which integrates the pump at this tolerance (`pump_bdf_reaches_test_set_accuracy`).
+    let (y0, yp0) = Pump::initial();
+    let opts = radau::Options {
+        rtol: dpc_core::bdf::Tolerance::Scalar(1e-6),
+        atol: dpc_core::bdf::Tolerance::Vector(pump_atol(1e-6)),
+        index: PUMP_INDEX.to_vec(),
+        ..radau::Options::default()
+    };
+    let mut s = radau::Radau::new(Pump, NalgebraLu::<9>::new(), opts, 0.0, &y0, &yp0)
+        .expect("a consistent start");
+    let mut y = [0.0; 9];
+    let mut failure = None;
+    for tb in pump_breaks() {
+        s.set_stop_time(tb).expect("ahead");
+        if let Err(e) = s.solve_to(tb, &mut y, None) {
+            failure = Some(e);
+            break;
+        }
+    }
+    let Some(e) = failure else {
+        panic!("Radau integrated the pump at 1e-6 (it failed at 50.1 ns): update the docs");
+    };
+    println!("{e}");
+    let radau::RadauError::StalledNewton {
+        t,
+        h_first,
+        h_last,
+        theta,
+        ..
+    } = &e
+    else {
+        panic!("not diagnosed as a stalled iteration: {e}");
+    };
+    assert!((5.0e-8..5.03e-8).contains(t), "t = {t}");
+    assert!(*theta >= 0.5 && h_last * 1e3 <= *h_first, "{e:?}");
+    assert!(e.to_string().contains("the BDF"), "{e}");
+}

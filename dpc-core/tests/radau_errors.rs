@@ -14,7 +14,9 @@ use no_solution::NoSolution;
 /// 0: `0 = x - 1` (the unknown `z` appears nowhere: singular column);
 /// 1: `0 = 0` (an empty equation: singular row);
 /// 2: `0 = z - x` but the residual is NaN for `t > 0.5`;
-/// 3: `x' = x^2` instead of the decay (from `x(0) = 1` it blows up at `t = 1`), `0 = z - x`.
+/// 3: `x' = x^2` instead of the decay (from `x(0) = 1` it blows up at `t = 1`), `0 = z - x`;
+/// 4 (and any other): `0 = z - x`, the model solved without failure;
+/// 5: `0 = z - x` with a wrong iteration matrix (`dF/dz = 0.1` for 1).
 struct Broken {
     kind: u8,
 }
@@ -57,7 +59,7 @@ impl ImplicitDae for Broken {
             0 => m.set(1, 0, 1.0),
             1 => {}
             _ => {
-                m.set(1, 1, 1.0);
+                m.set(1, 1, if self.kind == 5 { 0.1 } else { 1.0 });
                 m.set(1, 0, -1.0);
             }
         }
@@ -150,6 +152,34 @@ fn blow_up_stops_with_step_too_small() {
             ));
         }
         other => panic!("expected a step failure, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_wrong_iteration_matrix_is_named_as_a_possible_cause() {
+    // Newton with `dF/dz` ten times too small overshoots `z` ninefold at every step size: the
+    // failure says that the matrix does not describe the equations at any step.
+    let err = run(5, NalgebraLu::<2>::new(), Options::default()).err();
+    match err {
+        Some(
+            ref e @ RadauError::StalledNewton {
+                t,
+                theta,
+                ref source,
+                ..
+            },
+        ) => {
+            println!("{e}");
+            assert!(t < 1e-6, "{t}");
+            assert!(theta >= 0.5, "{theta}");
+            let msg = e.to_string();
+            assert!(msg.contains("not the derivative of its residual"), "{msg}");
+            assert!(matches!(
+                **source,
+                RadauError::StepTooSmall { .. } | RadauError::RepeatedFailures { .. }
+            ));
+        }
+        other => panic!("expected a stalled iteration, got {other:?}"),
     }
 }
 

@@ -220,6 +220,39 @@ pub enum RadauError {
         #[source]
         source: Box<RadauError>,
     },
+    /// A step failed on Newton's iteration ([`RadauError::StepTooSmall`] or
+    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]) while its contraction
+    /// stayed at least 0.5 as the step was cut by a factor of 1 000 or more: the iteration
+    /// matrix formed at the step's start does not describe the stage equations at any step
+    /// size. For a smooth model with its exact iteration matrix the contraction falls with the
+    /// step. So either the residual's derivative jumps at the point reached (an equation that
+    /// switches between expressions there, as the MOS charge models of the Test Set's charge
+    /// pump do), or the model's iteration matrix is not the derivative of its residual.
+    #[error(
+        "{source}; Newton's contraction was still {theta:.2} after the step fell from {} to {}: the \
+         iteration matrix formed at the step's start does not describe the equations near \
+         t = {} at any step size. Either the residual's derivative jumps there (an equation \
+         that switches between expressions, as a MOS charge model or a friction law does; \
+         the BDF, which forms its matrix at the predicted end of each step, integrates across \
+         such switches) or the model's iteration matrix is not the derivative of its residual \
+         (compare it with `DifferenceQuotients`)",
+        Time(*h_first),
+        Time(*h_last),
+        Time(*t)
+    )]
+    StalledNewton {
+        /// Start of the step that failed.
+        t: f64,
+        /// Step size of the first failure that measured a contraction.
+        h_first: f64,
+        /// Step size of the last one.
+        h_last: f64,
+        /// The last contraction estimate.
+        theta: f64,
+        /// The failure itself.
+        #[source]
+        source: Box<RadauError>,
+    },
     /// [`crate::radau::Radau::stabilised`]: the constraint structure of the DAE cannot be read
     /// at the start ([`crate::stabilised::Stabilised::detect`]'s error).
     #[error("the DAE's constraint structure cannot be read at the start: {0}")]

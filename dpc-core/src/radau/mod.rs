@@ -153,6 +153,8 @@ pub struct Radau<D: ImplicitDae, L: LinearSolver> {
     faccon: f64,
     /// Newton contraction of the last accepted step.
     theta: f64,
+    /// The Newton failures of the step being attempted (for [`RadauError::StalledNewton`]).
+    stall: NewtonStall,
     /// The Jacobian must be evaluated at the next step start.
     need_jacobian: bool,
     controller: Controller,
@@ -292,6 +294,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             steps_at_start: 0,
             faccon: 1.0,
             theta: 0.0,
+            stall: NewtonStall::default(),
             need_jacobian: true,
             controller: Controller::default(),
             stages: StageWork::new(n),
@@ -567,11 +570,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             }
         }
         if self.higher_index {
-            return e;
+            return self.with_stall_diagnosis(e);
         }
         let t = self.t;
         match diagnose_failure(&self.dae, &self.start, (t, self.y(), self.yp())) {
-            FailureDiagnosis::None => e,
+            FailureDiagnosis::None => self.with_stall_diagnosis(e),
             FailureDiagnosis::Undeclared(unknowns) => RadauError::UndeclaredIndex {
                 t,
                 unknowns,
@@ -583,6 +586,33 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 unknowns,
                 source: Box::new(e),
             },
+        }
+    }
+
+    /// `e`, or, when it is a failure of Newton's iteration ([`RadauError::StepTooSmall`] or
+    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]) whose contraction did not
+    /// fall as the step was cut ([`NewtonStall::stalled`]), `e` wrapped in
+    /// [`RadauError::StalledNewton`].
+    fn with_stall_diagnosis(&self, e: RadauError) -> RadauError {
+        let newton = matches!(
+            e,
+            RadauError::StepTooSmall {
+                cause: StepFailure::Newton,
+                ..
+            } | RadauError::RepeatedFailures {
+                cause: StepFailure::Newton,
+                ..
+            }
+        );
+        match self.stall.stalled() {
+            Some((h_first, h_last, theta)) if newton => RadauError::StalledNewton {
+                t: self.t,
+                h_first,
+                h_last,
+                theta,
+                source: Box::new(e),
+            },
+            _ => e,
         }
     }
 
@@ -777,6 +807,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         }
         let mut newton_failures = 0;
         let mut error_failures = 0;
+        self.stall = NewtonStall::default();
         // The step size and error of the last error-test failure of this step.
         let mut last_failure: Option<(f64, f64)> = None;
         let mut rejected = false;
@@ -863,9 +894,10 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                     theta,
                     first_increment,
                 } => (iterations, theta, first_increment),
-                NewtonOutcome::Failed { factor } => {
+                NewtonOutcome::Failed { factor, theta } => {
                     self.stats.newton_failures += 1;
                     newton_failures += 1;
+                    self.stall.record(h, theta);
                     if self.nst() == 0 && !self.sm.current && !rejected {
                         // The Jacobian kept across a restart does not fit the new point:
                         // the same step with a fresh one.
@@ -1089,6 +1121,42 @@ impl<D: ImplicitDae> Radau<crate::stabilised::Stabilised<D>, crate::linear_solve
             ..opts
         };
         Radau::new(s.form, s.ls, opts, t0, &s.y, &s.yp)
+    }
+}
+
+/// The Newton failures of the step being attempted that measured a contraction: the first and
+/// the last `(h, theta)`. For a smooth model the iteration matrix formed at the step's start
+/// describes the stage equations better as the step shrinks (the contraction falls with `h`);
+/// a contraction that stays near 1 over decades of the step says it does not describe them at
+/// any step size ([`RadauError::StalledNewton`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct NewtonStall {
+    first: Option<(f64, f64)>,
+    last: Option<(f64, f64)>,
+}
+
+/// How far the step must have fallen between the first and the last failure of a stalled
+/// iteration ([`NewtonStall::stalled`]).
+const STALL_STEP_RANGE: f64 = 1e3;
+
+/// The least contraction of the last failure of a stalled iteration ([`NewtonStall::stalled`]).
+const STALL_THETA: f64 = 0.5;
+
+impl NewtonStall {
+    fn record(&mut self, h: f64, theta: f64) {
+        if theta > 0.0 {
+            self.first.get_or_insert((h, theta));
+            self.last = Some((h, theta));
+        }
+    }
+
+    /// `(h_first, h_last, theta_last)` when the step fell by at least [`STALL_STEP_RANGE`]
+    /// between the first and the last failure that measured a contraction and the last
+    /// contraction is still at least [`STALL_THETA`].
+    fn stalled(&self) -> Option<(f64, f64, f64)> {
+        let ((h_first, _), (h_last, theta)) = (self.first?, self.last?);
+        (h_last * STALL_STEP_RANGE <= h_first && theta >= STALL_THETA)
+            .then_some((h_first, h_last, theta))
     }
 }
 

@@ -76,8 +76,9 @@ pub(crate) enum NewtonOutcome {
         theta: f64,
         first_increment: f64,
     },
-    /// Will not converge at this step size: retry with `h * factor`.
-    Failed { factor: f64 },
+    /// Will not converge at this step size: retry with `h * factor`. `theta` is the last
+    /// contraction estimate (0 when the iteration stopped before measuring one).
+    Failed { factor: f64, theta: f64 },
     /// A residual was not finite in this equation: retry with half the step.
     NonFinite { equation: usize, t: f64 },
 }
@@ -159,7 +160,7 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
     let mut first_increment = 0.0;
     loop {
         if newt >= nit {
-            return NewtonOutcome::Failed { factor: 0.5 };
+            return NewtonOutcome::Failed { factor: 0.5, theta };
         }
         // Residuals at the stages.
         stage_derivatives(tab, p.h, &work.z, &mut work.yp);
@@ -214,7 +215,7 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
         };
         newt += 1;
         if !dyno.is_finite() {
-            return NewtonOutcome::Failed { factor: 0.5 };
+            return NewtonOutcome::Failed { factor: 0.5, theta };
         }
         if newt == 1 {
             first_increment = dyno / p.fnewt;
@@ -243,7 +244,7 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
                     }
                     let qnewt = dyth.clamp(1e-4, 20.0);
                     let factor = 0.8 * qnewt.powf(-1.0 / (4.0 + f64::from(remaining)));
-                    return NewtonOutcome::Failed { factor };
+                    return NewtonOutcome::Failed { factor, theta };
                 }
             } else {
                 if at_roundoff(sm, tab, p, work, dyno) {
@@ -251,6 +252,7 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
                 }
                 return NewtonOutcome::Failed {
                     factor: divergence_factor(theta),
+                    theta,
                 };
             }
         }
