@@ -52,6 +52,42 @@ use crate::linear_solver::{FactorError, LinearSolver};
 /// digits at that factor, 6.18 -> 6.07 median over 15) move.
 pub(crate) const MIN_CARRIED_RATE: f64 = 1e-4;
 
+/// The Newton failures of the step being attempted that measured a contraction: the first and
+/// the last `(h, theta)`. For a smooth model with its exact iteration matrix the matrix
+/// describes the equations of the step better as the step shrinks (the contraction falls
+/// with `h`); a contraction that stays near 1 over decades of the step says it does not
+/// describe them at any step size (`RadauError::StalledNewton`, `BdfError::StalledNewton`).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct NewtonStall {
+    first: Option<(f64, f64)>,
+    last: Option<(f64, f64)>,
+}
+
+/// How far the step must have fallen between the first and the last failure of a stalled
+/// iteration ([`NewtonStall::stalled`]).
+const STALL_STEP_RANGE: f64 = 1e3;
+
+/// The least contraction of the last failure of a stalled iteration ([`NewtonStall::stalled`]).
+const STALL_THETA: f64 = 0.5;
+
+impl NewtonStall {
+    pub(crate) fn record(&mut self, h: f64, theta: f64) {
+        if theta > 0.0 {
+            self.first.get_or_insert((h, theta));
+            self.last = Some((h, theta));
+        }
+    }
+
+    /// `(h_first, h_last, theta_last)` when the step fell by at least [`STALL_STEP_RANGE`]
+    /// between the first and the last failure that measured a contraction and the last
+    /// contraction is still at least [`STALL_THETA`].
+    pub(crate) fn stalled(&self) -> Option<(f64, f64, f64)> {
+        let ((h_first, _), (h_last, theta)) = (self.first?, self.last?);
+        (h_last * STALL_STEP_RANGE <= h_first && theta >= STALL_THETA)
+            .then_some((h_first, h_last, theta))
+    }
+}
+
 /// Why a Newton solve stopped without a solution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum NewtonFailure {

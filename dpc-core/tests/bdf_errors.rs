@@ -15,7 +15,8 @@ use problems::Robertson;
 /// `y0' + y0 = 0` and a second equation chosen by `kind`:
 /// 0: `0 = y0 - 1` (the unknown `z` appears nowhere: singular column);
 /// 1: `0 = 0` (an empty equation: singular row);
-/// 2: `0 = z - y0` but the residual is NaN for `t > 0.5`.
+/// 2: `0 = z - y0` but the residual is NaN for `t > 0.5`;
+/// 3: `0 = z - y0` with a wrong iteration matrix (`dF/dz = 0.1` for 1).
 struct Broken {
     kind: u8,
 }
@@ -30,7 +31,7 @@ impl ImplicitDae for Broken {
             0 => y[0] - 1.0,
             1 => 0.0,
             _ => {
-                if t > 0.5 {
+                if t > 0.5 && self.kind == 2 {
                     f64::NAN
                 } else {
                     y[1] - y[0]
@@ -51,7 +52,7 @@ impl ImplicitDae for Broken {
             0 => m.set(1, 0, 1.0),
             1 => {}
             _ => {
-                m.set(1, 1, 1.0);
+                m.set(1, 1, if self.kind == 3 { 0.1 } else { 1.0 });
                 m.set(1, 0, -1.0);
             }
         }
@@ -476,4 +477,31 @@ fn consistent_initialisation_without_a_solution_is_a_typed_failure() {
         }
         other => panic!("{other:?}"),
     }
+}
+
+#[test]
+fn a_wrong_iteration_matrix_is_named_as_a_possible_cause() {
+    // Newton with `dF/dz` ten times too small overshoots `z` ninefold at every step size: the
+    // failure says that the matrix does not describe the equations at any step.
+    let err = run(3, NalgebraLu::<2>::new(), [1.0, 1.0]).expect_err("Newton cannot converge");
+    println!("{err}");
+    let BdfError::StalledNewton {
+        t,
+        rate,
+        h_first,
+        h_last,
+        ref source,
+    } = err
+    else {
+        panic!("expected a stalled iteration, got {err:?}");
+    };
+    assert!(t < 1e-6, "{t}");
+    assert!(rate >= 0.5 && h_last * 1e3 <= h_first, "{err:?}");
+    assert!(
+        matches!(**source, BdfError::NewtonFailed { .. }),
+        "{source:?}"
+    );
+    assert!(err
+        .to_string()
+        .contains("not the derivative of its residual"));
 }

@@ -105,6 +105,35 @@ pub enum BdfError {
         /// Step size of the last attempt.
         h: f64,
     },
+    /// Newton's method failed ([`BdfError::NewtonFailed`]) while its convergence rate stayed
+    /// at least 0.5 as the step was cut by a factor of 1 000 or more: the iteration matrix
+    /// does not describe the equations near the point reached at any step size. For a smooth
+    /// model with its exact iteration matrix the rate falls with the step. So either the
+    /// residual's derivative jumps there (an equation that switches between expressions) or
+    /// the model's iteration matrix is not the derivative of its residual.
+    #[error(
+        "{source}; Newton's convergence rate was still {rate:.2} after the step fell from {} \
+         to {}: the iteration matrix does not describe the equations near t = {} at any step \
+         size. Either the residual's derivative jumps there (an equation that switches \
+         between expressions) or the model's iteration matrix is not the derivative of its \
+         residual (compare it with `DifferenceQuotients`)",
+        Time(*h_first),
+        Time(*h_last),
+        Time(*t)
+    )]
+    StalledNewton {
+        /// Start of the step that failed.
+        t: f64,
+        /// Step size of the first failure that measured a rate.
+        h_first: f64,
+        /// Step size of the last one.
+        h_last: f64,
+        /// The last rate measured.
+        rate: f64,
+        /// The failure itself.
+        #[source]
+        source: Box<BdfError>,
+    },
     /// Newton's method failed on the first step of a problem with index-3 unknowns whose error
     /// the BDF excludes from its test ([`super::HigherIndexControl::Exclude`], the default):
     /// the iteration matrix has condition `O(h^-3)` and Newton's test keeps those unknowns'

@@ -247,6 +247,9 @@ pub(crate) struct Corrector<L: LinearSolver> {
     /// The fallback weights of Newton's test (see [`RateTest::fallback`]), set with the
     /// weights when [`NewtonProblem::fallback`] is.
     pub w_scaled: Vec<f64>,
+    /// The last rate the failed attempt of the last solve measured (0 when it measured
+    /// none, or when the solve converged).
+    pub failed_rate: f64,
 }
 
 /// The corrector's system at one step: the iterate `y` with `y' = y'_pred + cj (y - y_pred)`.
@@ -374,6 +377,8 @@ pub(crate) struct RateTest<'a> {
     oldnrm: f64,
     /// The rate test passed; the residual test at the next evaluation decides.
     residual_pending: bool,
+    /// The last rate measured in this solve (0 before the second update).
+    pub rate: f64,
 }
 
 impl RateTest<'_> {
@@ -391,6 +396,7 @@ impl RateTest<'_> {
             residual_tolerance,
             oldnrm: 0.0,
             residual_pending: false,
+            rate: 0.0,
         }
     }
 
@@ -467,6 +473,7 @@ impl<S: MatrixOrigin, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
             } else {
                 ratio.powf(1.0 / m as f64)
             };
+            self.rate = rate;
             if rate > 0.9 {
                 if self.fallback_converged(it.delta) {
                     return self.converged();
@@ -517,6 +524,7 @@ impl<L: LinearSolver> Corrector<L> {
             w_scaled: vec![0.0; n],
             point: MatrixPoint::new(n),
             moves: 0,
+            failed_rate: 0.0,
         }
     }
 
@@ -581,6 +589,7 @@ impl<L: LinearSolver> Corrector<L> {
                 .newton
                 .solve(&mut self.ls, &mut system, &mut test, fresh);
             self.jac.ss = test.ss;
+            self.failed_rate = if outcome.is_err() { test.rate } else { 0.0 };
             self.moves += system.moved;
             let evaluated = system.evaluated;
             // A failure with a matrix whose `dF/dy` was not evaluated in this attempt (kept,

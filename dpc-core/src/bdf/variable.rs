@@ -95,6 +95,8 @@ pub struct Bdf<D: ImplicitDae, L: LinearSolver> {
     /// Where the current integration started, for the diagnosis of a failure
     /// ([`Bdf::with_index_diagnosis`]).
     start: crate::index_estimate::StartPoint,
+    /// The Newton failures of the step being attempted (for [`BdfError::StalledNewton`]).
+    stall: crate::newton::NewtonStall,
 }
 
 /// The method's state (names follow IDA): the current time, step and order, the history
@@ -286,6 +288,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             stats,
             opts,
             start: crate::index_estimate::StartPoint::new(t0, y0, yp0),
+            stall: crate::newton::NewtonStall::default(),
         })
     }
 
@@ -579,15 +582,15 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             }
         }
         if !self.index_at_most_one() {
-            return e;
+            return self.with_stall_diagnosis(e);
         }
         let t = self.state.tn;
         let (mut y, mut yp) = (vec![0.0; self.n], vec![0.0; self.n]);
         if self.interpolate(t, &mut y, Some(&mut yp)).is_err() {
-            return e;
+            return self.with_stall_diagnosis(e);
         }
         match diagnose_failure(&self.dae, &self.start, (t, &y, &yp)) {
-            FailureDiagnosis::None => e,
+            FailureDiagnosis::None => self.with_stall_diagnosis(e),
             FailureDiagnosis::Undeclared(unknowns) => BdfError::UndeclaredIndex {
                 t,
                 unknowns,
@@ -599,6 +602,24 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 unknowns,
                 source: Box::new(e),
             },
+        }
+    }
+
+    /// `e`, or, when it is a failure of Newton's iteration ([`BdfError::NewtonFailed`]) whose
+    /// rate did not fall as the step was cut (`NewtonStall::stalled` in `crate::newton`), `e`
+    /// wrapped in [`BdfError::StalledNewton`].
+    fn with_stall_diagnosis(&self, e: BdfError) -> BdfError {
+        match self.stall.stalled() {
+            Some((h_first, h_last, rate)) if matches!(e, BdfError::NewtonFailed { .. }) => {
+                BdfError::StalledNewton {
+                    t: self.state.tn,
+                    h_first,
+                    h_last,
+                    rate,
+                    source: Box::new(e),
+                }
+            }
+            _ => e,
         }
     }
 
@@ -793,6 +814,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         let mut strict = index1_dae;
         let mut ncf = 0;
         let mut nef = 0;
+        self.stall = crate::newton::NewtonStall::default();
         loop {
             self.update_weights()?;
             self.set_coeffs();
@@ -875,6 +897,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 Err(fail) => {
                     self.restore(saved_t);
                     self.stats.newton_failures += 1;
+                    self.stall.record(self.state.hh, self.corrector.failed_rate);
                     if strict && fail == NewtonFailure::Convergence {
                         // The stricter corrector failed with a fresh matrix (the corrector
                         // retries with one): try IDA's at the same step before cutting it.

@@ -154,7 +154,7 @@ pub struct Radau<D: ImplicitDae, L: LinearSolver> {
     /// Newton contraction of the last accepted step.
     theta: f64,
     /// The Newton failures of the step being attempted (for [`RadauError::StalledNewton`]).
-    stall: NewtonStall,
+    stall: crate::newton::NewtonStall,
     /// The Jacobian must be evaluated at the next step start.
     need_jacobian: bool,
     controller: Controller,
@@ -294,7 +294,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             steps_at_start: 0,
             faccon: 1.0,
             theta: 0.0,
-            stall: NewtonStall::default(),
+            stall: crate::newton::NewtonStall::default(),
             need_jacobian: true,
             controller: Controller::default(),
             stages: StageWork::new(n),
@@ -591,7 +591,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
 
     /// `e`, or, when it is a failure of Newton's iteration ([`RadauError::StepTooSmall`] or
     /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]) whose contraction did not
-    /// fall as the step was cut ([`NewtonStall::stalled`]), `e` wrapped in
+    /// fall as the step was cut (`NewtonStall::stalled` in `crate::newton`), `e` wrapped in
     /// [`RadauError::StalledNewton`].
     fn with_stall_diagnosis(&self, e: RadauError) -> RadauError {
         let newton = matches!(
@@ -807,7 +807,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         }
         let mut newton_failures = 0;
         let mut error_failures = 0;
-        self.stall = NewtonStall::default();
+        self.stall = crate::newton::NewtonStall::default();
         // The step size and error of the last error-test failure of this step.
         let mut last_failure: Option<(f64, f64)> = None;
         let mut rejected = false;
@@ -1121,42 +1121,6 @@ impl<D: ImplicitDae> Radau<crate::stabilised::Stabilised<D>, crate::linear_solve
             ..opts
         };
         Radau::new(s.form, s.ls, opts, t0, &s.y, &s.yp)
-    }
-}
-
-/// The Newton failures of the step being attempted that measured a contraction: the first and
-/// the last `(h, theta)`. For a smooth model the iteration matrix formed at the step's start
-/// describes the stage equations better as the step shrinks (the contraction falls with `h`);
-/// a contraction that stays near 1 over decades of the step says it does not describe them at
-/// any step size ([`RadauError::StalledNewton`]).
-#[derive(Debug, Clone, Copy, Default)]
-struct NewtonStall {
-    first: Option<(f64, f64)>,
-    last: Option<(f64, f64)>,
-}
-
-/// How far the step must have fallen between the first and the last failure of a stalled
-/// iteration ([`NewtonStall::stalled`]).
-const STALL_STEP_RANGE: f64 = 1e3;
-
-/// The least contraction of the last failure of a stalled iteration ([`NewtonStall::stalled`]).
-const STALL_THETA: f64 = 0.5;
-
-impl NewtonStall {
-    fn record(&mut self, h: f64, theta: f64) {
-        if theta > 0.0 {
-            self.first.get_or_insert((h, theta));
-            self.last = Some((h, theta));
-        }
-    }
-
-    /// `(h_first, h_last, theta_last)` when the step fell by at least [`STALL_STEP_RANGE`]
-    /// between the first and the last failure that measured a contraction and the last
-    /// contraction is still at least [`STALL_THETA`].
-    fn stalled(&self) -> Option<(f64, f64, f64)> {
-        let ((h_first, _), (h_last, theta)) = (self.first?, self.last?);
-        (h_last * STALL_STEP_RANGE <= h_first && theta >= STALL_THETA)
-            .then_some((h_first, h_last, theta))
     }
 }
 
