@@ -53,14 +53,27 @@ use crate::linear_solver::{FactorError, LinearSolver};
 pub(crate) const MIN_CARRIED_RATE: f64 = 1e-4;
 
 /// The Newton failures of the step being attempted that measured a contraction: the first and
-/// the last `(h, theta)`. For a smooth model with its exact iteration matrix the matrix
+/// the last, each as the step size, the contraction and the size of the first update (in the
+/// iteration's weighted norm). For a smooth model with its exact iteration matrix the matrix
 /// describes the equations of the step better as the step shrinks (the contraction falls
-/// with `h`); a contraction that stays near 1 over decades of the step says it does not
-/// describe them at any step size (`RadauError::StalledNewton`, `BdfError::StalledNewton`).
+/// with `h`); a contraction that stays near 1 over decades of the step, with first updates
+/// that do not grow as the step falls, says that it does not describe them at any step size
+/// (`RadauError::StalledNewton`, `BdfError::StalledNewton`). First updates that grow as the
+/// step falls say something else: the point reached misses an equation that the unknowns
+/// must meet within the step (on Jay's index-2 problem a step accepted off the constraint
+/// made `z` jump by the defect over `h`, and Newton then diverged from that jump).
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct NewtonStall {
-    first: Option<(f64, f64)>,
-    last: Option<(f64, f64)>,
+    first: Option<StalledAttempt>,
+    last: Option<StalledAttempt>,
+}
+
+/// One failed attempt of [`NewtonStall`].
+#[derive(Debug, Clone, Copy)]
+struct StalledAttempt {
+    h: f64,
+    theta: f64,
+    first_update: f64,
 }
 
 /// How far the step must have fallen between the first and the last failure of a stalled
@@ -70,21 +83,35 @@ const STALL_STEP_RANGE: f64 = 1e3;
 /// The least contraction of the last failure of a stalled iteration ([`NewtonStall::stalled`]).
 const STALL_THETA: f64 = 0.5;
 
+/// How much the first update may grow from the first to the last failure of a stalled
+/// iteration ([`NewtonStall::stalled`]): a decade, while the step falls by three or more.
+const STALL_UPDATE_GROWTH: f64 = 10.0;
+
 impl NewtonStall {
-    pub(crate) fn record(&mut self, h: f64, theta: f64) {
-        if theta > 0.0 {
-            self.first.get_or_insert((h, theta));
-            self.last = Some((h, theta));
+    /// Record a failed attempt at step `h` with last contraction `theta` (not recorded when 0:
+    /// none was measured) and first update `first_update`.
+    pub(crate) fn record(&mut self, h: f64, theta: f64, first_update: f64) {
+        if theta > 0.0 && first_update.is_finite() {
+            let a = StalledAttempt {
+                h,
+                theta,
+                first_update,
+            };
+            self.first.get_or_insert(a);
+            self.last = Some(a);
         }
     }
 
     /// `(h_first, h_last, theta_last)` when the step fell by at least [`STALL_STEP_RANGE`]
-    /// between the first and the last failure that measured a contraction and the last
-    /// contraction is still at least [`STALL_THETA`].
+    /// between the first and the last failure that measured a contraction, the last
+    /// contraction is still at least [`STALL_THETA`], and the first update grew by at most
+    /// [`STALL_UPDATE_GROWTH`].
     pub(crate) fn stalled(&self) -> Option<(f64, f64, f64)> {
-        let ((h_first, _), (h_last, theta)) = (self.first?, self.last?);
-        (h_last * STALL_STEP_RANGE <= h_first && theta >= STALL_THETA)
-            .then_some((h_first, h_last, theta))
+        let (a, b) = (self.first?, self.last?);
+        (b.h * STALL_STEP_RANGE <= a.h
+            && b.theta >= STALL_THETA
+            && b.first_update <= STALL_UPDATE_GROWTH * a.first_update)
+            .then_some((a.h, b.h, b.theta))
     }
 }
 

@@ -738,3 +738,29 @@ fn analytic_index2_undeclared_bdf_takes_idas_steps() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_step_accepted_off_jays_constraint_is_not_called_a_stalled_iteration() {
+    // At 0.92e-6 the BDF accepts a step off the constraint `y1^2 y2 = 1` and then fails
+    // (docs/integrators.md, "The BDF stops on Jay's problem"): Newton's first updates grow as
+    // the step falls (`z` must jump by the defect over `h`), which a matrix that does not
+    // describe the equations (`BdfError::StalledNewton`) does not show. The failure is
+    // reported as Newton's, without that diagnosis.
+    let (y0, yp0) = Jay::exact(0.0);
+    let opts = bdf::Options {
+        index: vec![1, 1, 2],
+        ..bdf::Options::with_tolerances(0.92e-6, 0.92e-6)
+    };
+    let dae = Jay {
+        linear_multiplier: false,
+    };
+    let mut s = bdf::Bdf::new(dae, FaerDenseLu::new(3), opts, 0.0, &y0, &yp0).expect("start");
+    let mut y = [0.0; 3];
+    match s.solve_to(JAY_T_END, &mut y, None) {
+        Ok(_) => println!("ran at 0.92e-6 (it failed there on 2026-12-05)"),
+        Err(e) => {
+            println!("{e}");
+            assert!(matches!(e, bdf::BdfError::NewtonFailed { .. }), "{e:?}");
+        }
+    }
+}

@@ -247,9 +247,9 @@ pub(crate) struct Corrector<L: LinearSolver> {
     /// The fallback weights of Newton's test (see [`RateTest::fallback`]), set with the
     /// weights when [`NewtonProblem::fallback`] is.
     pub w_scaled: Vec<f64>,
-    /// The last rate the failed attempt of the last solve measured (0 when it measured
-    /// none, or when the solve converged).
-    pub failed_rate: f64,
+    /// The last rate and the first update's norm of the failed attempt of the last solve
+    /// (the rate 0 when it measured none, or when the solve converged).
+    pub failed_rate: (f64, f64),
 }
 
 /// The corrector's system at one step: the iterate `y` with `y' = y'_pred + cj (y - y_pred)`.
@@ -379,6 +379,8 @@ pub(crate) struct RateTest<'a> {
     residual_pending: bool,
     /// The last rate measured in this solve (0 before the second update).
     pub rate: f64,
+    /// The norm of the solve's first update (in the weights of the test).
+    pub first_norm: f64,
 }
 
 impl RateTest<'_> {
@@ -397,6 +399,7 @@ impl RateTest<'_> {
             oldnrm: 0.0,
             residual_pending: false,
             rate: 0.0,
+            first_norm: 0.0,
         }
     }
 
@@ -465,6 +468,7 @@ impl<S: MatrixOrigin, L: LinearSolver> Convergence<S, L> for RateTest<'_> {
         let mut converged = false;
         if m == 0 {
             self.oldnrm = delnrm;
+            self.first_norm = delnrm;
             converged = delnrm <= 1e-4 * self.epcon;
         } else {
             let ratio = delnrm / self.oldnrm;
@@ -524,7 +528,7 @@ impl<L: LinearSolver> Corrector<L> {
             w_scaled: vec![0.0; n],
             point: MatrixPoint::new(n),
             moves: 0,
-            failed_rate: 0.0,
+            failed_rate: (0.0, 0.0),
         }
     }
 
@@ -589,7 +593,11 @@ impl<L: LinearSolver> Corrector<L> {
                 .newton
                 .solve(&mut self.ls, &mut system, &mut test, fresh);
             self.jac.ss = test.ss;
-            self.failed_rate = if outcome.is_err() { test.rate } else { 0.0 };
+            self.failed_rate = if outcome.is_err() {
+                (test.rate, test.first_norm)
+            } else {
+                (0.0, 0.0)
+            };
             self.moves += system.moved;
             let evaluated = system.evaluated;
             // A failure with a matrix whose `dF/dy` was not evaluated in this attempt (kept,

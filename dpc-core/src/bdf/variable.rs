@@ -897,7 +897,8 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 Err(fail) => {
                     self.restore(saved_t);
                     self.stats.newton_failures += 1;
-                    self.stall.record(self.state.hh, self.corrector.failed_rate);
+                    let (rate, first_update) = self.corrector.failed_rate;
+                    self.stall.record(self.state.hh, rate, first_update);
                     if strict && fail == NewtonFailure::Convergence {
                         // The stricter corrector failed with a fresh matrix (the corrector
                         // retries with one): try IDA's at the same step before cutting it.

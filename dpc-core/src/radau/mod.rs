@@ -894,10 +894,14 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                     theta,
                     first_increment,
                 } => (iterations, theta, first_increment),
-                NewtonOutcome::Failed { factor, theta } => {
+                NewtonOutcome::Failed {
+                    factor,
+                    theta,
+                    first_increment,
+                } => {
                     self.stats.newton_failures += 1;
                     newton_failures += 1;
-                    self.stall.record(h, theta);
+                    self.stall.record(h, theta, first_increment);
                     if self.nst() == 0 && !self.sm.current && !rejected {
                         // The Jacobian kept across a restart does not fit the new point:
                         // the same step with a fresh one.

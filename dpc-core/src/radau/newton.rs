@@ -77,8 +77,13 @@ pub(crate) enum NewtonOutcome {
         first_increment: f64,
     },
     /// Will not converge at this step size: retry with `h * factor`. `theta` is the last
-    /// contraction estimate (0 when the iteration stopped before measuring one).
-    Failed { factor: f64, theta: f64 },
+    /// contraction estimate (0 when the iteration stopped before measuring one),
+    /// `first_increment` the first update's norm in units of the Newton tolerance.
+    Failed {
+        factor: f64,
+        theta: f64,
+        first_increment: f64,
+    },
     /// A residual was not finite in this equation: retry with half the step.
     NonFinite { equation: usize, t: f64 },
 }
@@ -160,7 +165,11 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
     let mut first_increment = 0.0;
     loop {
         if newt >= nit {
-            return NewtonOutcome::Failed { factor: 0.5, theta };
+            return NewtonOutcome::Failed {
+                factor: 0.5,
+                theta,
+                first_increment,
+            };
         }
         // Residuals at the stages.
         stage_derivatives(tab, p.h, &work.z, &mut work.yp);
@@ -215,7 +224,11 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
         };
         newt += 1;
         if !dyno.is_finite() {
-            return NewtonOutcome::Failed { factor: 0.5, theta };
+            return NewtonOutcome::Failed {
+                factor: 0.5,
+                theta,
+                first_increment,
+            };
         }
         if newt == 1 {
             first_increment = dyno / p.fnewt;
@@ -244,7 +257,11 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
                     }
                     let qnewt = dyth.clamp(1e-4, 20.0);
                     let factor = 0.8 * qnewt.powf(-1.0 / (4.0 + f64::from(remaining)));
-                    return NewtonOutcome::Failed { factor, theta };
+                    return NewtonOutcome::Failed {
+                        factor,
+                        theta,
+                        first_increment,
+                    };
                 }
             } else {
                 if at_roundoff(sm, tab, p, work, dyno) {
@@ -253,6 +270,7 @@ pub(crate) fn solve<D: ImplicitDae, L: LinearSolver>(
                 return NewtonOutcome::Failed {
                     factor: divergence_factor(theta),
                     theta,
+                    first_increment,
                 };
             }
         }
