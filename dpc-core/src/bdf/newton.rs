@@ -247,9 +247,10 @@ pub(crate) struct Corrector<L: LinearSolver> {
     /// The fallback weights of Newton's test (see [`RateTest::fallback`]), set with the
     /// weights when [`NewtonProblem::fallback`] is.
     pub w_scaled: Vec<f64>,
-    /// The last rate and the first update's norm of the failed attempt of the last solve
-    /// (the rate 0 when it measured none, or when the solve converged).
-    pub failed_rate: (f64, f64),
+    /// `(rate, first update)` of the last solve's failed attempt: the last rate it measured
+    /// and the norm of its first update (both 0 when the solve converged; the rate 0 when it
+    /// measured none).
+    pub failed_attempt: (f64, f64),
 }
 
 /// The corrector's system at one step: the iterate `y` with `y' = y'_pred + cj (y - y_pred)`.
@@ -528,7 +529,7 @@ impl<L: LinearSolver> Corrector<L> {
             w_scaled: vec![0.0; n],
             point: MatrixPoint::new(n),
             moves: 0,
-            failed_rate: (0.0, 0.0),
+            failed_attempt: (0.0, 0.0),
         }
     }
 
@@ -593,7 +594,7 @@ impl<L: LinearSolver> Corrector<L> {
                 .newton
                 .solve(&mut self.ls, &mut system, &mut test, fresh);
             self.jac.ss = test.ss;
-            self.failed_rate = if outcome.is_err() {
+            self.failed_attempt = if outcome.is_err() {
                 (test.rate, test.first_norm)
             } else {
                 (0.0, 0.0)

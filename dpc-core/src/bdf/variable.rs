@@ -897,7 +897,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 Err(fail) => {
                     self.restore(saved_t);
                     self.stats.newton_failures += 1;
-                    let (rate, first_update) = self.corrector.failed_rate;
+                    let (rate, first_update) = self.corrector.failed_attempt;
                     self.stall.record(self.state.hh, rate, first_update);
                     if strict && fail == NewtonFailure::Convergence {
                         // The stricter corrector failed with a fresh matrix (the corrector
