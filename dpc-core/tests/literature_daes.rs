@@ -740,12 +740,12 @@ fn analytic_index2_undeclared_bdf_takes_idas_steps() {
 }
 
 #[test]
-fn a_step_accepted_off_jays_constraint_is_not_called_a_stalled_iteration() {
-    // At 0.92e-6 the BDF accepts a step off the constraint `y1^2 y2 = 1` and then fails
-    // (docs/integrators.md, "The BDF stops on Jay's problem"): Newton's first updates grow as
-    // the step falls (`z` must jump by the defect over `h`), which a matrix that does not
-    // describe the equations (`BdfError::StalledNewton`) does not show. The failure is
-    // reported as Newton's, without that diagnosis.
+fn a_step_accepted_off_jays_constraint_is_named_as_the_cause_of_the_failure() {
+    // At 0.92e-6 the BDF accepts a step off the constraint `y1^2 y2 = 1` (equation 2) and then
+    // fails (docs/integrators.md, "The BDF stops on Jay's problem"): Newton's first updates
+    // grow as the step falls (`z` must jump by the defect over `h`), which a matrix that does
+    // not describe the equations (`BdfError::StalledNewton`) does not show. The failure names
+    // the constraint and how far the point reached is off it.
     let (y0, yp0) = Jay::exact(0.0);
     let opts = bdf::Options {
         index: vec![1, 1, 2],
@@ -760,7 +760,24 @@ fn a_step_accepted_off_jays_constraint_is_not_called_a_stalled_iteration() {
         Ok(_) => println!("ran at 0.92e-6 (it failed there on 2026-12-05)"),
         Err(e) => {
             println!("{e}");
-            assert!(matches!(e, bdf::BdfError::NewtonFailed { .. }), "{e:?}");
+            let bdf::BdfError::OffConstraint {
+                ref equation,
+                residual,
+                bound,
+                ref source,
+                ..
+            } = e
+            else {
+                panic!("not named as a step off the constraint: {e:?}");
+            };
+            assert_eq!(equation, "equation 2");
+            // Off by more than a tenth of what the tolerances allow (the accepted steps before
+            // met it to 1e-9 and better).
+            assert!(
+                residual.abs() >= 0.1 * bound && residual.abs() < bound,
+                "{e:?}"
+            );
+            assert!(matches!(**source, bdf::BdfError::NewtonFailed { .. }));
         }
     }
 }

@@ -134,6 +134,44 @@ pub enum BdfError {
         #[source]
         source: Box<BdfError>,
     },
+    /// Newton's method failed ([`BdfError::NewtonFailed`]) with first updates that grew as the
+    /// step was cut by a factor of 1 000 or more, at a point that meets a constraint (an
+    /// equation without derivatives and without algebraic unknowns, or a position constraint's
+    /// hidden velocity constraint) only to at least a tenth of what the tolerances allow it
+    /// (`sum_j |dh/dy_j| (rtol_j |y_j| + atol_j)`): a step was accepted that far off the
+    /// constraint, and every later step must move the unknowns back onto it within the step,
+    /// which fails the error test at every step size and, at the smallest, Newton's iteration
+    /// (on Jay's index-2 problem, docs/integrators.md).
+    #[error(
+        "{source}; the point reached at t = {} meets {equation} only to {}, {:.2} of what \
+         the tolerances allow it ({}): a step was accepted that far off it, and the unknowns \
+         cannot move back onto it within a step (Newton's first updates grew as the step \
+         fell from {} to {})",
+        Time(*t),
+        Readable(*residual),
+        residual.abs() / bound,
+        Readable(*bound),
+        Time(*h_first),
+        Time(*h_last)
+    )]
+    OffConstraint {
+        /// Start of the step that failed.
+        t: f64,
+        /// The constraint's name ([`crate::ImplicitDae::equation_name`]; "the hidden velocity
+        /// constraint of ..." for the derivative of a position constraint).
+        equation: String,
+        /// Its residual at `t`.
+        residual: f64,
+        /// What moving every unknown by its tolerance can change it by.
+        bound: f64,
+        /// Step size of the first failure that measured a rate.
+        h_first: f64,
+        /// Step size of the last one.
+        h_last: f64,
+        /// The failure itself.
+        #[source]
+        source: Box<BdfError>,
+    },
     /// Newton's method failed on the first step of a problem with index-3 unknowns whose error
     /// the BDF excludes from its test ([`super::HigherIndexControl::Exclude`], the default):
     /// the iteration matrix has condition `O(h^-3)` and Newton's test keeps those unknowns'

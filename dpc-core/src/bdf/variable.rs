@@ -605,21 +605,45 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
     }
 
-    /// `e`, or, when it is a failure of Newton's iteration ([`BdfError::NewtonFailed`]) whose
+    /// `e`, or, when it is a failure of Newton's iteration ([`BdfError::NewtonFailed`]): whose
     /// rate did not fall as the step was cut (`NewtonStall::stalled` in `crate::newton`), `e`
-    /// wrapped in [`BdfError::StalledNewton`].
+    /// wrapped in [`BdfError::StalledNewton`]; whose first updates grew as it was cut, at a
+    /// point that meets a constraint only to a tenth or more of its tolerances, in
+    /// [`BdfError::OffConstraint`].
     fn with_stall_diagnosis(&self, e: BdfError) -> BdfError {
-        match self.stall.stalled() {
-            Some((h_first, h_last, rate)) if matches!(e, BdfError::NewtonFailed { .. }) => {
-                BdfError::StalledNewton {
-                    t: self.state.tn,
-                    h_first,
-                    h_last,
-                    rate,
-                    source: Box::new(e),
-                }
-            }
-            _ => e,
+        if !matches!(e, BdfError::NewtonFailed { .. }) {
+            return e;
+        }
+        let t = self.state.tn;
+        if let Some((h_first, h_last, rate)) = self.stall.stalled() {
+            return BdfError::StalledNewton {
+                t,
+                h_first,
+                h_last,
+                rate,
+                source: Box::new(e),
+            };
+        }
+        let Some((h_first, h_last)) = self.stall.first_updates_grew() else {
+            return e;
+        };
+        let (mut y, mut yp) = (vec![0.0; self.n], vec![0.0; self.n]);
+        if self.interpolate(t, &mut y, Some(&mut yp)).is_err() {
+            return e;
+        }
+        let point = crate::index_estimate::StartPoint::new(t, &y, &yp);
+        let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
+        match crate::stabilised::start_near_tolerance(&self.dae, &point, rtol, atol) {
+            Some(v) => BdfError::OffConstraint {
+                t,
+                equation: v.equation,
+                residual: v.residual,
+                bound: v.bound,
+                h_first,
+                h_last,
+                source: Box::new(e),
+            },
+            None => e,
         }
     }
 

@@ -253,6 +253,44 @@ pub enum RadauError {
         #[source]
         source: Box<RadauError>,
     },
+    /// A step failed on Newton's iteration ([`RadauError::StepTooSmall`] or
+    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]) with first updates that
+    /// grew as the step was cut by a factor of 1 000 or more, at a point that meets a
+    /// constraint (an equation without derivatives and without algebraic unknowns, or a
+    /// position constraint's hidden velocity constraint) only to at least a tenth of what the
+    /// tolerances allow it (`sum_j |dh/dy_j| (rtol_j |y_j| + atol_j)`): a step was accepted
+    /// that far off the constraint, and every later step must move the unknowns back onto it
+    /// within the step.
+    #[error(
+        "{source}; the point reached at t = {} meets {equation} only to {}, {:.2} of what \
+         the tolerances allow it ({}): a step was accepted that far off it, and the unknowns \
+         cannot move back onto it within a step (Newton's first updates grew as the step \
+         fell from {} to {})",
+        Time(*t),
+        Readable(*residual),
+        residual.abs() / bound,
+        Readable(*bound),
+        Time(*h_first),
+        Time(*h_last)
+    )]
+    OffConstraint {
+        /// Start of the step that failed.
+        t: f64,
+        /// The constraint's name ([`crate::ImplicitDae::equation_name`]; "the hidden velocity
+        /// constraint of ..." for the derivative of a position constraint).
+        equation: String,
+        /// Its residual at `t`.
+        residual: f64,
+        /// What moving every unknown by its tolerance can change it by.
+        bound: f64,
+        /// Step size of the first failure that measured a contraction.
+        h_first: f64,
+        /// Step size of the last one.
+        h_last: f64,
+        /// The failure itself.
+        #[source]
+        source: Box<RadauError>,
+    },
     /// [`crate::radau::Radau::stabilised`]: the constraint structure of the DAE cannot be read
     /// at the start ([`crate::stabilised::Stabilised::detect`]'s error).
     #[error("the DAE's constraint structure cannot be read at the start: {0}")]

@@ -590,9 +590,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     }
 
     /// `e`, or, when it is a failure of Newton's iteration ([`RadauError::StepTooSmall`] or
-    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]) whose contraction did not
-    /// fall as the step was cut (`NewtonStall::stalled` in `crate::newton`), `e` wrapped in
-    /// [`RadauError::StalledNewton`].
+    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]): whose contraction did
+    /// not fall as the step was cut (`NewtonStall::stalled` in `crate::newton`), `e` wrapped
+    /// in [`RadauError::StalledNewton`]; whose first updates grew as it was cut, at a point
+    /// that meets a constraint only to a tenth or more of its tolerances, in
+    /// [`RadauError::OffConstraint`].
     fn with_stall_diagnosis(&self, e: RadauError) -> RadauError {
         let newton = matches!(
             e,
@@ -604,15 +606,35 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 ..
             }
         );
-        match self.stall.stalled() {
-            Some((h_first, h_last, theta)) if newton => RadauError::StalledNewton {
-                t: self.t,
+        if !newton {
+            return e;
+        }
+        let t = self.t;
+        if let Some((h_first, h_last, theta)) = self.stall.stalled() {
+            return RadauError::StalledNewton {
+                t,
                 h_first,
                 h_last,
                 theta,
                 source: Box::new(e),
+            };
+        }
+        let Some((h_first, h_last)) = self.stall.first_updates_grew() else {
+            return e;
+        };
+        let point = crate::index_estimate::StartPoint::new(t, &self.y, &self.yp);
+        let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
+        match crate::stabilised::start_near_tolerance(&self.dae, &point, rtol, atol) {
+            Some(v) => RadauError::OffConstraint {
+                t,
+                equation: v.equation,
+                residual: v.residual,
+                bound: v.bound,
+                h_first,
+                h_last,
+                source: Box::new(e),
             },
-            _ => e,
+            None => e,
         }
     }
 
