@@ -115,13 +115,12 @@ impl NewtonStall {
     }
 
     /// `(h_first, h_last)` when the step fell by at least [`STALL_STEP_RANGE`] between the
-    /// first and the last failure that measured a contraction and the first update grew by
-    /// more than [`STALL_UPDATE_GROWTH`]: the unknowns had to move by about as much at every
-    /// step size, as when the point reached misses an equation they must meet within the step.
-    pub(crate) fn first_updates_grew(&self) -> Option<(f64, f64)> {
+    /// first and the last failure that measured a contraction: Newton failed over decades of
+    /// the step, which a point reached off a constraint the unknowns must meet within the step
+    /// causes too (`BdfError::OffConstraint`, `RadauError::OffConstraint`).
+    pub(crate) fn fell(&self) -> Option<(f64, f64)> {
         let (a, b) = (self.first?, self.last?);
-        (b.h * STALL_STEP_RANGE <= a.h && b.first_update > STALL_UPDATE_GROWTH * a.first_update)
-            .then_some((a.h, b.h))
+        (b.h * STALL_STEP_RANGE <= a.h).then_some((a.h, b.h))
     }
 }
 

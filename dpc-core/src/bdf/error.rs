@@ -110,7 +110,8 @@ pub enum BdfError {
     /// does not describe the equations near the point reached at any step size. For a smooth
     /// model with its exact iteration matrix the rate falls with the step. So either the
     /// residual's derivative jumps there (an equation that switches between expressions) or
-    /// the model's iteration matrix is not the derivative of its residual.
+    /// the model's iteration matrix is not the derivative of its residual. A point reached off
+    /// a constraint is named instead ([`BdfError::OffConstraint`]).
     #[error(
         "{source}; Newton's convergence rate was still {rate:.2} after the step fell from {} \
          to {}: the iteration matrix does not describe the equations near t = {} at any step \
@@ -134,8 +135,8 @@ pub enum BdfError {
         #[source]
         source: Box<BdfError>,
     },
-    /// Newton's method failed ([`BdfError::NewtonFailed`]) with first updates that grew as the
-    /// step was cut by a factor of 1 000 or more, at a point that meets a constraint (an
+    /// Newton's method failed ([`BdfError::NewtonFailed`]) at every step down to a thousandth
+    /// of the first that measured a rate, at a point that meets a constraint (an
     /// equation without derivatives and without algebraic unknowns, or a position constraint's
     /// hidden velocity constraint) only to at least a tenth of what the tolerances allow it
     /// (`sum_j |dh/dy_j| (rtol_j |y_j| + atol_j)`): a step was accepted that far off the
@@ -145,8 +146,8 @@ pub enum BdfError {
     #[error(
         "{source}; the point reached at t = {} meets {equation} only to {}, {:.2} of what \
          the tolerances allow it ({}): a step was accepted that far off it, and the unknowns \
-         cannot move back onto it within a step (Newton's first updates grew as the step \
-         fell from {} to {})",
+         cannot move back onto it within a step (Newton failed at every step from {} down to \
+         {})",
         Time(*t),
         Readable(*residual),
         residual.abs() / bound,

@@ -605,42 +605,42 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         }
     }
 
-    /// `e`, or, when it is a failure of Newton's iteration ([`BdfError::NewtonFailed`]): whose
-    /// rate did not fall as the step was cut (`NewtonStall::stalled` in `crate::newton`), `e`
-    /// wrapped in [`BdfError::StalledNewton`]; whose first updates grew as it was cut, at a
-    /// point that meets a constraint only to a tenth or more of its tolerances, in
-    /// [`BdfError::OffConstraint`].
+    /// `e`, or, when it is a failure of Newton's iteration ([`BdfError::NewtonFailed`]) over
+    /// decades of the step (`NewtonStall::fell` in `crate::newton`): at a point that meets a
+    /// constraint only to a tenth or more of its tolerances, `e` wrapped in
+    /// [`BdfError::OffConstraint`]; else, when its rate did not fall as the step was cut
+    /// (`NewtonStall::stalled`), in [`BdfError::StalledNewton`].
     fn with_stall_diagnosis(&self, e: BdfError) -> BdfError {
         if !matches!(e, BdfError::NewtonFailed { .. }) {
             return e;
         }
         let t = self.state.tn;
-        if let Some((h_first, h_last, rate)) = self.stall.stalled() {
-            return BdfError::StalledNewton {
+        let Some((h_first, h_last)) = self.stall.fell() else {
+            return e;
+        };
+        let (mut y, mut yp) = (vec![0.0; self.n], vec![0.0; self.n]);
+        if self.interpolate(t, &mut y, Some(&mut yp)).is_ok() {
+            let point = crate::index_estimate::StartPoint::new(t, &y, &yp);
+            let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
+            if let Some(v) = crate::stabilised::start_near_tolerance(&self.dae, &point, rtol, atol)
+            {
+                return BdfError::OffConstraint {
+                    t,
+                    equation: v.equation,
+                    residual: v.residual,
+                    bound: v.bound,
+                    h_first,
+                    h_last,
+                    source: Box::new(e),
+                };
+            }
+        }
+        match self.stall.stalled() {
+            Some((h_first, h_last, rate)) => BdfError::StalledNewton {
                 t,
                 h_first,
                 h_last,
                 rate,
-                source: Box::new(e),
-            };
-        }
-        let Some((h_first, h_last)) = self.stall.first_updates_grew() else {
-            return e;
-        };
-        let (mut y, mut yp) = (vec![0.0; self.n], vec![0.0; self.n]);
-        if self.interpolate(t, &mut y, Some(&mut yp)).is_err() {
-            return e;
-        }
-        let point = crate::index_estimate::StartPoint::new(t, &y, &yp);
-        let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
-        match crate::stabilised::start_near_tolerance(&self.dae, &point, rtol, atol) {
-            Some(v) => BdfError::OffConstraint {
-                t,
-                equation: v.equation,
-                residual: v.residual,
-                bound: v.bound,
-                h_first,
-                h_last,
                 source: Box::new(e),
             },
             None => e,

@@ -227,7 +227,8 @@ pub enum RadauError {
     /// size. For a smooth model with its exact iteration matrix the contraction falls with the
     /// step. So either the residual's derivative jumps at the point reached (an equation that
     /// switches between expressions there, as the MOS charge models of the Test Set's charge
-    /// pump do), or the model's iteration matrix is not the derivative of its residual.
+    /// pump do), or the model's iteration matrix is not the derivative of its residual. A
+    /// point reached off a constraint is named instead ([`RadauError::OffConstraint`]).
     #[error(
         "{source}; Newton's contraction was still {theta:.2} after the step fell from {} to {}: the \
          iteration matrix formed at the step's start does not describe the equations near \
@@ -254,8 +255,8 @@ pub enum RadauError {
         source: Box<RadauError>,
     },
     /// A step failed on Newton's iteration ([`RadauError::StepTooSmall`] or
-    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]) with first updates that
-    /// grew as the step was cut by a factor of 1 000 or more, at a point that meets a
+    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]) at every step down to a
+    /// thousandth of the first that measured a contraction, at a point that meets a
     /// constraint (an equation without derivatives and without algebraic unknowns, or a
     /// position constraint's hidden velocity constraint) only to at least a tenth of what the
     /// tolerances allow it (`sum_j |dh/dy_j| (rtol_j |y_j| + atol_j)`): a step was accepted
@@ -264,8 +265,8 @@ pub enum RadauError {
     #[error(
         "{source}; the point reached at t = {} meets {equation} only to {}, {:.2} of what \
          the tolerances allow it ({}): a step was accepted that far off it, and the unknowns \
-         cannot move back onto it within a step (Newton's first updates grew as the step \
-         fell from {} to {})",
+         cannot move back onto it within a step (Newton failed at every step from {} down to \
+         {})",
         Time(*t),
         Readable(*residual),
         residual.abs() / bound,

@@ -590,11 +590,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     }
 
     /// `e`, or, when it is a failure of Newton's iteration ([`RadauError::StepTooSmall`] or
-    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]): whose contraction did
-    /// not fall as the step was cut (`NewtonStall::stalled` in `crate::newton`), `e` wrapped
-    /// in [`RadauError::StalledNewton`]; whose first updates grew as it was cut, at a point
-    /// that meets a constraint only to a tenth or more of its tolerances, in
-    /// [`RadauError::OffConstraint`].
+    /// [`RadauError::RepeatedFailures`] with [`StepFailure::Newton`]) over decades of the step
+    /// (`NewtonStall::fell` in `crate::newton`): at a point that meets a constraint only to a
+    /// tenth or more of its tolerances, `e` wrapped in [`RadauError::OffConstraint`]; else,
+    /// when its contraction did not fall as the step was cut (`NewtonStall::stalled`), in
+    /// [`RadauError::StalledNewton`].
     fn with_stall_diagnosis(&self, e: RadauError) -> RadauError {
         let newton = matches!(
             e,
@@ -610,28 +610,28 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             return e;
         }
         let t = self.t;
-        if let Some((h_first, h_last, theta)) = self.stall.stalled() {
-            return RadauError::StalledNewton {
-                t,
-                h_first,
-                h_last,
-                theta,
-                source: Box::new(e),
-            };
-        }
-        let Some((h_first, h_last)) = self.stall.first_updates_grew() else {
+        let Some((h_first, h_last)) = self.stall.fell() else {
             return e;
         };
         let point = crate::index_estimate::StartPoint::new(t, &self.y, &self.yp);
         let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
-        match crate::stabilised::start_near_tolerance(&self.dae, &point, rtol, atol) {
-            Some(v) => RadauError::OffConstraint {
+        if let Some(v) = crate::stabilised::start_near_tolerance(&self.dae, &point, rtol, atol) {
+            return RadauError::OffConstraint {
                 t,
                 equation: v.equation,
                 residual: v.residual,
                 bound: v.bound,
                 h_first,
                 h_last,
+                source: Box::new(e),
+            };
+        }
+        match self.stall.stalled() {
+            Some((h_first, h_last, theta)) => RadauError::StalledNewton {
+                t,
+                h_first,
+                h_last,
+                theta,
                 source: Box::new(e),
             },
             None => e,
