@@ -582,15 +582,15 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             }
         }
         if !self.index_at_most_one() {
-            return self.with_stall_diagnosis(e);
+            return self.with_newton_diagnosis(e);
         }
         let t = self.state.tn;
         let (mut y, mut yp) = (vec![0.0; self.n], vec![0.0; self.n]);
         if self.interpolate(t, &mut y, Some(&mut yp)).is_err() {
-            return self.with_stall_diagnosis(e);
+            return self.with_newton_diagnosis(e);
         }
         match diagnose_failure(&self.dae, &self.start, (t, &y, &yp)) {
-            FailureDiagnosis::None => self.with_stall_diagnosis(e),
+            FailureDiagnosis::None => self.with_newton_diagnosis(e),
             FailureDiagnosis::Undeclared(unknowns) => BdfError::UndeclaredIndex {
                 t,
                 unknowns,
@@ -610,7 +610,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
     /// constraint only to a tenth or more of its tolerances, `e` wrapped in
     /// [`BdfError::OffConstraint`]; else, when its rate did not fall as the step was cut
     /// (`NewtonStall::stalled`), in [`BdfError::StalledNewton`].
-    fn with_stall_diagnosis(&self, e: BdfError) -> BdfError {
+    fn with_newton_diagnosis(&self, e: BdfError) -> BdfError {
         if !matches!(e, BdfError::NewtonFailed { .. }) {
             return e;
         }

@@ -570,11 +570,11 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
             }
         }
         if self.higher_index {
-            return self.with_stall_diagnosis(e);
+            return self.with_newton_diagnosis(e);
         }
         let t = self.t;
         match diagnose_failure(&self.dae, &self.start, (t, self.y(), self.yp())) {
-            FailureDiagnosis::None => self.with_stall_diagnosis(e),
+            FailureDiagnosis::None => self.with_newton_diagnosis(e),
             FailureDiagnosis::Undeclared(unknowns) => RadauError::UndeclaredIndex {
                 t,
                 unknowns,
@@ -595,7 +595,7 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
     /// tenth or more of its tolerances, `e` wrapped in [`RadauError::OffConstraint`]; else,
     /// when its contraction did not fall as the step was cut (`NewtonStall::stalled`), in
     /// [`RadauError::StalledNewton`].
-    fn with_stall_diagnosis(&self, e: RadauError) -> RadauError {
+    fn with_newton_diagnosis(&self, e: RadauError) -> RadauError {
         let newton = matches!(
             e,
             RadauError::StepTooSmall {
