@@ -124,6 +124,46 @@ impl NewtonStall {
     }
 }
 
+/// What [`NewtonStall::diagnose`] finds for an integrator's Newton failure.
+pub(crate) enum NewtonDiagnosis {
+    /// The point reached meets a constraint only to a tenth or more of what its tolerances
+    /// allow it, after Newton failed from `h_first` down to `h_last`.
+    OffConstraint {
+        violation: crate::stabilised::ConstraintViolation,
+        h_first: f64,
+        h_last: f64,
+    },
+    /// [`NewtonStall::stalled`]: `(h_first, h_last, theta)`.
+    Stalled(f64, f64, f64),
+}
+
+impl NewtonStall {
+    /// The cause of a Newton failure of `dae` whose step failed at `(t, y, y')` with the
+    /// tolerances `rtol`, `atol`, when the failures this record holds span decades of the step
+    /// ([`NewtonStall::fell`]): a point off a constraint (`start_near_tolerance` of the
+    /// stabilised form's structure, read at the point), checked first, or a stalled iteration.
+    /// For the integrators' error paths (it reads the DAE's structure there).
+    pub(crate) fn diagnose<D: crate::ImplicitDae>(
+        &self,
+        dae: &D,
+        (t, y, yp): (f64, &[f64], &[f64]),
+        rtol: &crate::bdf::Tolerance,
+        atol: &crate::bdf::Tolerance,
+    ) -> Option<NewtonDiagnosis> {
+        let (h_first, h_last) = self.fell()?;
+        let point = crate::index_estimate::StartPoint::new(t, y, yp);
+        if let Some(violation) = crate::stabilised::start_near_tolerance(dae, &point, rtol, atol) {
+            return Some(NewtonDiagnosis::OffConstraint {
+                violation,
+                h_first,
+                h_last,
+            });
+        }
+        let (h_first, h_last, theta) = self.stalled()?;
+        Some(NewtonDiagnosis::Stalled(h_first, h_last, theta))
+    }
+}
+
 /// Why a Newton solve stopped without a solution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum NewtonFailure {

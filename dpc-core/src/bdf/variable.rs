@@ -614,29 +614,28 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         if !matches!(e, BdfError::NewtonFailed { .. }) {
             return e;
         }
+        use crate::newton::NewtonDiagnosis;
         let t = self.state.tn;
-        let Some((h_first, h_last)) = self.stall.fell() else {
-            return e;
-        };
         let (mut y, mut yp) = (vec![0.0; self.n], vec![0.0; self.n]);
-        if self.interpolate(t, &mut y, Some(&mut yp)).is_ok() {
-            let point = crate::index_estimate::StartPoint::new(t, &y, &yp);
-            let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
-            if let Some(v) = crate::stabilised::start_near_tolerance(&self.dae, &point, rtol, atol)
-            {
-                return BdfError::OffConstraint {
-                    t,
-                    equation: v.equation,
-                    residual: v.residual,
-                    bound: v.bound,
-                    h_first,
-                    h_last,
-                    source: Box::new(e),
-                };
-            }
+        if self.interpolate(t, &mut y, Some(&mut yp)).is_err() {
+            return e;
         }
-        match self.stall.stalled() {
-            Some((h_first, h_last, rate)) => BdfError::StalledNewton {
+        let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
+        match self.stall.diagnose(&self.dae, (t, &y, &yp), rtol, atol) {
+            Some(NewtonDiagnosis::OffConstraint {
+                violation: v,
+                h_first,
+                h_last,
+            }) => BdfError::OffConstraint {
+                t,
+                equation: v.equation,
+                residual: v.residual,
+                bound: v.bound,
+                h_first,
+                h_last,
+                source: Box::new(e),
+            },
+            Some(NewtonDiagnosis::Stalled(h_first, h_last, rate)) => BdfError::StalledNewton {
                 t,
                 h_first,
                 h_last,

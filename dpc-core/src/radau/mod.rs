@@ -609,14 +609,18 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
         if !newton {
             return e;
         }
+        use crate::newton::NewtonDiagnosis;
         let t = self.t;
-        let Some((h_first, h_last)) = self.stall.fell() else {
-            return e;
-        };
-        let point = crate::index_estimate::StartPoint::new(t, &self.y, &self.yp);
         let (rtol, atol) = (&self.opts.rtol, &self.opts.atol);
-        if let Some(v) = crate::stabilised::start_near_tolerance(&self.dae, &point, rtol, atol) {
-            return RadauError::OffConstraint {
+        match self
+            .stall
+            .diagnose(&self.dae, (t, &self.y, &self.yp), rtol, atol)
+        {
+            Some(NewtonDiagnosis::OffConstraint {
+                violation: v,
+                h_first,
+                h_last,
+            }) => RadauError::OffConstraint {
                 t,
                 equation: v.equation,
                 residual: v.residual,
@@ -624,10 +628,8 @@ impl<D: ImplicitDae, L: LinearSolver> Radau<D, L> {
                 h_first,
                 h_last,
                 source: Box::new(e),
-            };
-        }
-        match self.stall.stalled() {
-            Some((h_first, h_last, theta)) => RadauError::StalledNewton {
+            },
+            Some(NewtonDiagnosis::Stalled(h_first, h_last, theta)) => RadauError::StalledNewton {
                 t,
                 h_first,
                 h_last,
