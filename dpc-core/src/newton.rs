@@ -106,38 +106,22 @@ impl NewtonStall {
     /// between the first and the last failure that measured a contraction, the last
     /// contraction is still at least [`STALL_THETA`], and the first update grew by at most
     /// [`STALL_UPDATE_GROWTH`].
-    pub(crate) fn stalled(&self) -> Option<(f64, f64, f64)> {
+    fn stalled(&self) -> Option<(f64, f64, f64)> {
+        let (h_first, h_last) = self.fell()?;
         let (a, b) = (self.first?, self.last?);
-        (b.h * STALL_STEP_RANGE <= a.h
-            && b.theta >= STALL_THETA
-            && b.first_update <= STALL_UPDATE_GROWTH * a.first_update)
-            .then_some((a.h, b.h, b.theta))
+        (b.theta >= STALL_THETA && b.first_update <= STALL_UPDATE_GROWTH * a.first_update)
+            .then_some((h_first, h_last, b.theta))
     }
 
     /// `(h_first, h_last)` when the step fell by at least [`STALL_STEP_RANGE`] between the
     /// first and the last failure that measured a contraction: Newton failed over decades of
     /// the step, which a point reached off a constraint the unknowns must meet within the step
     /// causes too (`BdfError::OffConstraint`, `RadauError::OffConstraint`).
-    pub(crate) fn fell(&self) -> Option<(f64, f64)> {
+    fn fell(&self) -> Option<(f64, f64)> {
         let (a, b) = (self.first?, self.last?);
         (b.h * STALL_STEP_RANGE <= a.h).then_some((a.h, b.h))
     }
-}
 
-/// What [`NewtonStall::diagnose`] finds for an integrator's Newton failure.
-pub(crate) enum NewtonDiagnosis {
-    /// The point reached meets a constraint only to a tenth or more of what its tolerances
-    /// allow it, after Newton failed from `h_first` down to `h_last`.
-    OffConstraint {
-        violation: crate::stabilised::ConstraintViolation,
-        h_first: f64,
-        h_last: f64,
-    },
-    /// [`NewtonStall::stalled`]: `(h_first, h_last, theta)`.
-    Stalled(f64, f64, f64),
-}
-
-impl NewtonStall {
     /// The cause of a Newton failure of `dae` whose step failed at `(t, y, y')` with the
     /// tolerances `rtol`, `atol`, when the failures this record holds span decades of the step
     /// ([`NewtonStall::fell`]): a point off a constraint (`start_near_tolerance` of the
@@ -162,6 +146,19 @@ impl NewtonStall {
         let (h_first, h_last, theta) = self.stalled()?;
         Some(NewtonDiagnosis::Stalled(h_first, h_last, theta))
     }
+}
+
+/// What [`NewtonStall::diagnose`] finds for an integrator's Newton failure.
+pub(crate) enum NewtonDiagnosis {
+    /// The point reached meets a constraint only to a tenth or more of what its tolerances
+    /// allow it, after Newton failed from `h_first` down to `h_last`.
+    OffConstraint {
+        violation: crate::stabilised::ConstraintViolation,
+        h_first: f64,
+        h_last: f64,
+    },
+    /// [`NewtonStall::stalled`]: `(h_first, h_last, theta)`.
+    Stalled(f64, f64, f64),
 }
 
 /// Why a Newton solve stopped without a solution.
