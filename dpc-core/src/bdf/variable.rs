@@ -6,10 +6,13 @@
 //! the corrector is Newton's method on `F(t, y, y'_pred + cj (y - y_pred)) = 0` with
 //! `cj = -alpha_s / h`, and the local error estimate is `ck |y - y_pred|`. Step and order
 //! selection follow IDA's `IDATestError`/`IDACompleteStep`, including the initial phase that
-//! raises the order and doubles the step until the first failure, with two departures: after
-//! repeated error-test failures within a step the order drops to 1 only from the fifth failure
-//! (IDA: the third), and a step that passed after two or more failures is not enlarged at
-//! once. An implicit ODE keeps IDA's rules in both (`IDA_ORDER_ONE_FAILURES`).
+//! raises the order and doubles the step until the first failure, with three departures:
+//! on a DAE whose unknowns all have index at most 1 the order drops to 1 only from the fifth
+//! error-test failure within a step (IDA: the third; `KEEP_ORDER_FAILURES`), on any DAE a step
+//! that passed after two or more failures is not enlarged at once, and on a DAE with unknowns
+//! of index 2 or 3 a step that passed at order 1 after a failure is held for two steps
+//! (`ORDER_ONE_HOLD`). An implicit ODE keeps IDA's rules in the first two
+//! (`IDA_ORDER_ONE_FAILURES`).
 //! On the Test Set's transistor amplifier IDA's rules lock into a cycle of failures at orders 1
 //! and 2 through each switching transient (at `rtol = 1e-8`: more than 100 000 steps, most of
 //! them rejected); with these two rules it takes 15 608 steps, and 7 657 with the corrector's
@@ -36,17 +39,30 @@ use crate::ImplicitDae;
 
 const MAXORD: usize = 5;
 
-/// Error-test failures within one step from which the order drops to 1 on DAEs (IDA: 3).
+/// Error-test failures within one step from which the order drops to 1 on DAEs whose unknowns
+/// all have index at most 1 (IDA: 3).
 const KEEP_ORDER_FAILURES: usize = 5;
 
 /// IDA's count, kept on implicit ODEs (`dF/dy'` regular at the start, no unknown of index 2
-/// or 3), as IDA's other rules are there: on the Test Set's NAND gate (`C(y) y' = f`) the
+/// or 3) and on DAEs with unknowns of index 2 or 3.
+///
+/// On a DAE of higher index the drop to order 1 is what recovers a step accepted off a
+/// constraint: Jay's index-2 problem (`z^2`, `tests/literature_daes.rs`) at `0.92e-6` reaches
+/// `t = 0.96` with `y1^2 y2 = 1` missed by `4.1e-6`, in IDA 6.4.1 as here (the same 300 steps,
+/// each within `1e-3` of IDA's). IDA fails the next step three times, drops to order 1 on the
+/// third failure and passes at `h = 9e-4` back on the constraint; with `KEEP_ORDER_FAILURES`
+/// the order stayed 3, the steps fell to `2e-10` and Newton failed there. Over 41 tolerance
+/// factors `0.80 ... 1.20` at 1e-4 / 1e-6 / 1e-8 the BDF failed 0 / 5 / 0 runs with the later
+/// drop and fails none with IDA's (IDA none); the medians of Andrews' stabilised form, the
+/// water tube, the wheelset, both slider cranks, the charge pump, the pendulum, the car axis
+/// and Fekete's problem over 11 factors did not move by more than their jitter (Andrews'
+/// stabilised form at 1e-4 3.88 -> 3.89, the water tube at 1e-8 3.30 -> 3.15, IDA 3.00).
+///
+/// On implicit ODEs it keeps IDA's other rules: on the Test Set's NAND gate (`C(y) y' = f`) the
 /// two codes take the same steps until the first step with three error-test failures, where
 /// the later drop to order 1 parted them; with IDA's count the BDF's medians over 15
 /// tolerance factors at 1e-4 / 1e-6 / 1e-8 are 5.16 / 6.99 / 8.26 digits (4.94 / 6.93 / 8.26
-/// with `KEEP_ORDER_FAILURES`; IDA 4.84 / 7.08 / 8.61), HIRES unchanged. On DAEs with index-2
-/// unknowns the later drop stays: IDA's count there took Andrews' stabilised form at 1e-4
-/// from 3.57 to 3.07 digits.
+/// with `KEEP_ORDER_FAILURES`; IDA 4.84 / 7.08 / 8.61), HIRES unchanged.
 ///
 /// Implicit ODEs also keep IDA's growth of a step that passed after two or more failures
 /// (2026-12-05): the DAE rule that holds such a step was the last departure from IDA there,
@@ -57,6 +73,36 @@ const KEEP_ORDER_FAILURES: usize = 5;
 /// 1e-8 to step 655 of 3 688, where the two codes' error estimates, equal to about 10 digits,
 /// fall on either side of the doubling threshold.
 const IDA_ORDER_ONE_FAILURES: usize = 3;
+
+/// Accepted steps a DAE with unknowns of index 2 or 3 completes without growing the step
+/// after a step that passed at order 1 following an error-test failure: the step that passed
+/// and the next (the `k + 1` equal steps after which IDA's order selection considers a higher
+/// order). IDA grows it as soon as the estimate allows; CVODE holds the step after a failure
+/// (`etamax = 1`) for one step.
+///
+/// At order 1 on such a DAE the error estimate of a run of equal steps misses most of the
+/// error that a change of the step reveals. On Ascher and Petzold's linear index-2 problem
+/// (`tests/common/standard_dae.rs`, `a = 50`) the implicit Euler solution of `u` lies off the
+/// exact one by about `h / 2` (the constraint's time-dependent coefficients enter the
+/// discretised derivatives with the coupling `a`; the stiff reduced equation, eigenvalue
+/// `-a`, holds that error quasi-static), while the estimate measures `h^2 u'' / 2`: at
+/// `rtol = 1e-6`, `h = 3.8e-4`, 0.02 of the tolerance for equal steps, 1.6 for a doubled one,
+/// which fails and is cut back by half. IDA and the BDF without this rule repeated that on
+/// nearly every step (the order held at 1, since the order test needs equal steps): 180 /
+/// 2 011 / 20 318 failures in 205 / 2 119 / 21 105 steps at 1e-4 / 1e-6 / 1e-8. Held, over 11
+/// tolerance factors `0.80 ... 1.20` (medians; 2026-12-05): 50 / 433 / 4 360 failures, 368 /
+/// 4 034 / 40 654 -> 100 / 876 / 8 736 Jacobians, the same digits (paired +0.08 / 0.00 /
+/// +0.01) and steps (192 / 2 072 / 20 530), 0.70 / 0.59 / 0.72 of the time (with IDA's drop
+/// to order 1 on such DAEs, `IDA_ORDER_ONE_FAILURES`, measured again with it). Forcing order 2
+/// instead (a local build) needs more steps (3 065 at 1e-6) for the same digits: its estimate
+/// misses the `a h^2` offset likewise; Radau, whose stages meet the constraint, takes 163
+/// steps at 1e-8 for 10 digits (docs/integrators.md). The water tube, the wheelset, both
+/// slider cranks, the charge pump and Andrews' two forms keep their medians within their
+/// jitter (the water tube at 1e-8 3.15 -> 3.02, paired -0.08, interval -0.24 ... +0.11; IDA
+/// 3.00), and Jay's problem runs at all 123 of its factors; holding every order (or after
+/// any failure) cost Andrews' stabilised form 0.21 digits at 1e-4 and the water tube 0.41 at
+/// 1e-8.
+const ORDER_ONE_HOLD: usize = 2;
 
 /// The fraction of [`Options::newton_tolerance`] the corrector must reach on a DAE whose
 /// unknowns all have index at most 1, where it also stops an iteration as soon as its rate
@@ -110,6 +156,9 @@ struct BdfState {
     kused: usize,
     knew: usize,
     ns: usize,
+    /// Accepted steps still to be completed without growing the step, after error-test
+    /// failures (`complete_step`; the DAE rules of the module documentation).
+    hold: usize,
     phase: u8,
     cj: f64,
     psi: [f64; MAXORD + 2],
@@ -256,6 +305,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 kk: 1,
                 kused: 0,
                 knew: 1,
+                hold: 0,
                 ns: 0,
                 phase: 0,
                 cj: 0.0,
@@ -336,6 +386,7 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.state.kk = 1;
         self.state.kused = 0;
         self.state.ns = 0;
+        self.state.hold = 0;
         self.state.phase = 0;
         self.state.h_initialised = false;
         self.state.tstop = None;
@@ -898,13 +949,15 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                         // IDA drops to order 1 here. On solutions with fast transients (the
                         // transistor amplifier) that order needs tiny steps, and the climb back
                         // (k + 1 equal steps per order) is cut by the next failure: a cycle of
-                        // failures at orders 1 and 2. Keep the suggested order for two more
-                        // tries; order 1 only from the fifth failure. An implicit ODE keeps
-                        // IDA's rule (`IDA_ORDER_ONE_FAILURES`).
-                        let keep_order = if implicit_ode {
-                            IDA_ORDER_ONE_FAILURES
-                        } else {
+                        // failures at orders 1 and 2. On index-1 DAEs keep the suggested
+                        // order for two more tries; order 1 only from the fifth failure. An
+                        // implicit ODE and a DAE of higher index keep IDA's rule
+                        // (`IDA_ORDER_ONE_FAILURES`: order 1 recovers a step accepted off a
+                        // constraint).
+                        let keep_order = if index1_dae {
                             KEEP_ORDER_FAILURES
+                        } else {
+                            IDA_ORDER_ONE_FAILURES
                         };
                         self.state.kk = if nef < keep_order { self.state.knew } else { 1 };
                         self.state.hh *= 0.25;
@@ -954,8 +1007,15 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             }
         }
         // After repeated failures a DAE's step is not grown at once; an implicit ODE's is, as
-        // in IDA (`IDA_ORDER_ONE_FAILURES`).
-        self.complete_step(nef >= 2 && !implicit_ode);
+        // in IDA (`IDA_ORDER_ONE_FAILURES`). On a DAE with unknowns of index 2 or 3 a step
+        // that passed at order 1 after a failure is held longer (`ORDER_ONE_HOLD`).
+        if nef >= 2 && !implicit_ode {
+            self.state.hold = self.state.hold.max(1);
+        }
+        if nef >= 1 && !index1 && self.state.kk == 1 {
+            self.state.hold = self.state.hold.max(ORDER_ONE_HOLD);
+        }
+        self.complete_step();
         Ok(())
     }
 
@@ -1134,9 +1194,9 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
         self.state.ck * enorm_test <= 1.0
     }
 
-    /// IDA's `IDACompleteStep`: accept the step, choose the next order and step, update `phi`.
-    /// `failed_before`: the step passed after two or more error-test failures.
-    fn complete_step(&mut self, failed_before: bool) {
+    /// IDA's `IDACompleteStep`: accept the step, choose the next order and step, update `phi`;
+    /// a step is not grown while `hold` lasts (counted down here).
+    fn complete_step(&mut self) {
         self.stats.steps += 1;
         let kk = self.state.kk;
         let kdiff = kk as isize - self.state.kused as isize;
@@ -1222,16 +1282,19 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
             let exponent = -1.0 / (self.state.kk as f64 + 1.0);
             let doubles = base <= 0.5f64.powi(self.state.kk as i32 + 1);
             let keeps = !doubles && base < 1.0;
-            if failed_before && (doubles || keeps) {
-                // The step that just passed was found after repeated error-test failures: do
-                // not grow it at once (RADAU5 keeps the step after any rejection; after a
-                // single one that costs the index-3 pendulum accuracy), it would fail again.
+            let held = self.state.hold > 0;
+            if held && (doubles || keeps) {
+                // The step that just passed was found after error-test failures (repeated
+                // ones, or one at order 1 on a DAE of higher index): do not grow it yet
+                // (RADAU5 keeps the step after any rejection; after a single one at every
+                // order that costs the index-3 pendulum accuracy), it would fail again.
             } else if doubles {
                 self.state.hh = (2.0 * self.state.hh).min(hmax);
             } else if !keeps {
                 self.state.hh *= base.powf(exponent).clamp(0.5, 0.9);
             }
         }
+        self.state.hold = self.state.hold.saturating_sub(1);
         // IDA's update of the differences: `phi_{k+1} = e` (below the maximum order),
         // `phi_k += e`, then `phi_j += phi_{j+1}` downwards, in one pass over the components
         // with the order a constant (the same operations in the same order per component).
