@@ -165,6 +165,20 @@ fn initial_values_and_reference_are_the_test_sets() {
 }
 
 #[test]
+fn ida_peer_reference_is_the_fixtures() {
+    // bench/ida_peer.c includes the same reference as C literals: they must not drift apart.
+    let header = include_str!("../../bench/ida_peer_medakzo_ref.h");
+    let body = &header[header.find("*/").expect("the header's comment") + 2..];
+    let values: Vec<f64> = body
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse().unwrap_or_else(|e| panic!("'{s}': {e}")))
+        .collect();
+    assert_eq!(values, MEDAKZO_REF.to_vec());
+}
+
+#[test]
 fn bdf_and_radau_reach_the_reference() {
     // Measured medians (BDF, Radau): (3.38, 4.09) at 1e-4, (5.11, 5.50) at 1e-6, (6.74, 7.59)
     // at 1e-8; the floors are about half a digit below.
