@@ -68,6 +68,13 @@
  * lambda and mu excluded from the error test as the example does, the exact dense iteration
  * matrix (dq: is the example's own setting); scored on the six positions and velocities
  * against the Rust fixture's reference.
+ * The Test Set's Medical Akzo Nobel problem (medakzo.f; an ODE of 400 unknowns from the method of
+ * lines, as F = y' - f(t, y)) with IDA's band LU (half-bandwidths 2) and the exact band Jacobian
+ * of dpc-core/tests/common/medakzo.rs, to t = 20, stopped where the boundary input switches off
+ * (t = 5) and restarted there by IDAReInit from (y(5), f(5+, y(5))) as the Test Set's drivers
+ * split the interval (the counters of both pieces added); all 400 unknowns scored by the mixed
+ * error |y - r| / (1 + |r|) against the Test Set's reference (bench/ida_peer_medakzo_ref.h).
+ * Its rows carry dpc's problem number 28.
  * rtol = atol = 1e-k except for Robertson, the charge pump and the water tube; k = 4, 6, 8.
  * A failed solve is printed as such, with IDA's return flag and the time it stopped at. Times:
  * the thread's CPU time per solve, the mean over repetitions filling at least 0.3 s (at least 3).
@@ -2353,6 +2360,69 @@ static void slcrank_initial(double *y, double *yp) {
   for (int i = 0; i < 3; i++) yp[3 + i] = qf[i] / SL_MASS[i];
 }
 
+/* The Test Set's Medical Akzo Nobel problem (medakzo.f), as dpc-core/tests/common/medakzo.rs
+ * (the same equations, initial values and exact band Jacobian): an ODE y' = f(t, y) from the
+ * method of lines on the grid zeta_j = j / 200, j = 1..200, the unknowns interleaved
+ * (u_j at 2 (j - 1), v_j after it), half-bandwidths 2; u_j' = a_j u_{j-1} + b_j u_j + d_j u_{j+1}
+ * - k u_j v_j (no transport at zeta = 1, where the coefficients vanish), v_j' = -k u_j v_j,
+ * k = 100, the boundary value u_0 = phi(t) = 2 for t <= 5 and 0 after; u = 0, v = 1 at t = 0. */
+#define MA_N 200
+#define MA_DIM (2 * MA_N)
+#define MA_K 100.0
+#define MA_T_SWITCH 5.0
+static double ma_phi(double t) { return t <= MA_T_SWITCH ? 2.0 : 0.0; }
+/* The coefficients of u_{j-1}, u_j, u_{j+1} in u_j' (j 1-based, below MA_N), c = 4:
+ * beta / dzeta^2 -+ alpha / (2 dzeta) and -2 beta / dzeta^2 with alpha = 2 (zeta - 1)^3 / c^2,
+ * beta = (zeta - 1)^4 / c^2. */
+static void ma_stencil(int j, double *a, double *b, double *d) {
+  double dz = 1.0 / MA_N, s = j * dz - 1.0;
+  double alpha = 2.0 * s * s * s / 16.0, beta = s * s * s * s / 16.0;
+  double diffusion = beta / (dz * dz), convection = alpha / (2.0 * dz);
+  *a = diffusion - convection;
+  *b = -2.0 * diffusion;
+  *d = diffusion + convection;
+}
+/* f with the boundary value phi into f. */
+static void ma_f(double phi, const double *y, double *f) {
+  for (int j = 1; j <= MA_N; j++) {
+    int iu = 2 * (j - 1), iv = iu + 1;
+    double reaction = -MA_K * y[iu] * y[iv], transport = 0.0;
+    if (j < MA_N) {
+      double a, b, d;
+      ma_stencil(j, &a, &b, &d);
+      transport = a * (j == 1 ? phi : y[iu - 2]) + b * y[iu] + d * y[iu + 2];
+    }
+    f[iu] = transport + reaction;
+    f[iv] = reaction;
+  }
+}
+static int medakzo_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  realtype *y = N_VGetArrayPointer(yy), *p = N_VGetArrayPointer(yp), *r = N_VGetArrayPointer(rr);
+  (void)ud;
+  ma_f(ma_phi(t), y, r);
+  for (int i = 0; i < MA_DIM; i++) r[i] = p[i] - r[i];
+  return 0;
+}
+/* cj I - df/dy, exact, in IDA's band matrix. */
+static int medakzo_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
+                       void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
+  realtype *y = N_VGetArrayPointer(yy);
+  (void)t; (void)yp; (void)rr; (void)ud; (void)t1; (void)t2; (void)t3;
+  SUNMatZero(J);
+  for (int j = 1; j <= MA_N; j++) {
+    int iu = 2 * (j - 1), iv = iu + 1;
+    double u = y[iu], v = y[iv], a = 0.0, b = 0.0, d = 0.0;
+    if (j < MA_N) ma_stencil(j, &a, &b, &d);
+    if (j > 1 && j < MA_N) SM_ELEMENT_B(J, iu, iu - 2) = -a;
+    if (j < MA_N) SM_ELEMENT_B(J, iu, iu + 2) = -d;
+    SM_ELEMENT_B(J, iu, iu) = cj - b + MA_K * v;
+    SM_ELEMENT_B(J, iu, iv) = MA_K * u;
+    SM_ELEMENT_B(J, iv, iu) = MA_K * v;
+    SM_ELEMENT_B(J, iv, iv) = cj + MA_K * u;
+  }
+  return 0;
+}
+
 static double digits(const double *y, const double *ref, int from, int to) {
   double m = 0.0;
   for (int i = from; i < to; i++) {
@@ -2377,7 +2447,9 @@ enum { ROBERTSON, AMPLIFIER, PENDULUM, ANDREWS, ANDREWS_GGL, CAR, CAR_GGL, AKZO,
        /* SUNDIALS' banded examples (IDA's band LU). */
        HEAT, FOODWEB,
        /* SUNDIALS' dense example idaSlCrank_dns. */
-       SLCRANK, PROBLEMS };
+       SLCRANK,
+       /* The Test Set's Medical Akzo Nobel problem (IDA's band LU). */
+       MEDAKZO, PROBLEMS };
 static const char *NAMES[PROBLEMS] = {
     "Robertson (index 1)", "transistor amplifier (index 1)", "pendulum (index 3; x, y)",
     "Andrews (index 3; y1..y7)", "Andrews (stabilised index 2; y1..y7)",
@@ -2390,22 +2462,33 @@ static const char *NAMES[PROBLEMS] = {
     "Van der Pol, eps = 1e-6 (ODE; all)", "OREGO (ODE; all)", "Pollution (ODE; all)",
     "ring modulator (ODE; all)", "heat 2-D, idaHeat2D_bnd (index 1; interior)",
     "food web, idaFoodWeb_bnd (index 1; all)",
-    "slider crank, idaSlCrank_dns (index 2; q, v)"};
+    "slider crank, idaSlCrank_dns (index 2; q, v)",
+    "medical Akzo Nobel (ODE; all, mixed error)"};
 static const int DIM[PROBLEMS] = {3, 8, 5, 27, 33, 10, 12, 6, 8, 3, 160, 24, 14, 9, 49, 17, TB_N,
-                                  2, 3, 20, 15, HT_N, FW_N, 10};
+                                  2, 3, 20, 15, HT_N, FW_N, 10, MA_DIM};
 /* Leading unknowns of index 1 (the rest are excluded from the error test); 0: none excluded. */
 static const int DIFFERENTIAL[PROBLEMS] = {0, 0, 2, 14, 14, 8, 8, 0, 0, 2, 120, 14, 0, 8, 38, 15, 0,
-                                           0, 0, 0, 0, 0, 0, 6};
+                                           0, 0, 0, 0, 0, 0, 6, 0};
 /* Half-bandwidths of the problems solved with IDA's band LU (upper = lower); 0: dense LU. */
 static const int HALF_BANDWIDTH[PROBLEMS] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
-                                             0, 0, 0, 0, HT_M, 2 * FW_MX, 0};
+                                             0, 0, 0, 0, HT_M, 2 * FW_MX, 0, 2};
 static const double T_END[PROBLEMS] = {1e11, 0.2, 3.0, 0.03, 0.03, 3.0, 3.0, 180.0, 321.8122, 1.0,
                                         1000.0, 0.1, 80.0, 1200e-9, 17.0 * 3600.0, 10.0, 320.0,
-                                        2.0, 360.0, 60.0, 1e-3, 0.16, 1.0, 10.0};
+                                        2.0, 360.0, 60.0, 1e-3, 0.16, 1.0, 10.0, 20.0};
 /* The relative digits over the first n unknowns (every problem but the NAND gate, scored on
  * y5 alone, scores a leading block). */
 static double score(int problem, const double *y, const double *ref, int n) {
   if (problem == NAND) return digits(y, ref, 4, 5);
+  if (problem == MEDAKZO) {
+    /* All 400 by the mixed error |y - r| / (1 + |r|) (medakzo_scd in
+     * dpc-core/tests/common/medakzo.rs): half the reference is below 1e-20. */
+    double m = 0.0;
+    for (int i = 0; i < n; i++) {
+      double e = fabs(y[i] - ref[i]) / (1.0 + fabs(ref[i]));
+      if (e > m) m = e;
+    }
+    return -log10(m);
+  }
   if (problem == HEAT) {
     /* The 64 interior values (the boundary values are 0). */
     double m = 0.0;
@@ -2557,6 +2640,10 @@ static void initial(int problem, double rtol, double *y, double *p, double *a) {
   case SLCRANK:
     slcrank_initial(y, p);
     break;
+  case MEDAKZO:
+    for (int j = 0; j < MA_N; j++) { y[2 * j] = 0.0; y[2 * j + 1] = 1.0; }
+    ma_f(ma_phi(0.0), y, p);
+    break;
   case WHEEL: {
     /* The Test Set's consistent initial values. */
     static const double y0[17] = {0.14941e-02, 0.40089e-06, 0.11241e-05, -0.28573e-03,
@@ -2616,12 +2703,12 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
                                          hires_res, ap_res, fekete_res, crank_res,
                                          nand_res, pump_res, water_res,
                                          wheel_res, tba_res, ode_res, ode_res, ode_res,
-                                         ode_res, heat_res, web_res, slcrank_res};
+                                         ode_res, heat_res, web_res, slcrank_res, medakzo_res};
   static IDALsJacFn const JAC[PROBLEMS] = {rober_jac, amp_jac, pend_jac, NULL, NULL,
                                            NULL, NULL, akzo_jac, hires_jac, ap_jac, fekete_jac,
                                            crank_jac, nand_jac, pump_jac, water_jac,
                                            wheel_jac, tba_jac, ode_jac, ode_jac, ode_jac,
-                                           ode_jac, heat_jac, web_jac, slcrank_jac};
+                                           ode_jac, heat_jac, web_jac, slcrank_jac, medakzo_jac};
   int n = DIM[problem];
   Run run = {0};
   N_Vector yy = N_VNew_Serial(n, ctx), yp = N_VNew_Serial(n, ctx), atol = N_VNew_Serial(n, ctx);
@@ -2631,7 +2718,8 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
   IDAInit(mem, RES[problem], 0.0, yy, yp);
   /* The stiff ODEs share ode_res and ode_jac: which f. */
   static const int ODE_INDEX[4] = {0, 1, 2, 3};
-  if (problem >= VDPOL) IDASetUserData(mem, (void *)&ODE_INDEX[problem - VDPOL]);
+  if (problem >= VDPOL && problem <= RINGMOD)
+    IDASetUserData(mem, (void *)&ODE_INDEX[problem - VDPOL]);
   IDASVtolerances(mem, rtol, atol);
   int band = HALF_BANDWIDTH[problem];
   SUNMatrix A = band > 0 ? SUNBandMatrix(n, band, band, ctx) : SUNDenseMatrix(n, n, ctx);
@@ -2652,7 +2740,25 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
   realtype tret;
   double tb[64];
   int nb = breaks(problem, tb);
-  if (nb == 0) {
+  /* The Medical Akzo Nobel problem's first piece, to the input switch: its counters (IDAReInit
+   * clears them) are added to the second piece's below. */
+  long first[4] = {0, 0, 0, 0};
+  if (problem == MEDAKZO) {
+    /* Stopped at the switch and restarted there from (y(5), f(5+, y(5))), as the Test Set's
+     * drivers split the interval (dpc's reinit, a new diffsol state). */
+    IDASetStopTime(mem, MA_T_SWITCH);
+    run.flag = IDASolve(mem, MA_T_SWITCH, &tret, yy, yp, IDA_NORMAL);
+    if (run.flag >= 0) {
+      IDAGetNumSteps(mem, &first[0]);
+      IDAGetNumErrTestFails(mem, &first[1]);
+      IDAGetNumNonlinSolvConvFails(mem, &first[2]);
+      IDAGetNumJacEvals(mem, &first[3]);
+      ma_f(0.0, N_VGetArrayPointer(yy), N_VGetArrayPointer(yp));
+      IDAReInit(mem, MA_T_SWITCH, yy, yp);
+      IDASetStopTime(mem, T_END[problem]);
+      run.flag = IDASolve(mem, T_END[problem], &tret, yy, yp, IDA_NORMAL);
+    }
+  } else if (nb == 0) {
     run.flag = IDASolve(mem, T_END[problem], &tret, yy, yp, IDA_NORMAL);
   } else {
     for (int b = 0; b < nb; b++) {
@@ -2669,6 +2775,10 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
   IDAGetNumErrTestFails(mem, &run.etf);
   IDAGetNumNonlinSolvConvFails(mem, &run.ncf);
   IDAGetNumJacEvals(mem, &run.jacs);
+  run.steps += first[0];
+  run.etf += first[1];
+  run.ncf += first[2];
+  run.jacs += first[3];
   run.t_fail = tret;
   realtype *y = N_VGetArrayPointer(yy);
   if (problem == FOODWEB) {
@@ -2688,6 +2798,10 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
   N_VDestroy(atol);
   return run;
 }
+
+/* The row's problem number in the merged table: the order above, except the Medical Akzo Nobel
+ * problem, row 28 of dpc-core's table (its rows 25-27, index-3 mechanisms, have no IDA rows). */
+static int key(int problem) { return problem == MEDAKZO ? 28 : problem + 1; }
 
 int main(int argc, char **argv) {
   SUNContext ctx;
@@ -2813,6 +2927,11 @@ int main(int argc, char **argv) {
   static const double slcrank_ref[6] = {1.2756758486467310e0, 1.0235785589817956e0,
                                         -4.9881304918191771e-1, -2.3991499719846465e-1,
                                         1.3377828321722221e-1, 3.9731495992175736e-2};
+  /* The Medical Akzo Nobel problem at t = 20: the Test Set's reference (MEDAKZO_REF of
+   * dpc-core/tests/common/medakzo.rs). */
+  static const double medakzo_ref[MA_DIM] = {
+#include "ida_peer_medakzo_ref.h"
+  };
   double ap_ref[3] = {exp(1.0), exp(1.0), -exp(1.0)};
   double pend_ref[5];
   pend_reference(1.0, 3.0, pend_ref);
@@ -2820,9 +2939,9 @@ int main(int argc, char **argv) {
                                   car_ref, car_ref, akzo_ref, hires_ref, ap_ref, fekete_ref,
                                   crank_ref, nand_ref, pump_ref, water_ref,
                                   wheel_ref, tba_ref, vdpol_ref, orego_ref, pollu_ref,
-                                  ringmod_ref, heat_ref, web_ref, slcrank_ref};
+                                  ringmod_ref, heat_ref, web_ref, slcrank_ref, medakzo_ref};
   const int scored[PROBLEMS] = {3, 8, 2, 7, 7, 10, 10, 6, 8, 2, 60, 7, 5, 1, 49, 17, 3,
-                                2, 3, 20, 15, HT_N, 2 * FW_N, 6};
+                                2, 3, 20, 15, HT_N, 2 * FW_N, 6, MA_DIM};
   const char *only = argc > 1 ? argv[1] : NULL;
   if (only && strncmp(only, "dq:", 3) == 0) {
     use_dq = 1;
@@ -2870,7 +2989,7 @@ int main(int argc, char **argv) {
       if (problem == TBA && k == 8) continue;
       double rtol = factor * pow(10.0, -k);
       Run run = solve(ctx, problem, rtol);
-      printf("%02d-%02d-%d\t| %s | 1e-%d | %s | ", problem + 1, k, use_dq ? 13 : 4,
+      printf("%02d-%02d-%d\t| %s | 1e-%d | %s | ", key(problem), k, use_dq ? 13 : 4,
              NAMES[problem], k, use_dq ? "IDA 6.4.1 (difference quotients)" : "IDA 6.4.1");
       if (run.flag < 0) {
         printf("failed (%s at t = %.2g after %ld steps) | %ld | %ld | %ld | | |\n",

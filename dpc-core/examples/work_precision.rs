@@ -58,6 +58,12 @@
 //!   `max(|r|, 1e-2)`), by Radau and the BDF (`Exclude` and `Scale`) on the index-3 form and by
 //!   both on [`Stabilised::detect`] of it (no IDA or diffsol rows),
 //!
+//! * the Test Set's Medical Akzo Nobel problem (an ODE from the method of lines, 400 unknowns,
+//!   band of half-bandwidths 2, to `t = 20`, stopped and restarted where its boundary input
+//!   switches off at `t = 5`; all 400 components scored by the mixed error against the Test
+//!   Set's reference), by Radau and the BDF with the banded LU `FaerLu::for_dae` picks and by
+//!   the BDF with faer's sparse LU,
+//!
 //! at `rtol = atol = 1e-4, 1e-6, 1e-8`; and the BDF with the iteration matrix by the library's
 //! difference quotients ([`dpc_core::difference`], rows "difference quotients") on Robertson
 //! (IDA's floor from its `atol`), the transistor amplifier and the two bit adding unit (columns
@@ -88,6 +94,8 @@ mod heat2d;
 mod ida_slider_crank;
 #[path = "../tests/common/mechanisms.rs"]
 mod mechanisms;
+#[path = "../tests/common/medakzo.rs"]
+mod medakzo;
 #[path = "../tests/common/nand.rs"]
 mod nand;
 #[path = "../tests/common/peer_table.rs"]
@@ -226,11 +234,13 @@ enum Problem {
     RigidSliderCrank,
     FourBar,
     SphericalPendulum,
+    // The Test Set's Medical Akzo Nobel problem (`medakzo_rows`).
+    Medakzo,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 27] = [
+    const ALL: [Self; 28] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -258,6 +268,7 @@ impl Problem {
         Self::RigidSliderCrank,
         Self::FourBar,
         Self::SphericalPendulum,
+        Self::Medakzo,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -290,6 +301,7 @@ impl Problem {
             Self::RigidSliderCrank => "rigid slider crank (index 3; q, v)",
             Self::FourBar => "four-bar linkage (index 3; q, v)",
             Self::SphericalPendulum => "spherical pendulum (index 3; q, v)",
+            Self::Medakzo => "medical Akzo Nobel (ODE; all, mixed error)",
         }
     }
 }
@@ -859,6 +871,76 @@ fn main() {
         ida_slider_crank_rows(k, tol, &scalar);
         difference_rows(k, tol);
         mechanism_rows(k, tol, &scalar);
+        medakzo_rows(k, tol);
+    }
+}
+
+/// The rows of the Test Set's Medical Akzo Nobel problem (`tests/common/medakzo.rs`: an ODE of
+/// 400 unknowns, `F = y' - f(t, y)`, band of half-bandwidths 2) at `rtol = atol = tol` (label
+/// `1e-k`), all 400 components scored against the Test Set's reference by the mixed error
+/// `|y - r| / (1 + |r|)` ([`medakzo::medakzo_scd`]): Radau and the BDF with the LU
+/// [`FaerLu::for_dae`] picks from the declared pattern (banded), and the BDF with faer's sparse
+/// LU on the same pattern (the LU diffsol's row uses). Each run stops where the boundary input
+/// switches off (`t = 5`) and restarts there from `(y(5), f(5+, y(5)))` (`reinit`), as the Test
+/// Set's drivers split the interval; the statistics are those of both pieces.
+fn medakzo_rows(k: i32, tol: f64) {
+    use medakzo::{medakzo_scd, Medakzo, MEDAKZO_DIM, MEDAKZO_T_END, MEDAKZO_T_SWITCH};
+    // `$name(ls, start, opts)`: `$solver` to the switch, restarted there, on to the end.
+    macro_rules! restarted {
+        ($name:ident, $solver:ident, $options:ty) => {
+            fn $name<L: LinearSolver>(
+                ls: L,
+                (y0, yp0): (&[f64], &[f64]),
+                opts: $options,
+            ) -> Result<Run, String> {
+                let mut s =
+                    $solver::new(Medakzo, ls, opts, 0.0, y0, yp0).map_err(|e| e.to_string())?;
+                let mut y = vec![0.0; MEDAKZO_DIM];
+                s.set_stop_time(MEDAKZO_T_SWITCH)
+                    .map_err(|e| e.to_string())?;
+                s.solve_to(MEDAKZO_T_SWITCH, &mut y, None)
+                    .map_err(|e| e.to_string())?;
+                let yp = Medakzo::slope_after_switch(&y);
+                s.reinit(MEDAKZO_T_SWITCH, &y, &yp)
+                    .map_err(|e| e.to_string())?;
+                s.set_stop_time(MEDAKZO_T_END).map_err(|e| e.to_string())?;
+                s.solve_to(MEDAKZO_T_END, &mut y, None)
+                    .map_err(|e| e.to_string())?;
+                let st = s.stats();
+                Ok(Run {
+                    steps: st.steps,
+                    error_test_failures: st.error_test_failures,
+                    newton_failures: st.newton_failures,
+                    jacobians: st.jacobian_evaluations,
+                    y,
+                })
+            }
+        };
+    }
+    restarted!(bdf_restarted, Bdf, bdf::Options);
+    restarted!(radau_restarted, Radau, radau::Options);
+    let (y0, yp0) = Medakzo::initial();
+    for code in [Code::Radau, Code::Bdf, Code::BdfFaerSparse] {
+        row_scored(Problem::Medakzo, k, code, medakzo_scd, || {
+            let start = (&y0[..], &yp0[..]);
+            match code {
+                Code::Radau => radau_restarted(
+                    FaerLu::for_dae(&Medakzo),
+                    start,
+                    radau::Options::with_tolerances(tol, tol),
+                ),
+                Code::BdfFaerSparse => {
+                    let p = Medakzo::pattern();
+                    let ls = FaerSparseLu::new(MEDAKZO_DIM, &p).map_err(|e| e.to_string())?;
+                    bdf_restarted(ls, start, bdf::Options::with_tolerances(tol, tol))
+                }
+                _ => bdf_restarted(
+                    FaerLu::for_dae(&Medakzo),
+                    start,
+                    bdf::Options::with_tolerances(tol, tol),
+                ),
+            }
+        });
     }
 }
 

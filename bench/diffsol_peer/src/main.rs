@@ -1,7 +1,8 @@
-//! The BDF of the Rust crate diffsol (0.19, dense nalgebra LU, mass-matrix form) on the problems
-//! of dpc-core's work-precision example: diffsol's rows of the peer table that
-//! `bench/peers.sh` merges with dpc-core's and SUNDIALS IDA's (same row format, sort keys,
-//! scoring and timing, from `dpc-core/tests/common/peer_table.rs`).
+//! The BDF of the Rust crate diffsol (0.19, dense nalgebra LU but for the sparse faer LU of the
+//! Medical Akzo Nobel problem, mass-matrix form) on the problems of dpc-core's work-precision
+//! example: diffsol's rows of the peer table that `bench/peers.sh` merges with dpc-core's and
+//! SUNDIALS IDA's (same row format, sort keys, scoring and timing, from
+//! `dpc-core/tests/common/peer_table.rs`).
 //!
 //! ```sh
 //! bash bench/peers.sh diffsol           # or, from bench/diffsol_peer:
@@ -56,6 +57,13 @@
 //! both ways through its dpc-core residual, as the mechanisms above, scored on the six
 //! positions and velocities; its `lambda, mu` (index 2) stay in diffsol's error test.
 //!
+//! The Test Set's Medical Akzo Nobel problem (row 28; `dpc-core/tests/common/medakzo.rs`, an
+//! ODE of 400 unknowns with a band Jacobian) is given as an ODE without mass matrix as the stiff
+//! ODEs below, but in faer's sparse matrix with faer's sparse LU (`FaerSparseMat`,
+//! `FaerSparseLU`) rather than the dense nalgebra LU of the other rows, so that diffsol does not
+//! factor a dense 400 x 400 matrix; it is restarted at the input switch `t = 5` as dpc's and
+//! IDA's rows.
+//!
 //! The Test Set's stiff ODEs (rows 18-21: Van der Pol with `eps = 1e-6`, OREGO, Pollution, the
 //! ring modulator; `dpc-core/tests/common/stiff_odes.rs`) are given as diffsol intends an ODE:
 //! `y' = f(t, y)` without a mass matrix, with the fixtures' exact Jacobians `df/dy`, at
@@ -65,6 +73,8 @@
 mod bdf_problems;
 #[path = "../../../dpc-core/tests/common/ida_slider_crank.rs"]
 mod ida_slider_crank;
+#[path = "../../../dpc-core/tests/common/medakzo.rs"]
+mod medakzo;
 #[path = "../../../dpc-core/tests/common/peer_table.rs"]
 mod peer_table;
 #[path = "../../../dpc-core/tests/common/pump.rs"]
@@ -418,6 +428,67 @@ fn stiff_ode<P: stiff_odes::StiffOde + Copy + 'static>(p: P, tol: f64) -> Result
         .bdf::<NalgebraLU<f64>>()
         .map_err(|e| e.to_string())?;
     finish(solver, P::T_END, n)
+}
+
+/// The Test Set's Medical Akzo Nobel problem (`dpc-core/tests/common/medakzo.rs`) as diffsol's
+/// `y' = f(t, y)` without a mass matrix, with the fixture's exact Jacobian entries, at
+/// `rtol = atol = tol`, in faer's sparse matrices with faer's sparse LU (`FaerSparseMat`,
+/// `FaerSparseLU`): diffsol finds the Jacobian's pattern (the band of half-bandwidths 2) by
+/// probing the Jacobian action with NaN and assembles the matrix by colouring (5 actions per
+/// Jacobian), as it does for any closure on a sparse matrix type. Stopped where the boundary
+/// input switches off (`t = 5`) and restarted there from `(y(5), f(5+, y(5)))` in a new state
+/// and solver, as dpc's rows (`reinit`) and IDA's (`IDAReInit`); the counters of both added.
+fn medakzo(tol: f64) -> Result<Run, String> {
+    use diffsol::{FaerSparseLU, FaerSparseMat, Vector as _};
+    use medakzo::{Medakzo, MEDAKZO_DIM, MEDAKZO_T_END, MEDAKZO_T_SWITCH};
+    const N: usize = MEDAKZO_DIM;
+    let (y0, _) = Medakzo::initial();
+    let problem = OdeBuilder::<FaerSparseMat<f64>>::new()
+        .rtol(tol)
+        .atol(vec![tol; N])
+        .rhs_implicit(
+            |y: &[f64], _p: &[f64], t: f64, out: &mut [f64]| Medakzo.f(t, y, out),
+            |y: &[f64], _p: &[f64], _t: f64, v: &[f64], out: &mut [f64]| {
+                out.fill(0.0);
+                Medakzo.jacobian(y, |r, c, a| out[r] += a * v[c]);
+            },
+        )
+        .init(
+            move |_p: &[f64], _t: f64, y: &mut [f64]| y.copy_from_slice(&y0),
+            N,
+        )
+        .build()
+        .map_err(|e| e.to_string())?;
+    let solver = problem
+        .bdf::<FaerSparseLU<f64>>()
+        .map_err(|e| e.to_string())?;
+    let first = finish(solver, MEDAKZO_T_SWITCH, N)?;
+    let mut state = BdfState::new_without_initialise(&problem).map_err(|e| e.to_string())?;
+    {
+        let s = state.as_mut();
+        *s.t = MEDAKZO_T_SWITCH;
+        for (i, (y, yp)) in first
+            .y
+            .iter()
+            .zip(Medakzo::slope_after_switch(&first.y))
+            .enumerate()
+        {
+            s.y.set_index(i, *y);
+            s.dy.set_index(i, yp);
+        }
+    }
+    state.set_step_size(problem.h0, &problem.atol, tol, &problem.eqn, 1);
+    let solver = problem
+        .bdf_solver::<FaerSparseLU<f64>>(state)
+        .map_err(|e| e.to_string())?;
+    let second = finish(solver, MEDAKZO_T_END, N)?;
+    Ok(Run {
+        steps: first.steps + second.steps,
+        error_test_failures: first.error_test_failures + second.error_test_failures,
+        newton_failures: first.newton_failures + second.newton_failures,
+        jacobians: first.jacobians + second.jacobians,
+        y: second.y,
+    })
 }
 
 /// `dF/dy` of `dae` at `(t, y)` (the iteration matrix at `c = 0`), cached for the last point:
@@ -782,6 +853,15 @@ fn main() {
                 },
             );
         }
+        // The Test Set's Medical Akzo Nobel problem (row 28; an ODE, faer's sparse LU),
+        // restarted at the input switch, all 400 unknowns scored by the mixed error.
+        row(
+            (28, "medical Akzo Nobel (ODE; all, mixed error)"),
+            k,
+            CODE,
+            medakzo::medakzo_scd,
+            || medakzo(tol),
+        );
     }
 }
 
