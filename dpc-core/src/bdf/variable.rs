@@ -97,15 +97,14 @@ const IDA_ORDER_ONE_FAILURES: usize = 3;
 /// to order 1 on such DAEs, `IDA_ORDER_ONE_FAILURES`, measured again with it). Forcing order 2
 /// instead (a local build) needs more steps (3 065 at 1e-6) for the same digits: its estimate
 /// misses the `a h^2` offset likewise; Radau, whose stages meet the constraint, takes 163
-/// steps at 1e-8 for 10 digits (docs/integrators.md). The water tube, the wheelset, both
-/// slider cranks, the charge pump and Andrews' two forms keep their medians within their
-/// jitter, and Jay's problem runs at all 123 of its factors. The water tube at 1e-8 loses a
-/// little with this rule and IDA's drop to order 1 together (2026-12-05), over 41 factors
-/// `0.80 ... 1.20`: 3.23 ->
+/// steps at 1e-8 for 10 digits (docs/integrators.md). The wheelset, both slider cranks, the
+/// charge pump and Andrews' two forms keep their medians within their jitter, and Jay's
+/// problem runs at all 123 of its factors. The water tube at 1e-8 loses a little with this
+/// rule and IDA's drop to order 1 together (2026-12-05; 41 factors `0.80 ... 1.20`): 3.23 ->
 /// 3.09 digits (paired -0.16, 95 % bootstrap interval -0.31 ... -0.02), now IDA's (median
-/// 3.11; paired against IDA -0.08, -0.18 ... +0.12, before +0.10). Holding every order (or after
-/// any failure) cost Andrews' stabilised form 0.21 digits at 1e-4 and the water tube 0.41 at
-/// 1e-8.
+/// 3.11; paired against IDA -0.08, -0.18 ... +0.12, before +0.10). Holding every order (or
+/// after any failure) cost Andrews' stabilised form 0.21 digits at 1e-4 and the water tube
+/// 0.41 at 1e-8.
 const ORDER_ONE_HOLD: usize = 2;
 
 /// The fraction of [`Options::newton_tolerance`] the corrector must reach on a DAE whose
