@@ -364,6 +364,30 @@ fn reinit_and_reset_restart_cleanly() {
 }
 
 #[test]
+fn reinit_on_a_smooth_solution_keeps_the_step_its_curvature_allows() {
+    // Restarted on the solution itself (`y'` continuous), the first step comes from the
+    // curvature of the steps before: fewer steps to `t = 3` than a new integrator from the same
+    // point, whose default first step `h |y'| <= 1/2` takes steps to grow out of at tight
+    // tolerances (measured: 70 against 101 at rtol 1e-10; at 1e-8 50 against 55).
+    let opts = Options::with_tolerances(1e-10, 1e-12);
+    let (y0, yp0) = (Index1::exact(0.0), Index1::exact_p(0.0));
+    let mut bdf = Bdf::new(Index1, NalgebraLu::<2>::new(), opts.clone(), 0.0, &y0, &yp0).unwrap();
+    let mut out = [0.0; 2];
+    bdf.solve_to(2.0, &mut out, None).unwrap();
+    let (y, yp) = (bdf.y().to_vec(), bdf.yp().to_vec());
+    let before = bdf.stats().steps;
+    bdf.reinit(bdf.t(), &y, &yp).unwrap();
+    let t = bdf.t();
+    bdf.solve_to(3.0, &mut out, None).unwrap();
+    let restarted = bdf.stats().steps - before;
+    let mut fresh = Bdf::new(Index1, NalgebraLu::<2>::new(), opts, t, &y, &yp).unwrap();
+    fresh.solve_to(3.0, &mut out, None).unwrap();
+    let new = fresh.stats().steps;
+    println!("to t = 3: {restarted} steps restarted, {new} from a new start");
+    assert!(restarted + 10 <= new, "{restarted} against {new}");
+}
+
+#[test]
 fn stop_time_is_honoured_and_cleared() {
     let opts = Options::with_tolerances(1e-8, 1e-10);
     let (y0, yp0) = (Index1::exact(0.0), Index1::exact_p(0.0));
