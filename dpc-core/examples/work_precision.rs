@@ -131,6 +131,21 @@ use fekete::{
     FEKETE_T_END,
 };
 use peer_table::Run;
+
+/// The [`Run`] of a solve from its integrator's statistics (the BDF's and Radau's `Stats` name
+/// these counters alike) and its end state.
+macro_rules! run_of {
+    ($stats:expr, $y:expr) => {{
+        let st = $stats;
+        Run {
+            steps: st.steps,
+            error_test_failures: st.error_test_failures,
+            newton_failures: st.newton_failures,
+            jacobians: st.jacobian_evaluations,
+            y: $y,
+        }
+    }};
+}
 use problems::{
     robertson_atol, robertson_options, Pendulum, Robertson, PENDULUM_INDEX, PENDULUM_T,
     ROBERTSON_REF, ROBERTSON_T_END, THETA0,
@@ -173,14 +188,7 @@ macro_rules! run_with {
             s.set_stop_time(t_end).map_err(|e| e.to_string())?;
             let mut y = vec![0.0; n];
             s.solve_to(t_end, &mut y, None).map_err(|e| e.to_string())?;
-            let st = s.stats();
-            Ok(Run {
-                steps: st.steps,
-                error_test_failures: st.error_test_failures,
-                newton_failures: st.newton_failures,
-                jacobians: st.jacobian_evaluations,
-                y,
-            })
+            Ok(run_of!(s.stats(), y))
         }
     };
 }
@@ -386,14 +394,7 @@ macro_rules! piecewise_run {
                 s.set_stop_time(tb).map_err(|e| e.to_string())?;
                 s.solve_to(tb, &mut y, None).map_err(|e| e.to_string())?;
             }
-            let st = s.stats();
-            Ok(Run {
-                steps: st.steps,
-                error_test_failures: st.error_test_failures,
-                newton_failures: st.newton_failures,
-                jacobians: st.jacobian_evaluations,
-                y,
-            })
+            Ok(run_of!(s.stats(), y))
         }
     };
 }
@@ -906,14 +907,7 @@ fn medakzo_rows(k: i32, tol: f64) {
                 s.set_stop_time(MEDAKZO_T_END).map_err(|e| e.to_string())?;
                 s.solve_to(MEDAKZO_T_END, &mut y, None)
                     .map_err(|e| e.to_string())?;
-                let st = s.stats();
-                Ok(Run {
-                    steps: st.steps,
-                    error_test_failures: st.error_test_failures,
-                    newton_failures: st.newton_failures,
-                    jacobians: st.jacobian_evaluations,
-                    y,
-                })
+                Ok(run_of!(s.stats(), y))
             }
         };
     }
@@ -1326,14 +1320,7 @@ fn banded_rows(k: i32, tol: f64) {
                     s.set_stop_time(t).map_err(|e| e.to_string())?;
                     s.solve_to(t, y, None).map_err(|e| e.to_string())?;
                 }
-                let st = s.stats();
-                Ok(Run {
-                    steps: st.steps,
-                    error_test_failures: st.error_test_failures,
-                    newton_failures: st.newton_failures,
-                    jacobians: st.jacobian_evaluations,
-                    y,
-                })
+                Ok(run_of!(s.stats(), y))
             }
         };
     }
