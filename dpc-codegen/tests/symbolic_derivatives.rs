@@ -120,21 +120,30 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * 1f64.max(a.abs()).max(b.abs())
 }
 
-/// Magnitude of the tree's intermediate values (sum of |value| over nodes): a cheap scale for
-/// rounding error in expressions with cancellation.
-fn scale(t: &T, x: &[f64]) -> f64 {
-    let own = dual(t, x, u32::MAX).map_or(0.0, |d| d.v.abs());
-    own + match t {
-        T::V(_) | T::C(_) => 0.0,
-        T::Neg(a) | T::Powi(a, _) | T::F(_, a) => scale(a, x),
+/// The operands of a node (none for a variable or constant).
+fn operands(t: &T) -> Vec<&T> {
+    match t {
+        T::V(_) | T::C(_) => vec![],
+        T::Neg(a) | T::Powi(a, _) | T::F(_, a) => vec![a],
         T::Add(a, b)
         | T::Sub(a, b)
         | T::Mul(a, b)
         | T::Div(a, b)
         | T::Powf(a, b)
         | T::Atan2(a, b)
-        | T::Hypot(a, b) => scale(a, x) + scale(b, x),
+        | T::Hypot(a, b) => vec![a, b],
     }
+}
+
+/// The value's magnitude at `x` (0 where it is not finite).
+fn magnitude(t: &T, x: &[f64]) -> f64 {
+    dual(t, x, u32::MAX).map_or(0.0, |d| d.v.abs())
+}
+
+/// Magnitude of the tree's intermediate values (sum of |value| over nodes): a cheap scale for
+/// rounding error in expressions with cancellation.
+fn scale(t: &T, x: &[f64]) -> f64 {
+    magnitude(t, x) + operands(t).into_iter().map(|a| scale(a, x)).sum::<f64>()
 }
 
 /// Largest magnitude of an argument of `sin`, `cos` or `tan` in the tree (0 if none). Those
@@ -142,25 +151,14 @@ fn scale(t: &T, x: &[f64]) -> f64 {
 /// up to `|v| eps`: at `v = 2.7e6` (`x^-2` at `x = 6e-4`) the folded `x^-2` and the oracle's
 /// `powf` differ in the last bit and `sin` of them in the ninth digit.
 fn largest_trig_argument(t: &T, x: &[f64]) -> f64 {
-    match t {
-        T::V(_) | T::C(_) => 0.0,
-        T::F(f, a) => {
-            let own = if matches!(f, Func::Sin | Func::Cos | Func::Tan) {
-                dual(a, x, u32::MAX).map_or(0.0, |d| d.v.abs())
-            } else {
-                0.0
-            };
-            own.max(largest_trig_argument(a, x))
-        }
-        T::Neg(a) | T::Powi(a, _) => largest_trig_argument(a, x),
-        T::Add(a, b)
-        | T::Sub(a, b)
-        | T::Mul(a, b)
-        | T::Div(a, b)
-        | T::Powf(a, b)
-        | T::Atan2(a, b)
-        | T::Hypot(a, b) => largest_trig_argument(a, x).max(largest_trig_argument(b, x)),
-    }
+    let own = match t {
+        T::F(Func::Sin | Func::Cos | Func::Tan, a) => magnitude(a, x),
+        _ => 0.0,
+    };
+    operands(t)
+        .into_iter()
+        .map(|a| largest_trig_argument(a, x))
+        .fold(own, f64::max)
 }
 
 proptest! {
