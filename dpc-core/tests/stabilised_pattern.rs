@@ -3,8 +3,8 @@
 //! joined by rigid links in Cartesian coordinates (index 3, written here as a user would, with
 //! its pattern declared), stabilised, declares a pattern that holds every entry its iteration
 //! matrix writes, at random points and values of `c`, with the constraints' derivatives by
-//! differences or supplied; a chain of 20 links is solved with the sparse LU
-//! ([`FaerLu::for_dae`]) and agrees with the dense LU's run.
+//! differences or supplied; a chain of 20 links is solved by Radau and the BDF with the sparse
+//! LU ([`FaerLu::for_dae`]) and agrees with the dense LU's run.
 //!
 //! The timing of chains with and without the declared pattern (release mode; docs/integrators.md,
 //! "The same problems in the stabilised index-2 form"):
@@ -19,6 +19,7 @@ mod matrix_check;
 use std::collections::BTreeSet;
 use std::time::Instant;
 
+use dpc_core::bdf::{self, Bdf};
 use dpc_core::linear_solver::{FaerDenseLu, FaerLu, SPARSE_DENSITY};
 use dpc_core::radau::{self, Radau};
 use dpc_core::stabilised::Stabilised;
@@ -341,26 +342,40 @@ fn without_a_declared_pattern_the_form_is_dense() {
     assert_eq!(s.iteration_pattern(), Some(p));
 }
 
-/// Radau on the stabilised chain of `links` links at `tol` to `t_end`, with the linear solver
-/// `ls` (`None`: the one `Radau::stabilised` picks): the final state and the steps.
-fn run(chain: Chain, tol: f64, t_end: f64, ls: Option<FaerLu>) -> (Vec<f64>, usize) {
+/// The integrator on the stabilised chain at `tol` to `t_end`, with the linear solver `ls`
+/// (`None`: the one `Radau::stabilised` or `Bdf::stabilised` picks): the final state and the
+/// steps.
+fn run(chain: Chain, bdf: bool, (tol, t_end): (f64, f64), ls: Option<FaerLu>) -> (Vec<f64>, usize) {
     let (y0, yp0) = chain.initial();
-    let opts = radau::Options::with_tolerances(tol, tol);
-    let mut r = match ls {
-        None => Radau::stabilised(chain, opts, 0.0, &y0, &yp0).unwrap(),
-        Some(ls) => {
-            let s = Stabilised::detect(chain, 0.0, &y0, &yp0).unwrap();
-            let (y, yp) = s.extend(&y0, &yp0);
-            let opts = radau::Options {
-                index: s.index(),
-                ..opts
-            };
-            Radau::new(s, ls, opts, 0.0, &y, &yp).unwrap()
-        }
+    let mut out = vec![0.0; chain.dimension() + chain.links];
+    let steps = if bdf {
+        let opts = bdf::Options::with_tolerances(tol, tol);
+        let mut b = match ls {
+            None => Bdf::stabilised(chain, opts, 0.0, &y0, &yp0).unwrap(),
+            Some(ls) => {
+                let s = Stabilised::detect(chain, 0.0, &y0, &yp0).unwrap();
+                let (y, yp) = s.extend(&y0, &yp0);
+                let index = s.index();
+                Bdf::new(s, ls, bdf::Options { index, ..opts }, 0.0, &y, &yp).unwrap()
+            }
+        };
+        b.solve_to(t_end, &mut out, None).unwrap();
+        b.stats().steps
+    } else {
+        let opts = radau::Options::with_tolerances(tol, tol);
+        let mut r = match ls {
+            None => Radau::stabilised(chain, opts, 0.0, &y0, &yp0).unwrap(),
+            Some(ls) => {
+                let s = Stabilised::detect(chain, 0.0, &y0, &yp0).unwrap();
+                let (y, yp) = s.extend(&y0, &yp0);
+                let index = s.index();
+                Radau::new(s, ls, radau::Options { index, ..opts }, 0.0, &y, &yp).unwrap()
+            }
+        };
+        r.solve_to(t_end, &mut out, None).unwrap();
+        r.stats().steps
     };
-    let mut out = vec![0.0; r.y().len()];
-    r.solve_to(t_end, &mut out, None).unwrap();
-    (out, r.stats().steps)
+    (out, steps)
 }
 
 #[test]
@@ -378,61 +393,68 @@ fn a_long_chain_is_solved_with_the_sparse_lu() {
     );
     assert!(FaerLu::for_dae(&s).is_sparse());
     let (tol, t_end) = (1e-6, 0.3);
-    let (sparse, steps) = run(chain, tol, t_end, Some(FaerLu::for_dae(&s)));
-    // `Radau::stabilised` picks the same solver: the same run to the bit.
-    let (picked, picked_steps) = run(chain, tol, t_end, None);
-    assert_eq!(picked_steps, steps);
-    assert!(picked
-        .iter()
-        .zip(&sparse)
-        .all(|(a, b)| a.to_bits() == b.to_bits()));
-    let dense_ls = FaerLu::Dense(FaerDenseLu::new(m));
-    let (dense, dense_steps) = run(chain, tol, t_end, Some(dense_ls));
-    // Only the LU's round-off differs: the positions agree far within the tolerance.
-    let worst = (0..chain.links)
-        .flat_map(|k| [5 * k, 5 * k + 1])
-        .map(|j| (sparse[j] - dense[j]).abs())
-        .fold(0.0, f64::max);
-    println!("{steps} steps (dense {dense_steps}); positions differ by {worst:.1e}");
-    assert!(worst < tol, "{worst}");
-    // The chain fell and kept its links.
-    assert!(sparse[1] < -1e-3);
-    for k in 0..chain.links {
-        let (dx, dy) = Chain::link(&sparse, k);
-        assert!((dx.hypot(dy) - chain.l).abs() < 1e-6, "link {k}");
+    for bdf in [false, true] {
+        let (sparse, steps) = run(chain, bdf, (tol, t_end), Some(FaerLu::for_dae(&s)));
+        // `Radau::stabilised` (`Bdf::stabilised`) picks the same solver: the same run to the
+        // bit.
+        let (picked, picked_steps) = run(chain, bdf, (tol, t_end), None);
+        assert_eq!(picked_steps, steps);
+        assert!(picked
+            .iter()
+            .zip(&sparse)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        let dense_ls = FaerLu::Dense(FaerDenseLu::new(m));
+        let (dense, dense_steps) = run(chain, bdf, (tol, t_end), Some(dense_ls));
+        // Only the LU's round-off differs: the positions agree far within the tolerance.
+        let worst = (0..chain.links)
+            .flat_map(|k| [5 * k, 5 * k + 1])
+            .map(|j| (sparse[j] - dense[j]).abs())
+            .fold(0.0, f64::max);
+        println!("bdf {bdf}: {steps} steps (dense {dense_steps}); positions differ by {worst:.1e}");
+        assert!(worst < tol, "bdf {bdf}: {worst}");
+        // The chain fell and kept its links.
+        assert!(sparse[1] < -1e-3);
+        for k in 0..chain.links {
+            let (dx, dy) = Chain::link(&sparse, k);
+            assert!((dx.hypot(dy) - chain.l).abs() < 1e-6, "bdf {bdf}: link {k}");
+        }
     }
 }
 
-/// Radau on stabilised chains of 20, 40 and 80 links at `1e-6` to `t = 0.3`, with the pattern
-/// declared (the sparse LU) and without (dense): median wall times of 5 runs, set-up included.
+/// Radau and the BDF on stabilised chains of 20, 40 and 80 links at `1e-6` to `t = 0.3`, with
+/// the pattern declared (the sparse LU) and without (dense): median wall times of 5 runs,
+/// set-up included.
 #[test]
 #[ignore = "timing run: release mode"]
 fn chain_times_with_and_without_the_pattern() {
-    for links in [20, 40, 80] {
-        let mut row = Vec::new();
-        for pattern in [true, false] {
-            let chain = Chain {
-                pattern,
-                ..Chain::new(links)
-            };
-            let mut times = Vec::new();
-            let mut steps = 0;
-            for _ in 0..5 {
-                let start = Instant::now();
-                steps = run(chain, 1e-6, 0.3, None).1;
-                times.push(start.elapsed().as_secs_f64() * 1e3);
+    for bdf in [false, true] {
+        for links in [20, 40, 80] {
+            let mut row = Vec::new();
+            for pattern in [true, false] {
+                let chain = Chain {
+                    pattern,
+                    ..Chain::new(links)
+                };
+                let mut times = Vec::new();
+                let mut steps = 0;
+                for _ in 0..5 {
+                    let start = Instant::now();
+                    steps = run(chain, bdf, (1e-6, 0.3), None).1;
+                    times.push(start.elapsed().as_secs_f64() * 1e3);
+                }
+                times.sort_by(f64::total_cmp);
+                row.push((times[2], steps));
             }
-            times.sort_by(f64::total_cmp);
-            row.push((times[2], steps));
+            println!(
+                "{} chain {links} links ({} unknowns): with the pattern {:.1} ms ({} steps), \
+                 without {:.1} ms ({} steps)",
+                if bdf { "BDF" } else { "Radau" },
+                6 * links,
+                row[0].0,
+                row[0].1,
+                row[1].0,
+                row[1].1
+            );
         }
-        println!(
-            "chain {links} links ({} unknowns): with the pattern {:.1} ms ({} steps), \
-             without {:.1} ms ({} steps)",
-            6 * links,
-            row[0].0,
-            row[0].1,
-            row[1].0,
-            row[1].1
-        );
     }
 }
