@@ -813,7 +813,11 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
     /// constraint's `c G_aj` at `q_j`, and its curvature, whose columns are `G`'s: a second
     /// derivative of `g` is zero wherever its first is identically) and `(n + a, k)` for
     /// every `(i, k)` in `P` (the hidden constraint reads `phi_j = q_j' - F_i / c_j`). Nothing
-    /// else is written: the multipliers `mu` have no entry in the hidden rows.
+    /// else is written: the multipliers `mu` have no entry in the hidden rows. It is the
+    /// pattern of the iteration matrix, which leaves out `(dG/dq)^T mu` (see the
+    /// [module documentation](self)): the residual's derivative has that term's entries too
+    /// (kinematic row `i` at the other positions of the constraints on `q_j`) wherever
+    /// `mu != 0`, outside this pattern.
     ///
     /// This holds when the wrapped DAE's own derivatives stay within `P`: its iteration
     /// matrix (which gives `G` at `c = 0`, the kinematic rows and, by differences, the
