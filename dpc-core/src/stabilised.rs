@@ -53,6 +53,15 @@
 //! iteration matrix less. Its own mass matrix `dF/dy'` is the wrapped DAE's (the
 //! stabilisation adds no `y'`), at the cost of the wrapped one.
 //!
+//! A wrapped DAE that declares its iteration matrix's pattern
+//! ([`ImplicitDae::iteration_pattern`]) keeps it: the stabilised form declares the wrapped
+//! pattern with the entries the stabilisation writes (per constraint `a`, the column of `mu_a`
+//! in the kinematic rows of the positions its constraint involves, and the hidden row `n + a`
+//! at those positions and at every unknown of their kinematic rows), read off the wrapped
+//! pattern's structure, so that a large sparse model (a chain of many links) is solved with a
+//! sparse or banded LU ([`FaerLu::for_dae`](crate::linear_solver::FaerLu::for_dae)) in either
+//! form. Without a declared pattern the stabilised form is dense, as the wrapped one.
+//!
 //! ```
 //! use dpc_core::stabilised::Stabilised;
 //! use dpc_core::{ImplicitDae, MatrixSink};
@@ -790,6 +799,73 @@ impl<D: ImplicitDae> ImplicitDae for Stabilised<D> {
     ) -> bool {
         let n = self.dae.dimension();
         self.dae.mass_matrix(t, &y[..n], &yp[..n], out)
+    }
+
+    /// The structural pattern of the stabilised iteration matrix when the wrapped DAE declares
+    /// one (`None`, dense, when it does not), sorted by row and column, without repeats, so
+    /// that [`FaerLu::for_dae`](crate::linear_solver::FaerLu::for_dae) (and any other reader of
+    /// the pattern, such as the column groups of [`crate::difference`]) keeps a large sparse
+    /// model sparse once it is stabilised.
+    ///
+    /// The wrapped pattern `P` with, per position constraint `a` (row `g`) and per position
+    /// `q_j` with a kinematic row `i` and `(g, j)` in `P` (`G_aj` structurally non-zero):
+    /// `(i, n + a)` (the multiplier's term `c_j G_aj mu_a`), `(n + a, j)` (the hidden
+    /// constraint's `c G_aj` at `q_j`, and its curvature, whose columns are `G`'s: a second
+    /// derivative of `g` is zero wherever its first is identically) and `(n + a, k)` for
+    /// every `(i, k)` in `P` (the hidden constraint reads `phi_j = q_j' - F_i / c_j`). Nothing
+    /// else is written: the multipliers `mu` have no entry in the hidden rows. It is the
+    /// pattern of the iteration matrix, which leaves out `(dG/dq)^T mu` (see the
+    /// [module documentation](self)): the residual's derivative has that term's entries too
+    /// (kinematic row `i` at the other positions of the constraints on `q_j`) wherever
+    /// `mu != 0`, outside this pattern.
+    ///
+    /// This holds when the wrapped DAE's own derivatives stay within `P`: its iteration
+    /// matrix (which gives `G` at `c = 0`, the kinematic rows and, by differences, the
+    /// curvature), and [`ImplicitDae::constraint_gradient`] and
+    /// [`ImplicitDae::constraint_curvature`] when it supplies them (they are parts of the
+    /// iteration matrix's constraint rows at `c = 0` and their derivatives, so a correct
+    /// pattern covers them). Entries of `P` beyond the wrapped DAE's dimension are passed on
+    /// as given and add nothing. Set-up work: it allocates, in proportion to the entries.
+    fn iteration_pattern(&self) -> Option<Vec<(usize, usize)>> {
+        let mut pattern = self.dae.iteration_pattern()?;
+        pattern.sort_unstable();
+        pattern.dedup();
+        if self.rows.is_empty() {
+            return Some(pattern);
+        }
+        let n = self.dae.dimension();
+        // Row `r`'s entries of the sorted wrapped pattern (empty beyond its rows).
+        let row = |p: &[(usize, usize)], r: usize| -> (usize, usize) {
+            let first = p.partition_point(|e| e.0 < r);
+            (first, first + p[first..].partition_point(|e| e.0 == r))
+        };
+        // Per unknown, its kinematic row when it is a position.
+        let mut kinematic_row = vec![None; n];
+        for &(j, i) in &self.kinematic {
+            kinematic_row[j] = Some(i);
+        }
+        let mut added = Vec::new();
+        for (a, &g) in self.rows.iter().enumerate() {
+            let (first, last) = row(&pattern, g);
+            for &(_, j) in &pattern[first..last] {
+                let Some(i) = kinematic_row.get(j).copied().flatten() else {
+                    continue;
+                };
+                added.push((i, n + a));
+                added.push((n + a, j));
+                let (k_first, k_last) = row(&pattern, i);
+                added.extend(
+                    pattern[k_first..k_last]
+                        .iter()
+                        .filter(|&&(_, k)| k < n)
+                        .map(|&(_, k)| (n + a, k)),
+                );
+            }
+        }
+        pattern.extend(added);
+        pattern.sort_unstable();
+        pattern.dedup();
+        Some(pattern)
     }
 
     fn is_differential(&self, i: usize) -> bool {
