@@ -57,7 +57,7 @@ fn steps_after_setup_do_not_allocate() {
     // Matrices moved to new `cj` with the mass matrix (`MatrixUpdate::Move`): the point of
     // evaluation is stored in vectors made at construction.
     let opts = Options {
-        matrix_update: MatrixUpdate::Move { max_age: 20 },
+        matrix_update: MatrixUpdate::Move,
         ..robertson_options(rtol)
     };
     let mut bdf = robertson_bdf(Robertson, NalgebraLu::<3>::new(), opts).unwrap();

@@ -37,12 +37,14 @@ fn transistor_amplifier(tol: f64) -> (f64, Stats) {
 
 #[test]
 fn transistor_amplifier_matches_test_set_reference_without_failure_cycles() {
-    // Measured: scd 3.93 / 6.21 / 7.90 in 2 519 / 3 774 / 7 657 steps with 967 / 321 / 280
-    // error-test failures (with IDA's Newton tolerance on this index-1 DAE: 3.21 / 5.90 / 6.75
-    // in 4 133 / 6 515 / 15 608 steps with 1 916 / 2 023 / 5 850 failures). Floors half a
-    // digit below; the step bounds are 1.5 times the measured counts (IDA's step rules needed
+    // Measured: scd 3.23 / 6.41 / 7.30 in 1 706 / 3 629 / 7 319 steps with 36 / 15 / 5
+    // error-test failures (with IDA's matrix rule, no age bound: 4.36 / 6.22 / 7.53 in 1 711 /
+    // 3 748 / 7 902 steps; at 1e-4 the digits scatter by a digit over a tolerance jitter, 2.8
+    // to 4.4 with either rule; with IDA's Newton tolerance on this index-1 DAE: 3.21 / 5.90 /
+    // 6.75 in 4 133 / 6 515 / 15 608 steps). Floors half a digit below; the step bounds are
+    // above the counts measured before the filtered error estimate (IDA's step rules needed
     // 10 233 and more than 100 000 at 1e-6 and 1e-8).
-    for (tol, floor, max_steps) in [(1e-4, 3.4, 3_800), (1e-6, 5.7, 5_700), (1e-8, 7.4, 11_500)] {
+    for (tol, floor, max_steps) in [(1e-4, 2.7, 3_800), (1e-6, 5.9, 5_700), (1e-8, 6.8, 11_500)] {
         let (scd, s) = transistor_amplifier(tol);
         println!("transistor amplifier tol {tol:e}: scd {scd:.2}, {s:?}");
         assert!(scd >= floor, "tol {tol}: scd {scd}");
@@ -137,8 +139,12 @@ mod standard_scoring;
 
 use standard_scoring::{ascher_petzold_errors, standard_dae_digits, Integrator};
 
-/// The BDF with the dense faer LU, as a user runs it.
-struct BdfRun;
+/// The BDF with the dense faer LU, as a user runs it (`BdfRun(None)`), or with the given
+/// [`Options::max_matrix_age`] (`Some(0)`: IDA's rule).
+struct BdfRun(Option<usize>);
+
+/// The BDF as a user runs it.
+const BDF: BdfRun = BdfRun(None);
 
 impl Integrator for BdfRun {
     const NAME: &'static str = "BDF";
@@ -155,6 +161,7 @@ impl Integrator for BdfRun {
         let n = y0.len();
         let opts = Options {
             index: index.to_vec(),
+            max_matrix_age: self.0,
             ..Options::with_tolerances(tol, tol)
         };
         let ls = dpc_core::linear_solver::FaerDenseLu::new(n);
@@ -177,7 +184,7 @@ fn standard_dae_by_the_bdf_reach_their_floors() {
     // and error-test failures as the BDF on HIRES at 1e-4 / 1e-6 and on Ascher-Petzold, see the
     // tests below). Floors at 1e-6: below IDA's medians and 0.3-0.4 below the BDF's.
     for tol in [1e-4, 1e-6, 1e-8] {
-        let [da, dh, dp] = standard_dae_digits(&BdfRun, tol);
+        let [da, dh, dp] = standard_dae_digits(&BDF, tol);
         if tol == 1e-6 {
             assert!(da >= 4.4, "Akzo: scd {da}");
             assert!(dh >= 2.3, "HIRES: scd {dh}");
@@ -200,7 +207,7 @@ fn ascher_petzold_errors_fall_with_the_tolerance() {
     let mut last: Option<(f64, f64, usize)> = None;
     for k in 5..=9 {
         let tol = 10f64.powi(-k);
-        let (eu, ew, s) = ascher_petzold_errors(&BdfRun, tol);
+        let (eu, ew, s) = ascher_petzold_errors(&BDF, tol);
         assert!(eu <= 1e3 * tol, "tol {tol}: error in u {eu}");
         if let Some((e, e_w, n)) = last {
             let order = (e / eu).ln() / (s.steps as f64 / n as f64).ln();
@@ -217,14 +224,15 @@ fn ascher_petzold_errors_fall_with_the_tolerance() {
 fn an_implicit_ode_takes_idas_steps() {
     // HIRES written as F = y' - f(y): dF/dy' = I is regular, so the BDF keeps IDA's rules (the
     // corrector's tighter test and the filtered error estimate are for DAEs with algebraic
-    // unknowns) and takes IDA 6.4.1's steps and error-test failures at 1e-4 / 1e-6 (bench/
-    // ida_peer.c: 100 / 230 steps, 9 / 8 failures, 1.03 / 2.59 digits). With the DAE rules it
+    // unknowns) and, with IDA's matrix rule (no age bound, `max_matrix_age = 0`), takes IDA
+    // 6.4.1's steps and error-test failures at 1e-4 / 1e-6 (bench/ida_peer.c: 100 / 230
+    // steps, 9 / 8 failures, 1.03 / 2.59 digits; with the default bound 100 / 209). With the DAE rules it
     // took 102 / 234 steps and, over a 15-point tolerance jitter, 0.90 / 2.66 / 4.70 median
     // digits against IDA's 0.98 / 2.99 / 4.70; now 0.98 / 2.99 / 4.67 (docs/integrators.md).
     use standard_dae::{Hires, HIRES_REF, HIRES_T_END};
     let (y0, yp0) = Hires::initial();
     for (tol, steps, failures) in [(1e-4, 100, 9), (1e-6, 230, 8)] {
-        let (y, s) = BdfRun.run(Hires, (&y0, &yp0), &[], HIRES_T_END, tol);
+        let (y, s) = BdfRun(Some(0)).run(Hires, (&y0, &yp0), &[], HIRES_T_END, tol);
         let d = testset_index3::scd(&y, &HIRES_REF, &[0, 1, 2, 3, 4, 5, 6, 7]);
         println!("HIRES BDF tol {tol:e}: {d:.2} digits, {s:?}");
         assert_eq!(

@@ -189,10 +189,13 @@ fn ida_peer_reference_is_the_fixtures() {
 
 #[test]
 fn bdf_and_radau_reach_the_reference() {
-    // Measured medians (BDF, Radau): (3.86, 4.09) at 1e-4, (5.01, 5.50) at 1e-6, (6.62, 7.59)
-    // at 1e-8 (the BDF's are IDA's; before `Bdf::reinit` took the default first step after a
-    // strong jump of `y'`, 3.38 / 5.11 / 6.74); the floors are about half a digit below.
-    for (tol, floor_bdf, floor_radau) in [(1e-4, 3.3, 3.5), (1e-6, 4.6, 5.0), (1e-8, 6.2, 7.0)] {
+    // Measured medians (BDF, Radau): (3.27, 4.09) at 1e-4, (5.46, 5.50) at 1e-6, (6.92, 7.59)
+    // at 1e-8. The BDF's were IDA's with IDA's matrix rule (3.86 / 5.01 / 6.62, the same 377
+    // steps at 1e-4; before `Bdf::reinit` took the default first step after a strong jump of
+    // `y'`, 3.38 / 5.11 / 6.74); since its matrices serve at most `DEFAULT_MAX_MATRIX_AGE`
+    // solves it takes 748 / 1 447 steps for 891 / 1 844 at 1e-6 / 1e-8. The floors are about
+    // half a digit below.
+    for (tol, floor_bdf, floor_radau) in [(1e-4, 2.8, 3.5), (1e-6, 5.0, 5.0), (1e-8, 6.4, 7.0)] {
         let b = median(Code::Bdf, tol);
         let r = median(Code::Radau, tol);
         assert!(

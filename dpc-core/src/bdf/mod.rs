@@ -92,6 +92,6 @@ mod variable;
 pub use error::BdfError;
 pub use fixed::{CorrectorTest, CorrectorVerdict, FixedBdf, FixedStepDae};
 pub use init::{consistent_initial_values, InitWorkspace};
-pub use options::{HigherIndexControl, MatrixUpdate, Options, Tolerance};
+pub use options::{HigherIndexControl, MatrixUpdate, Options, Tolerance, DEFAULT_MAX_MATRIX_AGE};
 pub use stats::Stats;
 pub use variable::Bdf;

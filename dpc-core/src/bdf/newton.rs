@@ -32,6 +32,8 @@ pub(crate) struct JacState {
     pub ss: f64,
     /// `cj` of the previous Newton solve.
     pub cj_last: f64,
+    /// Corrector solves since the model's iteration matrix (its `dF/dy`) was last evaluated.
+    pub age: usize,
 }
 
 impl Default for JacState {
@@ -40,6 +42,7 @@ impl Default for JacState {
             cj_factored: 0.0,
             ss: 20.0,
             cj_last: 0.0,
+            age: 0,
         }
     }
 }
@@ -70,8 +73,6 @@ pub(crate) struct MatrixPoint {
     valid: bool,
     /// The model supplies its mass matrix (until it declines once).
     mass: bool,
-    /// Corrector solves since `dF/dy` was evaluated.
-    age: usize,
 }
 
 impl MatrixPoint {
@@ -82,7 +83,6 @@ impl MatrixPoint {
             yp: vec![0.0; n],
             valid: false,
             mass: true,
-            age: 0,
         }
     }
 
@@ -92,7 +92,6 @@ impl MatrixPoint {
         self.y.copy_from_slice(y);
         self.yp.copy_from_slice(yp);
         self.valid = true;
-        self.age = 0;
     }
 
     /// Move the matrix `m`, the model's at this point with `cj_old`, to `cj` with the
@@ -220,8 +219,11 @@ pub(crate) struct NewtonProblem {
     pub residual_tolerance: f64,
     /// Force a fresh iteration matrix before the first iteration.
     pub force_setup: bool,
-    /// Corrector solves one evaluation of `dF/dy` may serve, moved to new values of `cj`
-    /// with the mass matrix (0: evaluate at every new matrix, IDA's rule).
+    /// Move the matrix to a new `cj` with the mass matrix instead of evaluating it
+    /// ([`MatrixUpdate::Move`](super::MatrixUpdate::Move)).
+    pub move_matrix: bool,
+    /// Corrector solves one evaluation of `dF/dy` serves at most: the solve after that many
+    /// evaluates it anew (0: no limit; [`Options::max_matrix_age`](super::Options::max_matrix_age)).
     pub max_matrix_age: usize,
 }
 
@@ -550,21 +552,24 @@ impl<L: LinearSolver> Corrector<L> {
         p: &NewtonProblem,
     ) -> Result<usize, NewtonFailure> {
         self.jac.start_solve(p.cj);
-        let mut fresh = p.force_setup || {
+        // A matrix whose `dF/dy` has served `max_matrix_age` solves is evaluated anew.
+        let aged = p.max_matrix_age > 0 && self.jac.age >= p.max_matrix_age;
+        let new_cj = {
             let r = p.cj / self.jac.cj_factored;
             !(0.6..=1.0 / 0.6).contains(&r)
         };
+        let mut fresh = p.force_setup || new_cj || aged;
         // Moving the last matrix to the new `cj` (MatrixUpdate::Move) is allowed when only
         // `cj` asks for a new one, at the solve's start (a refresh the rate test asks for later
         // wants `dF/dy` at the iterate).
-        let keep_point = p.max_matrix_age > 0;
+        let keep_point = p.move_matrix;
         let mut may_move = keep_point
-            && (fresh || !self.newton.valid)
+            && (new_cj || !self.newton.valid)
             && !p.force_setup
+            && !aged
             && self.point.valid
-            && self.point.mass
-            && self.point.age < p.max_matrix_age;
-        self.point.age += 1;
+            && self.point.mass;
+        self.jac.age += 1;
         let before = self.newton.counts;
         let moves_before = self.moves;
         let outcome = loop {
@@ -601,6 +606,9 @@ impl<L: LinearSolver> Corrector<L> {
             };
             self.moves += system.moved;
             let evaluated = system.evaluated;
+            if evaluated {
+                self.jac.age = 0;
+            }
             // A failure with a matrix whose `dF/dy` was not evaluated in this attempt (kept,
             // or moved to the new `cj`) is tried again with a fresh one, as IDA does.
             if !retry_with_fresh_matrix(&outcome, false, evaluated) {
@@ -674,6 +682,7 @@ mod tests {
             min_carried: 0.0,
             residual_tolerance: f64::INFINITY,
             force_setup: false,
+            move_matrix: true,
             max_matrix_age: 50,
         };
         corrector.y_pred[0] = 1.0;

@@ -70,16 +70,16 @@ pub enum HigherIndexControl {
     Scale,
 }
 
-/// When the variable-step BDF ([`super::Bdf`]) evaluates the model's iteration matrix
-/// `dF/dy + cj dF/dy'` anew.
+/// How the variable-step BDF ([`super::Bdf`]) forms a new iteration matrix
+/// `dF/dy + cj dF/dy'` when `cj = alpha / h` leaves the window `[0.6, 1.67]` of the value the
+/// matrix was factorised with (after a change of step or order).
 ///
-/// Both rules form a new matrix when `cj = alpha / h` leaves the window `[0.6, 1.67]` of the
-/// value the matrix was factorised with (after a change of step or order) and when Newton
-/// fails with a matrix formed in an earlier step; they differ in how.
+/// Either way the model's matrix is evaluated when Newton fails with a matrix formed in an
+/// earlier step, and when its `dF/dy` has served [`Options::max_matrix_age`] corrector solves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum MatrixUpdate {
     /// Evaluate the model's [`iteration_matrix`](crate::ImplicitDae::iteration_matrix) at the
-    /// predicted point every time (IDA's rule). The default.
+    /// predicted point (IDA's rule). The default.
     #[default]
     Evaluate,
     /// Move the matrix to the new `cj` with the model's mass matrix: add
@@ -87,26 +87,28 @@ pub enum MatrixUpdate {
     /// ([`ImplicitDae::mass_matrix`](crate::ImplicitDae::mass_matrix)), and factorise again.
     /// Only the matrix a solve asks for at its start (for the new `cj`) is moved; the model's
     /// matrix is evaluated when Newton's rate test asks for a fresh one within a solve, when
-    /// Newton fails with a moved or older matrix, and for a new matrix asked for `max_age` or
-    /// more corrector solves after the last evaluation (CVODE keeps its Jacobian the same way, for at most 51 steps). For
-    /// models whose iteration matrix costs many residuals (difference quotients) and whose
-    /// mass matrix is cheap; a model that supplies no mass matrix is integrated as with
-    /// [`Evaluate`](Self::Evaluate).
+    /// Newton fails with a moved or older matrix, and when its `dF/dy` has served
+    /// [`Options::max_matrix_age`] solves. For models whose iteration matrix costs many
+    /// residuals (difference quotients) and whose mass matrix is cheap; a model that
+    /// supplies no mass matrix is integrated as with [`Evaluate`](Self::Evaluate).
     ///
     /// Newton then iterates with an older `dF/dy`: it converges more slowly, and its
     /// convergence test lets corrector errors up to its bound through where a fresh matrix
-    /// would have left far smaller ones. Measured (15 tolerance factors, `max_age = 50`): the
-    /// Test Set's wheelset (`dF/dy` by central differences, 34 residuals) 5 to 7 times fewer
-    /// matrix evaluations and 0.49 / 0.51 / 0.68 of `Evaluate`'s time at `rtol = atol = 1e-4 /
-    /// 1e-6 / 1e-8` (0.27 / 0.24 / 0.28 of IDA's), with 0.3 digits fewer at `1e-6` (0.2 more
-    /// at `1e-8`); on models with cheap exact matrices it saves little time and costs digits
-    /// at some tolerances (0.9 digits on the index-3 pendulum at `1e-6`, 1.5 on a NAND gate),
-    /// which is why it is not the default (docs/integrators.md, "`dF/dy'` from the model").
-    Move {
-        /// Corrector solves after which `dF/dy` is evaluated again (at least 1).
-        max_age: usize,
-    },
+    /// would have left far smaller ones. Measured (15 tolerance factors, `max_matrix_age =
+    /// 50`): the Test Set's wheelset (`dF/dy` by central differences, 34 residuals) 5 to 7
+    /// times fewer matrix evaluations and 0.49 / 0.51 / 0.68 of `Evaluate`'s time at `rtol =
+    /// atol = 1e-4 / 1e-6 / 1e-8` (0.27 / 0.24 / 0.28 of IDA's), with 0.3 digits fewer at
+    /// `1e-6` (0.2 more at `1e-8`); on models with cheap exact matrices it saves little time
+    /// and costs digits at some tolerances (0.9 digits on the index-3 pendulum at `1e-6`, 1.5
+    /// on a NAND gate), which is why it is not the default (docs/integrators.md, "`dF/dy'`
+    /// from the model").
+    Move,
 }
+
+/// The corrector solves an evaluation of the iteration matrix serves at most on a DAE whose
+/// unknowns all have index at most 1, unless [`Options::max_matrix_age`] says otherwise: the
+/// steps CVODE allows between two set-ups of its matrix (IDA has no such bound).
+pub const DEFAULT_MAX_MATRIX_AGE: usize = 20;
 
 /// Options of the variable-step integrator ([`super::Bdf`]) and, where they apply, of the
 /// fixed-step mode ([`super::FixedBdf`]) and consistent initialisation.
@@ -154,9 +156,20 @@ pub struct Options {
     /// within what a change of the unknowns by this many tolerance units would cause (default
     /// `1.0`); `f64::INFINITY` disables the check.
     pub residual_tolerance: f64,
-    /// Variable-step integrator only: when the iteration matrix is evaluated anew (default
-    /// [`MatrixUpdate::Evaluate`], IDA's rule).
+    /// Variable-step integrator only: how a new iteration matrix is formed when the step or
+    /// the order changes `cj` (default [`MatrixUpdate::Evaluate`], IDA's rule).
     pub matrix_update: MatrixUpdate,
+    /// Variable-step integrator only: the corrector solves one evaluation of the model's
+    /// `dF/dy` serves at most; the next solve evaluates the iteration matrix anew even when
+    /// `cj` stays in its window. `None` (the default): [`DEFAULT_MAX_MATRIX_AGE`] solves on a
+    /// DAE whose unknowns all have index at most 1 (an implicit ODE or an index-1 DAE), no
+    /// bound on a DAE with unknowns of index 2 or 3 (IDA's rule: there the bound cost digits
+    /// on the car axis for few steps saved). `Some(n)`: `n` solves on every DAE, `Some(0)` no
+    /// bound. A matrix kept through many steps of a solution that moves (a reaction front)
+    /// slows Newton's convergence, and the corrector's error it leaves in the local error
+    /// estimate keeps the step from growing and lowers the order (docs/integrators.md, "The
+    /// age of the iteration matrix").
+    pub max_matrix_age: Option<usize>,
 }
 
 impl Default for Options {
@@ -177,6 +190,7 @@ impl Default for Options {
             higher_index: HigherIndexControl::Exclude,
             residual_tolerance: 1.0,
             matrix_update: MatrixUpdate::Evaluate,
+            max_matrix_age: None,
         }
     }
 }
@@ -259,19 +273,7 @@ impl Options {
             )
             .into());
         }
-        if self.matrix_update == (MatrixUpdate::Move { max_age: 0 }) {
-            return Err(InvalidOption::new("matrix_update max_age", 0.0, "at least 1").into());
-        }
         Ok(())
-    }
-
-    /// The number of corrector solves one evaluation of `dF/dy` may serve, moved to new
-    /// values of `cj` ([`MatrixUpdate::Move`]); 0 for [`MatrixUpdate::Evaluate`].
-    pub(crate) fn max_matrix_age(&self) -> usize {
-        match self.matrix_update {
-            MatrixUpdate::Evaluate => 0,
-            MatrixUpdate::Move { max_age } => max_age,
-        }
     }
 
     /// Check that some unknown is in the variable-step error test: [`Options::index`] giving

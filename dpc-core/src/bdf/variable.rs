@@ -30,7 +30,8 @@
 
 use super::history::History;
 use super::newton::{error_weights, Corrector, NewtonProblem};
-use super::{BdfError, HigherIndexControl, Options, Stats, Tolerance};
+use super::options::DEFAULT_MAX_MATRIX_AGE;
+use super::{BdfError, HigherIndexControl, MatrixUpdate, Options, Stats, Tolerance};
 use crate::error::InvalidOption;
 use crate::linear_solver::LinearSolver;
 use crate::newton::{first_non_finite, wrms, NewtonFailure};
@@ -936,7 +937,12 @@ impl<D: ImplicitDae, L: LinearSolver> Bdf<D, L> {
                 },
                 residual_tolerance: f64::INFINITY,
                 force_setup: self.nst() == 0 && ncf == 0 && nef == 0,
-                max_matrix_age: self.opts.max_matrix_age(),
+                move_matrix: self.opts.matrix_update == MatrixUpdate::Move,
+                max_matrix_age: self.opts.max_matrix_age.unwrap_or(if index1 {
+                    DEFAULT_MAX_MATRIX_AGE
+                } else {
+                    0
+                }),
             };
             let outcome = self.corrector.solve(&self.dae, &mut self.stats, &problem);
             match outcome {
