@@ -27,6 +27,14 @@
 //! digits over a tolerance jitter, where the DAE rules took larger steps and lost up to 0.33
 //! digits at 1e-6), and so does a DAE of higher index run without its index declared
 //! (`dae_rules_apply`: SUNDIALS' analytic index-2 example as IDA's example runs it).
+//!
+//! The iteration matrix is evaluated anew as in IDA (for a `cj` out of the window of the
+//! factorised one, and for a retry after Newton fails with an older matrix) and, on DAEs whose
+//! unknowns all have index at most 1, also once it has served
+//! [`DEFAULT_MAX_MATRIX_AGE`] corrector solves ([`Options::max_matrix_age`]; CVODE's bound):
+//! a matrix kept while the solution moves leaves corrector errors in the local error
+//! estimate that keep the step from growing and the order high (Medical Akzo Nobel at
+//! `rtol = 1e-8`: 1 447 steps for IDA's 1 844).
 
 use super::history::History;
 use super::newton::{error_weights, Corrector, NewtonProblem};
