@@ -1626,11 +1626,13 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
 }
 
 /// Whether the block `dF_Z/dy_Z` of the iteration matrix at `c = 0` (its sorted entries `g0`;
-/// `Z` = `z`, ascending, of the `n` unknowns) is regular, for [`dae_rules_apply`]: by
-/// `regular` (a column-pivoted QR) when the DAE has at most [`LEADING_CHECK_MAX`] unknowns;
-/// above, a diagonal block by its diagonal (the same test: the `R` of a diagonal matrix holds
-/// its entries), and any other block counts as regular (the DAE as one of index 1, as every
-/// DAE of that size did before). `None` when an entry of the block is not finite.
+/// `Z` = `z`, ascending, of the `n` unknowns) is regular, for [`dae_rules_apply`]: a diagonal
+/// block by its diagonal at any size (the same test as `regular`'s: the `R` of a diagonal
+/// matrix holds its entries; SUNDIALS' heat example, whose boundary rows are `u = 0`, then
+/// sets up without a decomposition); any other block by `regular` (a column-pivoted QR) when
+/// the DAE has at most [`LEADING_CHECK_MAX`] unknowns, and above that it counts as regular
+/// (the DAE as one of index 1, as every DAE of that size did before). `None` when an entry of
+/// the block is not finite.
 fn block_regular(
     g0: &[(usize, usize, f64)],
     z: &[usize],
@@ -1650,7 +1652,11 @@ fn block_regular(
     if in_block.iter().any(|e| !e.2.is_finite()) {
         return None;
     }
-    if n <= LEADING_CHECK_MAX {
+    let diagonal_block = in_block.iter().all(|&(a, b, v)| a == b || v == 0.0);
+    if !diagonal_block {
+        if n > LEADING_CHECK_MAX {
+            return Some(true);
+        }
         let mut block = nalgebra::DMatrix::zeros(k, k);
         for &(a, b, v) in &in_block {
             block[(a, b)] = v;
@@ -1659,9 +1665,6 @@ fn block_regular(
     }
     let mut diagonal = vec![0.0; k];
     for &(a, b, v) in &in_block {
-        if a != b && v != 0.0 {
-            return Some(true);
-        }
         if a == b {
             diagonal[a] = v;
         }
