@@ -5,18 +5,30 @@
 //! With `A^{-1} = T Λ T^{-1}` (see [`super::tableau`]) it decouples into
 //!
 //! * the real `n x n` matrix `E_1 = J + (gamma/h) M`, factorised by the caller's
-//!   [`LinearSolver`] (fixed-size, dense or sparse), and
-//! * the complex `n x n` matrix `E_2 = J + ((alpha - i beta)/h) M`, factorised by a dense
-//!   complex partial-pivoting LU (faer) whose storage is allocated once, or within the band
-//!   of the real solver when it is banded ([`LinearSolver::band`]; `E_2` has `E_1`'s
-//!   structure).
+//!   [`LinearSolver`] (fixed-size, dense, banded or sparse), and
+//! * the complex `n x n` matrix `E_2 = J + ((alpha - i beta)/h) M`, which has `E_1`'s
+//!   structure, factorised
+//!   - within the band of the real solver when it is banded ([`LinearSolver::band`]);
+//!   - by faer's sparse LU over `c64` in the real solver's pattern when it has one
+//!     ([`LinearSolver::pattern`], [`crate::linear_solver::FaerSparseLu`]), the symbolic
+//!     analysis done once at construction and shared by every numeric factorisation; like
+//!     the real sparse LU, each numeric factorisation allocates (faer's high-level sparse
+//!     API), so a step that refactorises is not allocation-free on this path;
+//!   - otherwise by a dense complex partial-pivoting LU (faer) whose storage is allocated
+//!     once.
 //!
 //! `J` is the model's `iteration_matrix(t, y, y', c) = J + c M` at `c = 0`; `M` its
 //! [`ImplicitDae::mass_matrix`] when the model supplies one, else the same entry point at
-//! `c = 1` less `J` (`M = (J + M) - J`). Both are kept in dense storage so that a change of `h`
-//! only refactorises, without evaluating the Jacobian again (as RADAU5 does). The subtraction
-//! is exact where `J` has no entry; where both have one the error is a round-off of `|J_ij|`,
-//! the size of the round-off of the matrix entry `J_ij + c M_ij` itself.
+//! `c = 1` less `J` (`M = (J + M) - J`). Both are kept, in the real solver's storage kind
+//! (dense, its band, or its compressed-column pattern: memory in the number of non-zeros),
+//! so that a change of `h` only refactorises, without evaluating the Jacobian again (as
+//! RADAU5 does). The subtraction is exact where `J` has no entry; where both have one the
+//! error is a round-off of `|J_ij|`, the size of the round-off of the matrix entry
+//! `J_ij + c M_ij` itself.
+//!
+//! With a band or a pattern, a non-zero entry the model writes outside it is not stored but
+//! remembered, and the next factorisation reports it ([`SetupFailure::OutsidePattern`], which
+//! the integrator returns as [`super::RadauError::OutsidePattern`]) instead of dropping it.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
