@@ -435,7 +435,7 @@ pub(crate) enum SetupFailure {
 enum ComplexSolver {
     Dense(ComplexLu),
     Band(ComplexBandLu),
-    Sparse(ComplexSparseLu),
+    Sparse(Box<ComplexSparseLu>),
 }
 
 /// `J` or `M`: dense, in the real solver's band when it has one (an entry outside the band
@@ -613,7 +613,7 @@ impl<L: LinearSolver> StageMatrices<L> {
         );
         let complex = match (band, sparse) {
             (Some((kl, ku)), _) => ComplexSolver::Band(ComplexBandLu::new(n, kl, ku)),
-            (None, Some((lu, _))) => ComplexSolver::Sparse(lu),
+            (None, Some((lu, _))) => ComplexSolver::Sparse(Box::new(lu)),
             (None, None) => ComplexSolver::Dense(ComplexLu::new(n)),
         };
         Self {
