@@ -360,9 +360,21 @@ pub(crate) struct ComplexSparseLu {
 }
 
 impl ComplexSparseLu {
-    /// For `n x n` matrices with entries at `(col_ptr, row_idx)`; `None` when faer's
-    /// symbolic analysis rejects the pattern.
+    /// For `n x n` matrices with entries at `(col_ptr, row_idx)`; `None` when the pattern is
+    /// not a well-formed compressed-column one (rows ascending within a column, in range) or
+    /// faer's symbolic analysis rejects it.
     fn new(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<Self> {
+        let well_formed = col_ptr.len() == n + 1
+            && col_ptr[0] == 0
+            && col_ptr.windows(2).all(|w| w[0] <= w[1])
+            && col_ptr[n] == row_idx.len()
+            && (0..n).all(|j| {
+                let rows = &row_idx[col_ptr[j]..col_ptr[j + 1]];
+                rows.windows(2).all(|w| w[0] < w[1]) && rows.iter().all(|&i| i < n)
+            });
+        if !well_formed {
+            return None;
+        }
         let symbolic_mat =
             SymbolicSparseColMat::new_checked(n, n, col_ptr.to_vec(), None, row_idx.to_vec());
         let symbolic = SymbolicLu::try_new(symbolic_mat.as_ref()).ok()?;
@@ -984,6 +996,17 @@ mod tests {
             sm.factor(0.1, 3.6, 2.7, 3.05),
             Err(SetupFailure::OutsidePattern(2, 0))
         );
+    }
+
+    /// A malformed compressed-column pattern (from some other solver) is refused, not a
+    /// panic: the stage matrices then fall back to dense storage.
+    #[test]
+    fn a_malformed_pattern_is_refused() {
+        // Too few column pointers; a row out of range; rows not ascending.
+        assert!(ComplexSparseLu::new(3, &[0, 1], &[0]).is_none());
+        assert!(ComplexSparseLu::new(2, &[0, 1, 2], &[0, 2]).is_none());
+        assert!(ComplexSparseLu::new(2, &[0, 2, 3], &[1, 0, 1]).is_none());
+        assert!(ComplexSparseLu::new(2, &[0, 2, 3], &[0, 1, 1]).is_some());
     }
 
     fn systems_solve_what_they_should<L: LinearSolver>(ls: L) {
