@@ -138,6 +138,13 @@ impl LinearSolver for FaerLu {
         }
     }
 
+    fn pattern(&self) -> Option<(&[usize], &[usize])> {
+        match self {
+            Self::Sparse(s) => s.pattern(),
+            _ => None,
+        }
+    }
+
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {
         match self {
             Self::Dense(d) => d.scaled_row_norms(w, out),

@@ -38,6 +38,47 @@ impl PatternMatrix {
     pub fn nnz(&self) -> usize {
         self.values.len()
     }
+
+    /// Zeros in the compressed-column pattern `(col_ptr, row_idx)` of an `n x n` matrix (as
+    /// [`LinearSolver::pattern`] gives it).
+    pub(crate) fn with_pattern(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Self {
+        Self {
+            n,
+            col_ptr: col_ptr.to_vec(),
+            row_idx: row_idx.to_vec(),
+            values: vec![0.0; row_idx.len()],
+            outside: None,
+        }
+    }
+
+    /// The rows of column `j` and their values.
+    #[inline]
+    pub(crate) fn column(&self, j: usize) -> (&[usize], &[f64]) {
+        let (lo, hi) = (self.col_ptr[j], self.col_ptr[j + 1]);
+        (&self.row_idx[lo..hi], &self.values[lo..hi])
+    }
+
+    /// The entry `(i, j)` (zero outside the pattern).
+    pub(crate) fn get(&self, i: usize, j: usize) -> f64 {
+        self.slot(i, j).map_or(0.0, |k| self.values[k])
+    }
+
+    /// The values in pattern order (column by column).
+    pub(crate) fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// `self -= other`, both in the same pattern (entry by entry).
+    pub(crate) fn subtract(&mut self, other: &Self) {
+        for (a, b) in self.values.iter_mut().zip(&other.values) {
+            *a -= b;
+        }
+    }
+
+    /// The first non-zero entry written outside the pattern since the last zeroing.
+    pub(crate) fn outside(&self) -> Option<(usize, usize)> {
+        self.outside
+    }
 }
 
 impl MatrixSink for PatternMatrix {
@@ -195,6 +236,10 @@ impl LinearSolver for FaerSparseLu {
                 row: zero_row,
             }),
         }
+    }
+
+    fn pattern(&self) -> Option<(&[usize], &[usize])> {
+        Some((&self.matrix.col_ptr, &self.matrix.row_idx))
     }
 
     fn scaled_row_norms(&self, w: &[f64], out: &mut [f64]) {

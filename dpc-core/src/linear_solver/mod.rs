@@ -110,6 +110,15 @@ pub trait LinearSolver {
     fn band(&self) -> Option<(usize, usize)> {
         None
     }
+
+    /// The fixed sparsity pattern of the solver's matrix in compressed-column form, when it
+    /// has one ([`FaerSparseLu`]): `(col_ptr, row_idx)`, the rows of column `j` (ascending,
+    /// without repeats) being `row_idx[col_ptr[j]..col_ptr[j + 1]]`. An integrator with a
+    /// second system of the same structure (Radau's complex one) can then store and
+    /// factorise that one in the pattern too. The default says not sparse.
+    fn pattern(&self) -> Option<(&[usize], &[usize])> {
+        None
+    }
 }
 
 /// A mutable borrow of a solver is a solver, so one solver can serve several integrators in
@@ -133,6 +142,9 @@ impl<L: LinearSolver + ?Sized> LinearSolver for &mut L {
     }
     fn band(&self) -> Option<(usize, usize)> {
         (**self).band()
+    }
+    fn pattern(&self) -> Option<(&[usize], &[usize])> {
+        (**self).pattern()
     }
 }
 

@@ -5,27 +5,45 @@
 //! With `A^{-1} = T Λ T^{-1}` (see [`super::tableau`]) it decouples into
 //!
 //! * the real `n x n` matrix `E_1 = J + (gamma/h) M`, factorised by the caller's
-//!   [`LinearSolver`] (fixed-size, dense or sparse), and
-//! * the complex `n x n` matrix `E_2 = J + ((alpha - i beta)/h) M`, factorised by a dense
-//!   complex partial-pivoting LU (faer) whose storage is allocated once, or within the band
-//!   of the real solver when it is banded ([`LinearSolver::band`]; `E_2` has `E_1`'s
-//!   structure).
+//!   [`LinearSolver`] (fixed-size, dense, banded or sparse), and
+//! * the complex `n x n` matrix `E_2 = J + ((alpha - i beta)/h) M`, which has `E_1`'s
+//!   structure, factorised
+//!   - within the band of the real solver when it is banded ([`LinearSolver::band`]);
+//!   - by faer's sparse LU over `c64` in the real solver's pattern when it has one
+//!     ([`LinearSolver::pattern`], [`crate::linear_solver::FaerSparseLu`]), the symbolic
+//!     analysis done once at construction and shared by every numeric factorisation; like
+//!     the real sparse LU, each numeric factorisation allocates (faer's high-level sparse
+//!     API), so a step that refactorises is not allocation-free on this path;
+//!   - otherwise by a dense complex partial-pivoting LU (faer) whose storage is allocated
+//!     once.
 //!
 //! `J` is the model's `iteration_matrix(t, y, y', c) = J + c M` at `c = 0`; `M` its
 //! [`ImplicitDae::mass_matrix`] when the model supplies one, else the same entry point at
-//! `c = 1` less `J` (`M = (J + M) - J`). Both are kept in dense storage so that a change of `h`
-//! only refactorises, without evaluating the Jacobian again (as RADAU5 does). The subtraction
-//! is exact where `J` has no entry; where both have one the error is a round-off of `|J_ij|`,
-//! the size of the round-off of the matrix entry `J_ij + c M_ij` itself.
+//! `c = 1` less `J` (`M = (J + M) - J`). Both are kept, in the real solver's storage kind
+//! (dense, its band, or its compressed-column pattern: memory in the number of non-zeros),
+//! so that a change of `h` only refactorises, without evaluating the Jacobian again (as
+//! RADAU5 does). The subtraction is exact where `J` has no entry; where both have one the
+//! error is a round-off of `|J_ij|`, the size of the round-off of the matrix entry
+//! `J_ij + c M_ij` itself.
+//!
+//! With a band or a pattern, a non-zero entry the model writes outside it is not stored but
+//! remembered, and the next factorisation reports it ([`SetupFailure::OutsidePattern`], which
+//! the integrator returns as [`super::RadauError::OutsidePattern`]) instead of dropping it.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::linalg::solvers::SolveCore;
 use faer::perm::PermRef;
-use faer::{c64, Mat, MatMut, Par};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::linalg::LuError;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{c64, Conj, Mat, MatMut, Par};
 
 use super::band::ComplexBandLu;
 use super::error::StageSystem;
-use crate::linear_solver::{BandMatrix, FactorError, LinearSolver, UNBLOCKED_MAX_DIMENSION};
+use crate::linear_solver::{
+    BandMatrix, FactorError, LinearSolver, PatternMatrix, UNBLOCKED_MAX_DIMENSION,
+};
 use crate::sink::MatrixSink;
 use crate::ImplicitDae;
 
@@ -328,6 +346,80 @@ fn complex_solve_dispatched(lu: &[c64], n: usize, pivots: &[usize], b: &mut [c64
     sizes!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
+/// Sparse complex LU (faer's, over `c64`) in the real solver's compressed-column pattern
+/// ([`LinearSolver::pattern`]): the symbolic analysis once at construction, shared by every
+/// numeric factorisation (as [`crate::linear_solver::FaerSparseLu`] does for `f64`). Like that
+/// one, each numeric factorisation allocates its factors and scratch memory (faer's
+/// high-level sparse API).
+pub(crate) struct ComplexSparseLu {
+    symbolic_mat: SymbolicSparseColMat<usize>,
+    symbolic: SymbolicLu<usize>,
+    /// The matrix's values in pattern order.
+    values: Vec<c64>,
+    lu: Option<Lu<usize, c64>>,
+}
+
+impl ComplexSparseLu {
+    /// For `n x n` matrices with entries at `(col_ptr, row_idx)`; `None` when the pattern is
+    /// not a well-formed compressed-column one (rows ascending within a column, in range) or
+    /// faer's symbolic analysis rejects it.
+    fn new(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<Self> {
+        let well_formed = col_ptr.len() == n + 1
+            && col_ptr[0] == 0
+            && col_ptr.windows(2).all(|w| w[0] <= w[1])
+            && col_ptr[n] == row_idx.len()
+            && (0..n).all(|j| {
+                let rows = &row_idx[col_ptr[j]..col_ptr[j + 1]];
+                rows.windows(2).all(|w| w[0] < w[1]) && rows.iter().all(|&i| i < n)
+            });
+        if !well_formed {
+            return None;
+        }
+        let symbolic_mat =
+            SymbolicSparseColMat::new_checked(n, n, col_ptr.to_vec(), None, row_idx.to_vec());
+        let symbolic = SymbolicLu::try_new(symbolic_mat.as_ref()).ok()?;
+        Some(Self {
+            symbolic_mat,
+            symbolic,
+            values: vec![c64::new(0.0, 0.0); row_idx.len()],
+            lu: None,
+        })
+    }
+
+    /// Factorise the values; an error names a column without a usable pivot when one is
+    /// known (a column entirely zero, one holding a non-finite entry, or faer's structurally
+    /// singular column). As with the real sparse LU, a numerically zero pivot is not
+    /// reported by faer: the non-finite solution it gives fails the Newton iteration.
+    fn factor(&mut self) -> Result<(), Option<usize>> {
+        self.lu = None;
+        let col_ptr = self.symbolic_mat.col_ptr();
+        let n = col_ptr.len() - 1;
+        let irregular = |v: &c64| !(v.re.is_finite() && v.im.is_finite());
+        if let Some(col) = (0..n).find(|&c| {
+            let column = &self.values[col_ptr[c]..col_ptr[c + 1]];
+            column.iter().all(|v| *v == c64::new(0.0, 0.0)) || column.iter().any(irregular)
+        }) {
+            return Err(Some(col));
+        }
+        let a = SparseColMatRef::new(self.symbolic_mat.as_ref(), &self.values);
+        match Lu::try_new_with_symbolic(self.symbolic.clone(), a) {
+            Ok(lu) => {
+                self.lu = Some(lu);
+                Ok(())
+            }
+            Err(LuError::SymbolicSingular { index }) => Err(Some(index)),
+            Err(LuError::Generic(_)) => Err(None),
+        }
+    }
+
+    fn solve_in_place(&self, b: &mut [c64]) {
+        if let Some(lu) = &self.lu {
+            let n = b.len();
+            lu.solve_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(b, n, 1));
+        }
+    }
+}
+
 /// A non-finite entry of `J` or `M` as the model gave them: a matrix the step's start point
 /// fixes, which no smaller step changes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -350,44 +442,77 @@ pub(crate) enum SetupFailure {
     OutsidePattern(usize, usize),
 }
 
-/// The complex stage system's LU: dense, or banded when the real solver is
-/// ([`LinearSolver::band`]).
+/// The complex stage system's LU: dense, banded when the real solver is
+/// ([`LinearSolver::band`]), sparse in its pattern when it has one ([`LinearSolver::pattern`]).
 enum ComplexSolver {
     Dense(ComplexLu),
     Band(ComplexBandLu),
+    Sparse(Box<ComplexSparseLu>),
 }
 
-/// `J` or `M`: dense, or in the real solver's band when it has one (an entry outside the band
-/// is remembered, see [`BandMatrix`]).
+/// `J` or `M`: dense, in the real solver's band when it has one (an entry outside the band
+/// is remembered, see [`BandMatrix`]), or in its sparsity pattern when it has one (an entry
+/// outside the pattern is remembered, see [`PatternMatrix`]).
 enum Jacobian {
     Dense(Mat<f64>),
     Band(BandMatrix),
+    Sparse(PatternMatrix),
+}
+
+/// The rows of a column of a [`Jacobian`]: consecutive from a first one (dense, band) or
+/// listed (sparse).
+#[derive(Clone, Copy)]
+enum Rows<'a> {
+    From(usize),
+    List(&'a [usize]),
+}
+
+impl Rows<'_> {
+    /// The row of the column's `k`-th stored value.
+    #[inline(always)]
+    fn row(self, k: usize) -> usize {
+        match self {
+            Self::From(first) => first + k,
+            Self::List(rows) => rows[k],
+        }
+    }
 }
 
 impl Jacobian {
-    fn new(n: usize, band: Option<(usize, usize)>) -> Self {
-        match band {
-            Some((kl, ku)) => Self::Band(BandMatrix::new(n, kl, ku)),
-            None => Self::Dense(Mat::zeros(n, n)),
+    fn new(n: usize, band: Option<(usize, usize)>, pattern: Option<(&[usize], &[usize])>) -> Self {
+        match (band, pattern) {
+            (Some((kl, ku)), _) => Self::Band(BandMatrix::new(n, kl, ku)),
+            (None, Some((col_ptr, row_idx))) => {
+                Self::Sparse(PatternMatrix::with_pattern(n, col_ptr, row_idx))
+            }
+            (None, None) => Self::Dense(Mat::zeros(n, n)),
         }
     }
 
-    /// The first row of column `j` that can hold an entry, and the column from there on (to
-    /// the band's last row).
+    /// The rows of column `j` that can hold an entry, and their values (dense: the whole
+    /// column; band: from the band's first row to its last; sparse: the pattern's rows).
     #[inline]
-    fn column(&self, j: usize) -> (usize, &[f64]) {
+    fn column(&self, j: usize) -> (Rows<'_>, &[f64]) {
         match self {
-            Self::Dense(m) => (0, m.col_as_slice(j)),
-            Self::Band(b) => b.column(j),
+            Self::Dense(m) => (Rows::From(0), m.col_as_slice(j)),
+            Self::Band(b) => {
+                let (first, column) = b.column(j);
+                (Rows::From(first), column)
+            }
+            Self::Sparse(p) => {
+                let (rows, column) = p.column(j);
+                (Rows::List(rows), column)
+            }
         }
     }
 
-    /// The entry `(i, j)` (zero outside the band).
+    /// The entry `(i, j)` (zero outside the band or pattern).
     #[inline]
     fn get(&self, i: usize, j: usize) -> f64 {
         match self {
             Self::Dense(m) => m[(i, j)],
             Self::Band(b) => b.get(i, j),
+            Self::Sparse(p) => p.get(i, j),
         }
     }
 
@@ -403,6 +528,7 @@ impl Jacobian {
                 }
             }
             (Self::Band(a), Self::Band(b)) => a.subtract(b),
+            (Self::Sparse(a), Self::Sparse(b)) => a.subtract(b),
             // Not built so (J and M share their storage kind), but well defined.
             (a, b) => {
                 let n = a.rows();
@@ -416,11 +542,12 @@ impl Jacobian {
         }
     }
 
-    /// A non-zero entry written outside the band.
+    /// A non-zero entry written outside the band or pattern.
     fn outside(&self) -> Option<(usize, usize)> {
         match self {
             Self::Dense(_) => None,
             Self::Band(b) => b.outside(),
+            Self::Sparse(p) => p.outside(),
         }
     }
 }
@@ -430,6 +557,7 @@ impl MatrixSink for Jacobian {
         match self {
             Self::Dense(m) => m.nrows(),
             Self::Band(b) => b.rows(),
+            Self::Sparse(p) => p.rows(),
         }
     }
     fn cols(&self) -> usize {
@@ -440,6 +568,7 @@ impl MatrixSink for Jacobian {
         match self {
             Self::Dense(m) => m.set(row, col, value),
             Self::Band(b) => b.set(row, col, value),
+            Self::Sparse(p) => p.set(row, col, value),
         }
     }
     #[inline]
@@ -447,12 +576,14 @@ impl MatrixSink for Jacobian {
         match self {
             Self::Dense(m) => m.add(row, col, value),
             Self::Band(b) => b.add(row, col, value),
+            Self::Sparse(p) => p.add(row, col, value),
         }
     }
     fn fill_zero(&mut self) {
         match self {
             Self::Dense(m) => m.fill_zero(),
             Self::Band(b) => b.fill_zero(),
+            Self::Sparse(p) => p.fill_zero(),
         }
     }
 }
@@ -463,9 +594,9 @@ pub(crate) struct StageMatrices<L: LinearSolver> {
     jy: Jacobian,
     jyp: Jacobian,
     complex: ComplexSolver,
-    /// With a banded solver: the first entry of `J` or `M` outside its band, at the last
-    /// evaluation.
-    outside_band: Option<(usize, usize)>,
+    /// With a banded or sparse solver: the first entry of `J` or `M` outside its band or
+    /// pattern, at the last evaluation.
+    outside_pattern: Option<(usize, usize)>,
     /// A Jacobian has been evaluated (at some earlier step start, possibly stale).
     pub have_jacobian: bool,
     /// The Jacobian was evaluated at the start of the current step.
@@ -479,16 +610,30 @@ pub(crate) struct StageMatrices<L: LinearSolver> {
 impl<L: LinearSolver> StageMatrices<L> {
     pub fn new(ls: L, n: usize) -> Self {
         let band = ls.band();
-        let complex = match band {
-            Some((kl, ku)) => ComplexSolver::Band(ComplexBandLu::new(n, kl, ku)),
-            None => ComplexSolver::Dense(ComplexLu::new(n)),
+        // The sparse complex LU in the real solver's pattern; dense storage should faer's
+        // symbolic analysis reject the pattern (it accepted it for the real system).
+        let sparse = match (band, ls.pattern()) {
+            (None, Some((col_ptr, row_idx))) => {
+                ComplexSparseLu::new(n, col_ptr, row_idx).map(|lu| (lu, (col_ptr, row_idx)))
+            }
+            _ => None,
+        };
+        let pattern = sparse.as_ref().map(|(_, p)| *p);
+        let (jy, jyp) = (
+            Jacobian::new(n, band, pattern),
+            Jacobian::new(n, band, pattern),
+        );
+        let complex = match (band, sparse) {
+            (Some((kl, ku)), _) => ComplexSolver::Band(ComplexBandLu::new(n, kl, ku)),
+            (None, Some((lu, _))) => ComplexSolver::Sparse(Box::new(lu)),
+            (None, None) => ComplexSolver::Dense(ComplexLu::new(n)),
         };
         Self {
             ls,
-            jy: Jacobian::new(n, band),
-            jyp: Jacobian::new(n, band),
+            jy,
+            jyp,
             complex,
-            outside_band: None,
+            outside_pattern: None,
             have_jacobian: false,
             current: false,
             factored: false,
@@ -514,19 +659,19 @@ impl<L: LinearSolver> StageMatrices<L> {
             dae.iteration_matrix(t, y, yp, 1.0, &mut self.jyp);
             self.jyp.subtract(&self.jy);
         }
-        self.outside_band = self.jy.outside().or(self.jyp.outside());
+        self.outside_pattern = self.jy.outside().or(self.jyp.outside());
         self.have_jacobian = true;
         self.current = true;
         self.factored = false;
         for j in 0..self.jy.cols() {
-            let ((first, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+            let ((rows, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
             if let Some(k) = jy
                 .iter()
                 .zip(jyp)
                 .position(|(a, b)| !(a.is_finite() && b.is_finite()))
             {
                 return Err(NonFiniteEntry {
-                    row: first + k,
+                    row: rows.row(k),
                     col: j,
                 });
             }
@@ -545,18 +690,18 @@ impl<L: LinearSolver> StageMatrices<L> {
         self.factored = false;
         let n = self.jy.rows();
         let (cr, ca, cb) = (gamma / h, alpha / h, -beta / h);
-        // Rows of column j that can hold entries: the band's, when the solver has one (an
-        // entry outside it was found when J and M were evaluated).
-        if let Some((row, col)) = self.outside_band {
+        // Rows of column j that can hold entries: the band's or the pattern's, when the
+        // solver has one (an entry outside it was found when J and M were evaluated).
+        if let Some((row, col)) = self.outside_pattern {
             return Err(SetupFailure::OutsidePattern(row, col));
         }
         let m = self.ls.matrix_mut();
         m.fill_zero();
         for j in 0..n {
-            let ((first, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+            let ((rows, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
             for (k, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
                 if a != 0.0 || b != 0.0 {
-                    m.set(first + k, j, a + cr * b);
+                    m.set(rows.row(k), j, a + cr * b);
                 }
             }
         }
@@ -588,21 +733,46 @@ impl<L: LinearSolver> StageMatrices<L> {
                 // above reported any outside it).
                 complex.clear();
                 for j in 0..n {
-                    let ((first, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
+                    let ((rows, jy), (_, jyp)) = (self.jy.column(j), self.jyp.column(j));
                     for (k, (&a, &b)) in jy.iter().zip(jyp).enumerate() {
                         if a != 0.0 || b != 0.0 {
-                            complex.set(first + k, j, c64::new(a + ca * b, cb * b));
+                            complex.set(rows.row(k), j, c64::new(a + ca * b, cb * b));
                         }
                     }
                 }
                 complex.factor().map_err(Some)
             }
+            ComplexSolver::Sparse(complex) => match (&self.jy, &self.jyp) {
+                // J, M and the complex matrix share the pattern: value by value.
+                (Jacobian::Sparse(jy), Jacobian::Sparse(jyp)) => {
+                    for ((e, &a), &b) in
+                        complex.values.iter_mut().zip(jy.values()).zip(jyp.values())
+                    {
+                        *e = c64::new(a + ca * b, cb * b);
+                    }
+                    complex.factor()
+                }
+                // Not built so (the sparse complex LU comes with sparse J and M).
+                _ => Err(None),
+            },
         };
         if let Err(col) = factored {
-            let (jy, jyp) = (&self.jy, &self.jyp);
-            let row = crate::linear_solver::zero_row(n, |i, j| {
-                (jy.get(i, j) + ca * jyp.get(i, j)).abs() + (cb * jyp.get(i, j)).abs()
-            });
+            let row = match (&self.jy, &self.jyp) {
+                (Jacobian::Sparse(jy), Jacobian::Sparse(jyp)) => {
+                    // Rows with a non-zero entry, over the pattern only.
+                    let mut nonzero = vec![false; n];
+                    for j in 0..n {
+                        let ((rows, a), (_, b)) = (jy.column(j), jyp.column(j));
+                        for ((&i, &a), &b) in rows.iter().zip(a).zip(b) {
+                            nonzero[i] |= (a + ca * b).abs() + (cb * b).abs() != 0.0;
+                        }
+                    }
+                    nonzero.iter().position(|&nz| !nz)
+                }
+                (jy, jyp) => crate::linear_solver::zero_row(n, |i, j| {
+                    (jy.get(i, j) + ca * jyp.get(i, j)).abs() + (cb * jyp.get(i, j)).abs()
+                }),
+            };
             return Err(SetupFailure::Singular(StageSystem::Complex, col, row));
         }
         self.factored = true;
@@ -620,6 +790,7 @@ impl<L: LinearSolver> StageMatrices<L> {
         match &mut self.complex {
             ComplexSolver::Dense(complex) => complex.solve_in_place(b),
             ComplexSolver::Band(complex) => complex.solve_in_place(b),
+            ComplexSolver::Sparse(complex) => complex.solve_in_place(b),
         }
     }
 
@@ -646,6 +817,20 @@ impl<L: LinearSolver> StageMatrices<L> {
                     let (yj, ypj) = (y[j].abs(), yp[j].abs());
                     for ((o, a), b) in out[first..].iter_mut().zip(cy).zip(cyp) {
                         *o += a.abs() * yj + b.abs() * ypj;
+                    }
+                }
+                for o in out.iter_mut() {
+                    *o *= 10.0 * f64::EPSILON;
+                }
+            }
+            (Jacobian::Sparse(jy), Jacobian::Sparse(jyp)) => {
+                // Column by column over the pattern.
+                out.fill(0.0);
+                for j in 0..n {
+                    let ((rows, cy), (_, cyp)) = (jy.column(j), jyp.column(j));
+                    let (yj, ypj) = (y[j].abs(), yp[j].abs());
+                    for ((&i, a), b) in rows.iter().zip(cy).zip(cyp) {
+                        out[i] += a.abs() * yj + b.abs() * ypj;
                     }
                 }
                 for o in out.iter_mut() {
@@ -771,6 +956,57 @@ mod tests {
             sm.factor(0.1, 3.6, 2.7, 3.05),
             Err(SetupFailure::OutsidePattern(2, 0))
         );
+    }
+
+    /// The sparse LU with the whole `3 x 3` pattern: `J`, `M` and the complex system stored
+    /// in it; and with a tridiagonal pattern that misses the entry `(2, 0)` of `J`: the
+    /// set-up reports it (the value is not dropped).
+    #[test]
+    fn the_sparse_solver_stores_and_checks_its_pattern() {
+        let full: Vec<(usize, usize)> = (0..3).flat_map(|i| (0..3).map(move |j| (i, j))).collect();
+        let ls = crate::linear_solver::FaerSparseLu::new(3, &full).unwrap();
+        let sm = StageMatrices::new(ls, 3);
+        assert!(matches!(sm.complex, ComplexSolver::Sparse(_)));
+        assert!(matches!(sm.jy, Jacobian::Sparse(_)));
+        systems_solve_what_they_should(crate::linear_solver::FaerSparseLu::new(3, &full).unwrap());
+        // The round-off bound with the pattern equals the dense one's.
+        let mut sparse = StageMatrices::new(
+            crate::linear_solver::FaerSparseLu::new(3, &full).unwrap(),
+            3,
+        );
+        let mut dense = StageMatrices::new(NalgebraLu::<3>::new(), 3);
+        let (y, yp) = ([1.0, -2.0, 0.5], [0.25, 3.0, -1.0]);
+        sparse.evaluate(&Linear, 0.0, &y, &yp).unwrap();
+        dense.evaluate(&Linear, 0.0, &y, &yp).unwrap();
+        let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+        sparse.residual_roundoff(&y, &yp, &mut a);
+        dense.residual_roundoff(&y, &yp, &mut b);
+        for (a, b) in a.iter().zip(&b) {
+            assert!((a - b).abs() <= 1e-15 * b.abs(), "{a} {b}");
+        }
+
+        let tridiagonal: Vec<(usize, usize)> = (0..3usize)
+            .flat_map(|i| [(i, i.saturating_sub(1)), (i, i), (i, (i + 1).min(2))])
+            .collect();
+        let ls = crate::linear_solver::FaerSparseLu::new(3, &tridiagonal).unwrap();
+        let mut sm = StageMatrices::new(ls, 3);
+        sm.evaluate(&Linear, 0.0, &[0.0; 3], &[0.0; 3]).unwrap();
+        assert!(matches!(sm.complex, ComplexSolver::Sparse(_)));
+        assert_eq!(
+            sm.factor(0.1, 3.6, 2.7, 3.05),
+            Err(SetupFailure::OutsidePattern(2, 0))
+        );
+    }
+
+    /// A malformed compressed-column pattern (from some other solver) is refused, not a
+    /// panic: the stage matrices then fall back to dense storage.
+    #[test]
+    fn a_malformed_pattern_is_refused() {
+        // Too few column pointers; a row out of range; rows not ascending.
+        assert!(ComplexSparseLu::new(3, &[0, 1], &[0]).is_none());
+        assert!(ComplexSparseLu::new(2, &[0, 1, 2], &[0, 2]).is_none());
+        assert!(ComplexSparseLu::new(2, &[0, 2, 3], &[1, 0, 1]).is_none());
+        assert!(ComplexSparseLu::new(2, &[0, 2, 3], &[0, 1, 1]).is_some());
     }
 
     fn systems_solve_what_they_should<L: LinearSolver>(ls: L) {

@@ -13,8 +13,10 @@
 //! * `newton`: the collocation conditions `F(t_n + c_i h, y_n + Z_i, Y'_i) = 0` solved by
 //!   simplified Newton, one real and one complex `n x n` system per iteration;
 //! * `linear`: `dF/dy` and `dF/dy'` (from two calls of `iteration_matrix`), the real system in
-//!   the caller's [`LinearSolver`], the complex one in a dense complex LU (faer), or in a
-//!   banded complex LU (`band`) when the caller's solver is banded ([`LinearSolver::band`]);
+//!   the caller's [`LinearSolver`], the complex one in a dense complex LU (faer), in a
+//!   banded complex LU (`band`) when the caller's solver is banded ([`LinearSolver::band`]),
+//!   or in faer's sparse LU over `c64` in the caller's pattern when it has one
+//!   ([`LinearSolver::pattern`]), `dF/dy` and `dF/dy'` then stored in that pattern too;
 //! * `estimate`: the embedded error estimate filtered through the real matrix, with the extra
 //!   solve on the first step and after rejections;
 //! * `control`: Gustafsson's predictive step-size controller; after a step's second
