@@ -68,6 +68,11 @@ impl PatternMatrix {
         &self.values
     }
 
+    /// The row of each value, in pattern order.
+    pub(crate) fn row_indices(&self) -> &[usize] {
+        &self.row_idx
+    }
+
     /// `self -= other`, both in the same pattern (entry by entry).
     pub(crate) fn subtract(&mut self, other: &Self) {
         for (a, b) in self.values.iter_mut().zip(&other.values) {
@@ -79,6 +84,31 @@ impl PatternMatrix {
     pub(crate) fn outside(&self) -> Option<(usize, usize)> {
         self.outside
     }
+}
+
+/// The first column of a compressed-column matrix (`col_ptr`, `values` in pattern order) whose
+/// values `no_pivot` says cannot give a pivot (all zero, or not finite): the check before a
+/// sparse LU, which names no such column itself.
+pub(crate) fn first_column_without_pivot<T>(
+    col_ptr: &[usize],
+    values: &[T],
+    no_pivot: impl Fn(&[T]) -> bool,
+) -> Option<usize> {
+    (0..col_ptr.len().saturating_sub(1)).find(|&c| no_pivot(&values[col_ptr[c]..col_ptr[c + 1]]))
+}
+
+/// The first of `n` rows that has no value for which `nonzero(k)` holds (`k` indexing the
+/// values, whose rows are `row_idx`): the zero row a singular sparse matrix is reported with.
+pub(crate) fn first_empty_row(
+    n: usize,
+    row_idx: &[usize],
+    nonzero: impl Fn(usize) -> bool,
+) -> Option<usize> {
+    let mut filled = vec![false; n];
+    for (k, &r) in row_idx.iter().enumerate() {
+        filled[r] |= nonzero(k);
+    }
+    filled.iter().position(|&f| !f)
 }
 
 impl MatrixSink for PatternMatrix {
@@ -198,18 +228,10 @@ impl LinearSolver for FaerSparseLu {
                 col,
             });
         }
-        let zero_row = {
-            let mut nonzero = vec![false; m.n];
-            for (k, &r) in m.row_idx.iter().enumerate() {
-                nonzero[r] |= m.values[k] != 0.0;
-            }
-            nonzero.iter().position(|&b| !b)
-        };
-        if let Some(col) = (0..m.n).find(|&c| {
-            m.values[m.col_ptr[c]..m.col_ptr[c + 1]]
-                .iter()
-                .all(|v| *v == 0.0)
-        }) {
+        let zero_row = first_empty_row(m.n, &m.row_idx, |k| m.values[k] != 0.0);
+        if let Some(col) =
+            first_column_without_pivot(&m.col_ptr, &m.values, |c| c.iter().all(|v| *v == 0.0))
+        {
             return Err(FactorError::Singular {
                 column: Some(col),
                 row: zero_row,

@@ -25,7 +25,7 @@
 mod auto;
 pub(crate) mod band;
 mod faer_dense;
-mod faer_sparse;
+pub(crate) mod faer_sparse;
 mod nalgebra_lu;
 mod unblocked;
 

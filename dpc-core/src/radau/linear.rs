@@ -41,6 +41,7 @@ use faer::{c64, Conj, Mat, MatMut, Par};
 
 use super::band::ComplexBandLu;
 use super::error::StageSystem;
+use crate::linear_solver::faer_sparse::{first_column_without_pivot, first_empty_row};
 use crate::linear_solver::{
     BandMatrix, FactorError, LinearSolver, PatternMatrix, UNBLOCKED_MAX_DIMENSION,
 };
@@ -392,13 +393,12 @@ impl ComplexSparseLu {
     /// reported by faer: the non-finite solution it gives fails the Newton iteration.
     fn factor(&mut self) -> Result<(), Option<usize>> {
         self.lu = None;
-        let col_ptr = self.symbolic_mat.col_ptr();
-        let n = col_ptr.len() - 1;
         let irregular = |v: &c64| !(v.re.is_finite() && v.im.is_finite());
-        if let Some(col) = (0..n).find(|&c| {
-            let column = &self.values[col_ptr[c]..col_ptr[c + 1]];
-            column.iter().all(|v| *v == c64::new(0.0, 0.0)) || column.iter().any(irregular)
-        }) {
+        if let Some(col) =
+            first_column_without_pivot(self.symbolic_mat.col_ptr(), &self.values, |column| {
+                column.iter().all(|v| *v == c64::new(0.0, 0.0)) || column.iter().any(irregular)
+            })
+        {
             return Err(Some(col));
         }
         let a = SparseColMatRef::new(self.symbolic_mat.as_ref(), &self.values);
@@ -759,15 +759,11 @@ impl<L: LinearSolver> StageMatrices<L> {
         if let Err(col) = factored {
             let row = match (&self.jy, &self.jyp) {
                 (Jacobian::Sparse(jy), Jacobian::Sparse(jyp)) => {
-                    // Rows with a non-zero entry, over the pattern only.
-                    let mut nonzero = vec![false; n];
-                    for j in 0..n {
-                        let ((rows, a), (_, b)) = (jy.column(j), jyp.column(j));
-                        for ((&i, &a), &b) in rows.iter().zip(a).zip(b) {
-                            nonzero[i] |= (a + ca * b).abs() + (cb * b).abs() != 0.0;
-                        }
-                    }
-                    nonzero.iter().position(|&nz| !nz)
+                    // Over the pattern only (J and M share it, value by value).
+                    let (a, b) = (jy.values(), jyp.values());
+                    first_empty_row(n, jy.row_indices(), |k| {
+                        (a[k] + ca * b[k]).abs() + (cb * b[k]).abs() != 0.0
+                    })
                 }
                 (jy, jyp) => crate::linear_solver::zero_row(n, |i, j| {
                     (jy.get(i, j) + ca * jyp.get(i, j)).abs() + (cb * jyp.get(i, j)).abs()
