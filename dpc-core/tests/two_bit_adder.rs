@@ -226,11 +226,15 @@ fn digits(tol: f64, radau: bool) -> f64 {
 
 #[test]
 fn bdf_reaches_test_set_accuracy() {
-    // Median scd on the outputs over tol x (0.9, 1, 1.1) at 1e-4, measured: 5.09 (4 780 steps
+    // Median scd on the outputs over tol x (0.9, 1, 1.1) at 1e-4, measured: 4.47 (5 263 steps
     // at tol; the test profile is optimised, about 0.2 s a run). Floor half a digit below.
+    // Since `Bdf::new` reads the singular algebraic block (13 node groups of index 2) and keeps
+    // IDA's rules: 5.09 with the index-1 DAE rules before; over 15 tolerance factors 0.80 ...
+    // 1.20 the medians are 4.64 against 4.84 (IDA 4.53), and at 1e-6 1 of the 15 factors
+    // fails instead of 5 (IDA: 1; docs/integrators.md, "The Test Set's two bit adding unit").
     let d = digits(1e-4, false);
     println!("adder BDF tol 1e-4: median scd {d:.2}");
-    assert!(d >= 4.55, "scd {d}");
+    assert!(d >= 3.97, "scd {d}");
 }
 
 #[test]

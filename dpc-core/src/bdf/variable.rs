@@ -1479,14 +1479,14 @@ fn error_norms(e: &[f64], w: &[f64], p_k: &[f64], p_km1: &[f64], k: usize) -> (f
     ((s0 / m).sqrt(), (s1 / m).sqrt(), (s2 / m).sqrt())
 }
 
-/// The most unknowns of a DAE whose matrices [`dae_rules_apply`] decomposes densely (a
-/// column-pivoted QR of at most this many columns, 0.5 MB): the block `dF_Z/dy_Z` of the
-/// algebraic unknowns `Z`, and `dF/dy'` itself when it is not diagonal. Above it nothing is
-/// decomposed: a diagonal `dF/dy'` and a diagonal block are read from their diagonals, and a
-/// DAE that would need a decomposition counts as one of index 1 (the DAE rules, which were the
-/// rules for every index-1 problem before the distinction, and which every DAE above this
-/// size had before the classification was made sparse: the Test Set's two bit adding unit, 350
-/// unknowns with index-2 node groups, keeps them).
+/// The largest matrix [`dae_rules_apply`] decomposes densely (a column-pivoted QR of at most
+/// this many columns, 0.5 MB): the block `dF_Z/dy_Z` of the algebraic unknowns `Z` (bounded
+/// by the block's size, not the DAE's: the Test Set's two bit adding unit, 350 unknowns, has a
+/// block of 175, singular in its 13 node groups of index 2, and is read as a DAE of higher
+/// index), and `dF/dy'` itself when it is not diagonal (bounded by the DAE's size). Above it
+/// nothing is decomposed: a diagonal `dF/dy'` and a diagonal block are read from their
+/// diagonals, and a DAE that would need a larger decomposition counts as one of index 1 (the
+/// DAE rules, which were the rules for every index-1 problem before the distinction).
 const LEADING_CHECK_MAX: usize = 256;
 
 /// Whether the DAE rules apply to a DAE declared with every unknown of index at most 1, read
@@ -1514,10 +1514,10 @@ const LEADING_CHECK_MAX: usize = 256;
 /// with `n^2` (SUNDIALS' heat example on a `100 x 100` grid without a mass matrix: 10 000
 /// unknowns, docs/integrators.md).
 ///
-/// A matrix that is not finite counts as a DAE of index 1, and so does a DAE of more than
-/// [`LEADING_CHECK_MAX`] unknowns whose test would need a dense decomposition (a non-diagonal
-/// block `dF_Z/dy_Z`, or a non-diagonal `dF/dy'`): an implicit ODE misread as one only keeps
-/// the rules every index-1 problem had before.
+/// A matrix that is not finite counts as a DAE of index 1, and so does a DAE whose test would
+/// need a dense decomposition of more than [`LEADING_CHECK_MAX`] columns (a non-diagonal block
+/// `dF_Z/dy_Z` of more algebraic unknowns, or a non-diagonal `dF/dy'` of more unknowns): an
+/// implicit ODE misread as one only keeps the rules every index-1 problem had before.
 fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (bool, usize) {
     let n = dae.dimension();
     let negligible = |r: &nalgebra::DVector<f64>| {
@@ -1551,7 +1551,7 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
         dae.iteration_matrix(t, y, yp, 0.0, &mut g0);
         // Only the block's entries need be finite.
         return (
-            block_regular(&g0.entries(), &z, n, regular).unwrap_or(true),
+            block_regular(&g0.entries(), &z, n, regular, negligible).unwrap_or(true),
             1,
         );
     }
@@ -1590,7 +1590,10 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
         if z.is_empty() {
             return (false, 2);
         }
-        return (block_regular(&g0, &z, n, regular).unwrap_or(true), 2);
+        return (
+            block_regular(&g0, &z, n, regular, negligible).unwrap_or(true),
+            2,
+        );
     }
     if n > LEADING_CHECK_MAX {
         return (true, 2);
@@ -1629,15 +1632,16 @@ fn dae_rules_apply<D: ImplicitDae>(dae: &D, t: f64, y: &[f64], yp: &[f64]) -> (b
 /// `Z` = `z`, ascending, of the `n` unknowns) is regular, for [`dae_rules_apply`]: a diagonal
 /// block by its diagonal at any size (the same test as `regular`'s: the `R` of a diagonal
 /// matrix holds its entries; SUNDIALS' heat example, whose boundary rows are `u = 0`, then
-/// sets up without a decomposition); any other block by `regular` (a column-pivoted QR) when
-/// the DAE has at most [`LEADING_CHECK_MAX`] unknowns, and above that it counts as regular
-/// (the DAE as one of index 1, as every DAE of that size did before). `None` when an entry of
-/// the block is not finite.
+/// sets up without a decomposition; `negligible` is `regular`'s test of `R`'s diagonal); any
+/// other block by `regular` (a column-pivoted QR) when it has at most [`LEADING_CHECK_MAX`]
+/// rows, and above that it counts as regular (the DAE as one of index 1). `None` when an entry
+/// of the block is not finite.
 fn block_regular(
     g0: &[(usize, usize, f64)],
     z: &[usize],
     n: usize,
     regular: impl Fn(nalgebra::DMatrix<f64>) -> bool,
+    negligible: impl Fn(&nalgebra::DVector<f64>) -> nalgebra::DVector<bool>,
 ) -> Option<bool> {
     let k = z.len();
     let mut slot = vec![usize::MAX; n];
@@ -1654,7 +1658,7 @@ fn block_regular(
     }
     let diagonal_block = in_block.iter().all(|&(a, b, v)| a == b || v == 0.0);
     if !diagonal_block {
-        if n > LEADING_CHECK_MAX {
+        if k > LEADING_CHECK_MAX {
             return Some(true);
         }
         let mut block = nalgebra::DMatrix::zeros(k, k);
@@ -1669,9 +1673,11 @@ fn block_regular(
             diagonal[a] = v;
         }
     }
-    let largest = diagonal.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let tol = 1e3 * n as f64 * f64::EPSILON * largest;
-    Some(largest > 0.0 && diagonal.iter().all(|v| v.abs() > tol))
+    Some(
+        !negligible(&nalgebra::DVector::from_vec(diagonal))
+            .iter()
+            .any(|z| *z),
+    )
 }
 
 /// A [`MatrixSink`] that keeps the diagonal of what is written and notes any non-zero entry off
