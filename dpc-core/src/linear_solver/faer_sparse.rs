@@ -1,10 +1,11 @@
 //! Sparse LU (faer) for iteration matrices with a known structural pattern.
 
-use faer::linalg::solvers::SolveCore;
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
 use faer::sparse::linalg::LuError;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, MatMut};
+use faer::traits::ComplexField;
+use faer::{Conj, MatMut, Par};
 
 use super::{FactorError, LinearSolver};
 use crate::sink::MatrixSink;
@@ -97,14 +98,16 @@ pub(crate) fn first_column_without_pivot<T>(
     (0..col_ptr.len().saturating_sub(1)).find(|&c| no_pivot(&values[col_ptr[c]..col_ptr[c + 1]]))
 }
 
-/// The first of `n` rows that has no value for which `nonzero(k)` holds (`k` indexing the
+/// The first of the rows that has no value for which `nonzero(k)` holds (`k` indexing the
 /// values, whose rows are `row_idx`): the zero row a singular sparse matrix is reported with.
+/// `filled` has one slot per row (its contents on entry do not matter): the caller's storage,
+/// so that the check before every factorisation allocates nothing.
 pub(crate) fn first_empty_row(
-    n: usize,
+    filled: &mut [bool],
     row_idx: &[usize],
     nonzero: impl Fn(usize) -> bool,
 ) -> Option<usize> {
-    let mut filled = vec![false; n];
+    filled.fill(false);
     for (k, &r) in row_idx.iter().enumerate() {
         filled[r] |= nonzero(k);
     }
@@ -144,15 +147,109 @@ impl MatrixSink for PatternMatrix {
     }
 }
 
-/// Sparse LU with partial pivoting (faer), symbolic analysis done once at construction.
+/// faer's sparse LU with partial pivoting over `T` (real or complex), its symbolic analysis
+/// (the fill-reducing column order, the choice of the simplicial or supernodal kernel) done
+/// once, and the numeric factors, the row permutation and the work space kept from one
+/// factorisation to the next: after the first factorisation (and any later one whose pivots
+/// grow the fill beyond every earlier one's) neither factorising nor solving allocates. faer's
+/// `Lu::try_new_with_symbolic` allocates new factors and work space at every factorisation,
+/// and its solve a work space at every solve. The real LU ([`FaerSparseLu`]) and Radau's
+/// complex one share it.
+pub(crate) struct ReusedSparseLu<T> {
+    pattern: SymbolicSparseColMat<usize>,
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, T>,
+    /// The last factorisation succeeded (`numeric` holds its factors).
+    factored: bool,
+    /// Work space for a factorisation and for a solve with one right-hand side.
+    work: MemBuffer,
+}
+
+impl<T> std::fmt::Debug for ReusedSparseLu<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ReusedSparseLu")
+            .field("n", &self.pattern.ncols())
+            .field("nnz", &self.pattern.row_idx().len())
+            .field("factored", &self.factored)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<T: ComplexField> ReusedSparseLu<T> {
+    /// For `n x n` matrices with entries at the compressed-column pattern `(col_ptr,
+    /// row_idx)`, which must be well formed (rows ascending within each column, in range);
+    /// `None` when faer's symbolic analysis fails.
+    pub(crate) fn new(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Option<Self> {
+        let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let symbolic = factorize_symbolic_lu(pattern.as_ref(), Default::default()).ok()?;
+        let work = MemBuffer::new(StackReq::any_of(&[
+            symbolic.factorize_numeric_lu_scratch::<T>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<T>(1, Par::Seq),
+        ]));
+        Some(Self {
+            pattern,
+            symbolic,
+            numeric: NumericLu::new(),
+            factored: false,
+            work,
+        })
+    }
+
+    /// The pattern's column pointers.
+    pub(crate) fn col_ptr(&self) -> &[usize] {
+        self.pattern.col_ptr()
+    }
+
+    /// Mark the factors unusable (a matrix refused before factorising): solves leave their
+    /// right-hand side unchanged until the next successful factorisation.
+    pub(crate) fn discard(&mut self) {
+        self.factored = false;
+    }
+
+    /// Factorise the matrix whose values, in the pattern's order, are `values`.
+    ///
+    /// # Errors
+    /// faer's: a column without any possible pivot (`LuError::SymbolicSingular`), or out of
+    /// memory. A numerically zero pivot is not reported (faer divides by it).
+    pub(crate) fn factor(&mut self, values: &[T]) -> Result<(), LuError> {
+        self.factored = false;
+        let a = SparseColMatRef::new(self.pattern.as_ref(), values);
+        self.symbolic.factorize_numeric_lu(
+            &mut self.numeric,
+            a,
+            Par::Seq,
+            MemStack::new(&mut self.work),
+            Default::default(),
+        )?;
+        self.factored = true;
+        Ok(())
+    }
+
+    /// Solve `A x = b` in place with the last factorisation; `b` unchanged when the last
+    /// factorisation failed (or none was made).
+    pub(crate) fn solve_in_place(&mut self, b: &mut [T]) {
+        if self.factored {
+            let n = b.len();
+            LuRef::new_unchecked(&self.symbolic, &self.numeric).solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(b, n, 1),
+                Par::Seq,
+                MemStack::new(&mut self.work),
+            );
+        }
+    }
+}
+
+/// Sparse LU with partial pivoting (faer), symbolic analysis done once at construction, no
+/// allocation when factorising or solving ([`ReusedSparseLu`]).
 ///
 /// The diagonal is always added to the pattern, so a model may leave it out.
 #[derive(Debug)]
 pub struct FaerSparseLu {
     matrix: PatternMatrix,
-    symbolic_mat: SymbolicSparseColMat<usize>,
-    symbolic: SymbolicLu<usize>,
-    lu: Option<Lu<usize, f64>>,
+    lu: ReusedSparseLu<f64>,
+    /// Per row, whether it holds a non-zero value (the check before each factorisation).
+    row_filled: Vec<bool>,
 }
 
 impl FaerSparseLu {
@@ -181,13 +278,12 @@ impl FaerSparseLu {
             col_ptr[c + 1] += col_ptr[c];
         }
         let row_idx: Vec<usize> = entries.iter().map(|&(_, r)| r).collect();
-        let symbolic_mat =
-            SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
-        let symbolic =
-            SymbolicLu::try_new(symbolic_mat.as_ref()).map_err(|_| FactorError::Singular {
+        let lu = ReusedSparseLu::new(n, col_ptr.clone(), row_idx.clone()).ok_or(
+            FactorError::Singular {
                 column: None,
                 row: None,
-            })?;
+            },
+        )?;
         let nnz = row_idx.len();
         Ok(Self {
             matrix: PatternMatrix {
@@ -197,9 +293,8 @@ impl FaerSparseLu {
                 values: vec![0.0; nnz],
                 outside: None,
             },
-            symbolic_mat,
-            symbolic,
-            lu: None,
+            lu,
+            row_filled: vec![false; n],
         })
     }
 }
@@ -216,7 +311,7 @@ impl LinearSolver for FaerSparseLu {
     }
 
     fn factor(&mut self) -> Result<(), FactorError> {
-        self.lu = None;
+        self.lu.discard();
         if let Some((row, col)) = self.matrix.outside {
             return Err(FactorError::OutsidePattern { row, col });
         }
@@ -228,7 +323,7 @@ impl LinearSolver for FaerSparseLu {
                 col,
             });
         }
-        let zero_row = first_empty_row(m.n, &m.row_idx, |k| m.values[k] != 0.0);
+        let zero_row = first_empty_row(&mut self.row_filled, &m.row_idx, |k| m.values[k] != 0.0);
         if let Some(col) =
             first_column_without_pivot(&m.col_ptr, &m.values, |c| c.iter().all(|v| *v == 0.0))
         {
@@ -237,16 +332,15 @@ impl LinearSolver for FaerSparseLu {
                 row: zero_row,
             });
         }
-        let a = SparseColMatRef::new(self.symbolic_mat.as_ref(), &m.values);
-        match Lu::try_new_with_symbolic(self.symbolic.clone(), a) {
-            Ok(lu) => {
+        match self.lu.factor(&m.values) {
+            Ok(()) => {
                 if zero_row.is_some() {
+                    self.lu.discard();
                     return Err(FactorError::Singular {
                         column: None,
                         row: zero_row,
                     });
                 }
-                self.lu = Some(lu);
                 Ok(())
             }
             Err(LuError::SymbolicSingular { index }) => Err(FactorError::Singular {
@@ -276,13 +370,9 @@ impl LinearSolver for FaerSparseLu {
     }
 
     fn solve_in_place(&mut self, b: &mut [f64]) {
-        if let Some(lu) = &self.lu {
-            let n = b.len();
-            let rhs = MatMut::from_column_major_slice_mut(b, n, 1);
-            // faer does not report numerically zero pivots; a non-finite solution is caught by
-            // the integrator's Newton iteration and reported as a failure.
-            lu.solve_in_place_with_conj(Conj::No, rhs);
-        }
+        // faer does not report numerically zero pivots; a non-finite solution is caught by the
+        // integrator's Newton iteration and reported as a failure.
+        self.lu.solve_in_place(b);
     }
 }
 

@@ -32,16 +32,15 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
-use faer::linalg::solvers::SolveCore;
 use faer::perm::PermRef;
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::linalg::LuError;
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{c64, Conj, Mat, MatMut, Par};
+use faer::{c64, Mat, MatMut, Par};
 
 use super::band::ComplexBandLu;
 use super::error::StageSystem;
-use crate::linear_solver::faer_sparse::{first_column_without_pivot, first_empty_row};
+use crate::linear_solver::faer_sparse::{
+    first_column_without_pivot, first_empty_row, ReusedSparseLu,
+};
 use crate::linear_solver::{
     BandMatrix, FactorError, LinearSolver, PatternMatrix, UNBLOCKED_MAX_DIMENSION,
 };
@@ -353,11 +352,9 @@ fn complex_solve_dispatched(lu: &[c64], n: usize, pivots: &[usize], b: &mut [c64
 /// one, each numeric factorisation allocates its factors and scratch memory (faer's
 /// high-level sparse API).
 pub(crate) struct ComplexSparseLu {
-    symbolic_mat: SymbolicSparseColMat<usize>,
-    symbolic: SymbolicLu<usize>,
+    lu: ReusedSparseLu<c64>,
     /// The matrix's values in pattern order.
     values: Vec<c64>,
-    lu: Option<Lu<usize, c64>>,
 }
 
 impl ComplexSparseLu {
@@ -376,14 +373,9 @@ impl ComplexSparseLu {
         if !well_formed {
             return None;
         }
-        let symbolic_mat =
-            SymbolicSparseColMat::new_checked(n, n, col_ptr.to_vec(), None, row_idx.to_vec());
-        let symbolic = SymbolicLu::try_new(symbolic_mat.as_ref()).ok()?;
         Some(Self {
-            symbolic_mat,
-            symbolic,
+            lu: ReusedSparseLu::new(n, col_ptr.to_vec(), row_idx.to_vec())?,
             values: vec![c64::new(0.0, 0.0); row_idx.len()],
-            lu: None,
         })
     }
 
@@ -392,31 +384,22 @@ impl ComplexSparseLu {
     /// singular column). As with the real sparse LU, a numerically zero pivot is not
     /// reported by faer: the non-finite solution it gives fails the Newton iteration.
     fn factor(&mut self) -> Result<(), Option<usize>> {
-        self.lu = None;
         let irregular = |v: &c64| !(v.re.is_finite() && v.im.is_finite());
-        if let Some(col) =
-            first_column_without_pivot(self.symbolic_mat.col_ptr(), &self.values, |column| {
-                column.iter().all(|v| *v == c64::new(0.0, 0.0)) || column.iter().any(irregular)
-            })
-        {
+        if let Some(col) = first_column_without_pivot(self.lu.col_ptr(), &self.values, |column| {
+            column.iter().all(|v| *v == c64::new(0.0, 0.0)) || column.iter().any(irregular)
+        }) {
+            self.lu.discard();
             return Err(Some(col));
         }
-        let a = SparseColMatRef::new(self.symbolic_mat.as_ref(), &self.values);
-        match Lu::try_new_with_symbolic(self.symbolic.clone(), a) {
-            Ok(lu) => {
-                self.lu = Some(lu);
-                Ok(())
-            }
+        match self.lu.factor(&self.values) {
+            Ok(()) => Ok(()),
             Err(LuError::SymbolicSingular { index }) => Err(Some(index)),
             Err(LuError::Generic(_)) => Err(None),
         }
     }
 
-    fn solve_in_place(&self, b: &mut [c64]) {
-        if let Some(lu) = &self.lu {
-            let n = b.len();
-            lu.solve_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(b, n, 1));
-        }
+    fn solve_in_place(&mut self, b: &mut [c64]) {
+        self.lu.solve_in_place(b);
     }
 }
 
@@ -761,7 +744,7 @@ impl<L: LinearSolver> StageMatrices<L> {
                 (Jacobian::Sparse(jy), Jacobian::Sparse(jyp)) => {
                     // Over the pattern only (J and M share it, value by value).
                     let (a, b) = (jy.values(), jyp.values());
-                    first_empty_row(n, jy.row_indices(), |k| {
+                    first_empty_row(&mut vec![false; n], jy.row_indices(), |k| {
                         (a[k] + ca * b[k]).abs() + (cb * b[k]).abs() != 0.0
                     })
                 }
