@@ -122,7 +122,10 @@ pub(crate) fn wrms(v: &[f64], w: &[f64]) -> f64 {
 ///
 /// All work vectors and both factorisations' storage are allocated in [`Radau::new`]; steps
 /// allocate nothing themselves (the linear solver decides for its own part; error paths build
-/// names for the message).
+/// names for the message). With [`NalgebraLu`](crate::linear_solver::NalgebraLu) or
+/// [`FaerDenseLu`](crate::linear_solver::FaerDenseLu) no step, factorisation, solve or dense
+/// output allocates, and with the sparse LU none once faer's factors have their largest fill
+/// (a counting allocator in `tests/radau_and_sparse_alloc.rs`).
 pub struct Radau<D: ImplicitDae, L: LinearSolver> {
     dae: D,
     opts: Options,
