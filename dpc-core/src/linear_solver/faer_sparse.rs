@@ -240,8 +240,10 @@ impl<T: ComplexField> ReusedSparseLu<T> {
     }
 }
 
-/// Sparse LU with partial pivoting (faer), symbolic analysis done once at construction, no
-/// allocation when factorising or solving ([`ReusedSparseLu`]).
+/// Sparse LU with partial pivoting (faer), symbolic analysis done once at construction; faer's
+/// numeric factors, row permutation and work space are kept from one factorisation to the
+/// next, so factorising and solving allocate nothing once the factors have their largest
+/// fill.
 ///
 /// The diagonal is always added to the pattern, so a model may leave it out.
 #[derive(Debug)]
