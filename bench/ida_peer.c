@@ -44,8 +44,10 @@
  * same equations and exact Jacobian as dpc-core/tests/common/water_tube.rs.
  * The Test Set's wheelset (wheel.f, 17 unknowns, index 2, creep forces) to t = 10, the two
  * normal forces of index 2 excluded from the error test, all 17 unknowns scored: the same
- * equations and iteration matrix (dF/dy' exact, central differences in y) as
- * dpc-core/tests/common/wheelset.rs.
+ * equations as dpc-core/tests/common/wheelset.rs, the iteration matrix by IDA's own difference
+ * quotients (the Test Set gives no Jacobian; dpc's fixture takes the exact one its model!
+ * declaration generates). central: runs it with the matrix of dpc's old fixture instead
+ * (dF/dy' exact, central differences in y: 34 residuals per matrix).
  * The Test Set's two bit adding unit (tba.f, 350 unknowns y = (q, U), index 1) to t = 320, scored
  * on its outputs y224, y305, y323: the netlist and exact Jacobian of
  * dpc-core/tests/common/two_bit_adder.rs, from corner to corner of its inputs (every 5).
@@ -86,6 +88,9 @@
  *                            # on the problems that have an exact one, rows "IDA (difference
  *                            # quotients)": the like-for-like peer of dpc's
  *                            # dpc_core::difference rows (dq: alone: every problem)
+ *   ida_peer central:wheelset # the wheelset with the central differences of wheel_jac, rows
+ *                            # "IDA (central differences)" (central: alone: every problem, the
+ *                            # others unchanged)
  *   ida_peer --reference     # Akzo and HIRES at rtol = 1e-12, atol = 1e-15, Fekete at
  *                            # rtol = atol = 1e-10 from a first step of 1e-2: the end values
  * (IDA's Newton iteration fails at t = 0 on the Fekete problem at 1e-8 on some tolerance
@@ -1290,8 +1295,8 @@ static int water_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector
 /* The Test Set's wheelset (wheel.f, reswhs and its routines; index-2 formulation, straight track,
  * no propulsion, no chassis mass), as dpc-core/tests/common/wheelset.rs: 17 unknowns
  * (p, v, beta, q = (psi_R, xi_R, psi_L, xi_L), lambda in 1e4 N), F = M y' - f; IDA's own
- * difference-quotient Jacobian. A derailment or a singular contact geometry: a recoverable
- * error. */
+ * difference-quotient Jacobian (wheel_jac below with "central:"). A derailment or a singular
+ * contact geometry: a recoverable error. */
 #define WH_MR 16.08
 #define WH_G 9.81
 #define WH_V 30.0
@@ -1445,8 +1450,9 @@ static int wheel_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud
   return 0;
 }
 
-/* The iteration matrix of dpc-core's fixture: dF/dy' exact, dF/dy by central differences of
- * the residual (step cbrt(eps) max(|y_j|, 1e-3)). */
+/* The iteration matrix of dpc-core's fixture before its exact matrix (2026-12-05): dF/dy' exact,
+ * dF/dy by central differences of the residual (step cbrt(eps) max(|y_j|, 1e-3)); used with the
+ * command line's "central:" prefix. */
 static int wheel_jac(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
                      void *ud, N_Vector t1, N_Vector t2, N_Vector t3) {
   realtype *y = N_VGetArrayPointer(yy), *up = N_VGetArrayPointer(t1), *down = N_VGetArrayPointer(t2);
@@ -2696,6 +2702,9 @@ static void quiet(int code, const char *module, const char *function, char *msg,
 /* Set by the command line's "dq:" prefix: IDA forms every iteration matrix by its own difference
  * quotients (idaLsDenseDQJac), as when a user supplies no Jacobian. */
 static int use_dq = 0;
+/* Set by the command line's "central:" prefix: the wheelset's matrix by wheel_jac's central
+ * differences instead of IDA's own difference quotients. */
+static int use_central = 0;
 
 static Run solve(SUNContext ctx, int problem, double rtol) {
   static IDAResFn const RES[PROBLEMS] = {rober_res, amp_res, pend_res, andrews_res,
@@ -2707,7 +2716,7 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
   static IDALsJacFn const JAC[PROBLEMS] = {rober_jac, amp_jac, pend_jac, NULL, NULL,
                                            NULL, NULL, akzo_jac, hires_jac, ap_jac, fekete_jac,
                                            crank_jac, nand_jac, pump_jac, water_jac,
-                                           wheel_jac, tba_jac, ode_jac, ode_jac, ode_jac,
+                                           NULL, tba_jac, ode_jac, ode_jac, ode_jac,
                                            ode_jac, heat_jac, web_jac, slcrank_jac, medakzo_jac};
   int n = DIM[problem];
   Run run = {0};
@@ -2726,6 +2735,7 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
   SUNLinearSolver LS = band > 0 ? SUNLinSol_Band(yy, A, ctx) : SUNLinSol_Dense(yy, A, ctx);
   IDASetLinearSolver(mem, LS, A);
   if (JAC[problem] && !use_dq) IDASetJacFn(mem, JAC[problem]);
+  if (problem == WHEEL && use_central) IDASetJacFn(mem, wheel_jac);
   IDASetMaxNumSteps(mem, 1000000);
   IDASetStopTime(mem, T_END[problem]);
   if (init_step > 0.0) IDASetInitStep(mem, init_step);
@@ -2946,6 +2956,9 @@ int main(int argc, char **argv) {
   if (only && strncmp(only, "dq:", 3) == 0) {
     use_dq = 1;
     only = only[3] ? only + 3 : NULL;
+  } else if (only && strncmp(only, "central:", 8) == 0) {
+    use_central = 1;
+    only = only[8] ? only + 8 : NULL;
   }
   if (only && strcmp(only, "--reference") == 0) {
     static const int reference[3] = {AKZO, HIRES, FEKETE};
@@ -2989,8 +3002,11 @@ int main(int argc, char **argv) {
       if (problem == TBA && k == 8) continue;
       double rtol = factor * pow(10.0, -k);
       Run run = solve(ctx, problem, rtol);
-      printf("%02d-%02d-%d\t| %s | 1e-%d | %s | ", key(problem), k, use_dq ? 13 : 4,
-             NAMES[problem], k, use_dq ? "IDA 6.4.1 (difference quotients)" : "IDA 6.4.1");
+      int central = use_central && problem == WHEEL;
+      printf("%02d-%02d-%d\t| %s | 1e-%d | %s | ", key(problem), k, use_dq ? 13 : central ? 18 : 4,
+             NAMES[problem], k,
+             use_dq ? "IDA 6.4.1 (difference quotients)"
+                    : central ? "IDA 6.4.1 (central differences)" : "IDA 6.4.1");
       if (run.flag < 0) {
         printf("failed (%s at t = %.2g after %ld steps) | %ld | %ld | %ld | | |\n",
                IDAGetReturnFlagName(run.flag), run.t_fail, run.steps, run.etf, run.ncf, run.jacs);

@@ -95,8 +95,9 @@ pub enum MatrixUpdate {
     /// Newton then iterates with an older `dF/dy`: it converges more slowly, and its
     /// convergence test lets corrector errors up to its bound through where a fresh matrix
     /// would have left far smaller ones. Measured (15 tolerance factors, `max_matrix_age =
-    /// 50`): the Test Set's wheelset (`dF/dy` by central differences, 34 residuals) 5 to 7
-    /// times fewer matrix evaluations and 0.49 / 0.51 / 0.68 of `Evaluate`'s time at `rtol =
+    /// 50`): the Test Set's wheelset with `dF/dy` by central differences (34 residuals; its
+    /// fixture's matrix until it took the exact one from `dpc::model!`) 5 to 7 times fewer
+    /// matrix evaluations and 0.49 / 0.51 / 0.68 of `Evaluate`'s time at `rtol =
     /// atol = 1e-4 / 1e-6 / 1e-8` (0.27 / 0.24 / 0.28 of IDA's), with 0.3 digits fewer at
     /// `1e-6` (0.2 more at `1e-8`); on models with cheap exact matrices it saves little time
     /// and costs digits at some tolerances (0.9 digits on the index-3 pendulum at `1e-6`, 1.5

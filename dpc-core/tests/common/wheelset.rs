@@ -24,11 +24,24 @@
 //! the unknowns' order above; its rows are kept in the order of its subroutine (`f` is evaluated
 //! with `lambda` and `q` swapped into the positions the subroutine expects). A derailment (a
 //! contact point off the profiles; the Test Set's `ires = -1`) or a singular contact geometry
-//! gives a non-finite residual (the integrators retry a smaller step). The iteration matrix:
-//! `dF/dy'` exact, `dF/dy` by central differences of the residual (step `eps^(1/3)
-//! max(|y_j|, 1e-3)`).
+//! gives a non-finite residual (the integrators retry a smaller step).
+//!
+//! The iteration matrix and the mass matrix are exact: the same equations are declared with
+//! `dpc::model!` in [`WheelsetModel`] and the macro differentiates them symbolically, as for a
+//! plant a user declares (the Test Set supplies no Jacobian). The residual stays this
+//! transcription (what `bench/ida_peer.c` transcribes); `tests/wheelset.rs` checks that the
+//! generated residual equals it and the generated matrix equals its central differences.
+//! What the declaration does not represent: the transcription's derailment checks, which are
+//! not equations. Off the rail's circle the rail profile's square root is NaN by itself (the
+//! transcription stops `1e-5` earlier), and a contact point at `xi = 0` or at the track's
+//! centre line divides `0 / 0` (the slopes `x / |x|`); but a contact point beyond the wheel's
+//! cone (`|xi| >= 4`) and a nearly singular normal-force system (`|deter| < 1e-8`) give the
+//! model finite (or infinite) values where the transcription gives NaN. The integrators
+//! evaluate the transcription's residual, so they see all its checks: at such a point the
+//! residual is NaN and the step is retried, whatever the matrix.
 #![allow(dead_code)]
 
+use dpc::core::DaeModel;
 use dpc_core::{ImplicitDae, MatrixSink};
 
 /// The wheelset ([module documentation](self)).
@@ -398,48 +411,205 @@ impl ImplicitDae for Wheelset {
         c: f64,
         m: &mut S,
     ) {
-        let (sip, cop) = y[4].sin_cos();
-        for i in 0..5 {
-            m.add(i, i, c);
-        }
-        for i in 5..8 {
-            m.add(i, i, c * MR);
-        }
-        m.add(8, 8, c * LI2 * cop);
-        m.add(9, 9, c * LI2);
-        m.add(10, 8, c * LI1 * sip);
-        m.add(10, 10, c * LI1);
-        let h0 = f64::EPSILON.cbrt();
-        let (mut up, mut down) = ([0.0; WHEEL_DIM], [0.0; WHEEL_DIM]);
-        let mut z = [0.0; WHEEL_DIM];
-        z.copy_from_slice(y);
-        for j in 0..WHEEL_DIM {
-            let h = h0 * y[j].abs().max(1e-3);
-            z[j] = y[j] + h;
-            self.residual(t, &z, yp, &mut up);
-            z[j] = y[j] - h;
-            self.residual(t, &z, yp, &mut down);
-            z[j] = y[j];
-            for i in 0..WHEEL_DIM {
-                let d = (up[i] - down[i]) / (2.0 * h);
-                if d != 0.0 {
-                    m.add(i, j, d);
-                }
-            }
-        }
+        let (x, z) = y.split_at(WheelsetModel::N_STATES);
+        let xdot = &yp[..WheelsetModel::N_STATES];
+        WheelsetModel::default().iteration_matrix(t, x, xdot, z, &[], c, m);
     }
-    fn mass_matrix<S: MatrixSink + ?Sized>(&self, _: f64, y: &[f64], _: &[f64], m: &mut S) -> bool {
-        let (sip, cop) = y[4].sin_cos();
-        for i in 0..5 {
-            m.add(i, i, 1.0);
+
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        m: &mut S,
+    ) -> bool {
+        let (x, z) = y.split_at(WheelsetModel::N_STATES);
+        let xdot = &yp[..WheelsetModel::N_STATES];
+        WheelsetModel::default().mass_matrix(t, x, xdot, z, &[], m)
+    }
+}
+
+dpc::model! {
+    /// The wheelset of [the module](self) declared in the DSL: the same equations as
+    /// [`forces`] and [`Wheelset`]'s residual, in the same rows and unknowns' order (states
+    /// `y1..y11`, algebraic unknowns `y12..y17`), so that the macro differentiates them exactly.
+    /// Written without branches: the profiles' slopes `signum(x)` (the DSL has no `signum`)
+    /// as `x / abs(x)`, exactly `+-1` for `x != 0` and `0 / 0` at `x = 0` (off both profiles
+    /// in the transcription too), its derivative `(1 - (x / |x|) signum(x)) / |x|` exactly `0`
+    /// in floating point; the friction saturation (`T *= |mu N| / |T|` where `|T| > |mu N|`) as
+    /// a division by `max(1, u)`, `u = |T| / |mu N| = sqrt(tanh_x^2 + tanh_y^2) <= sqrt(2)`,
+    /// written `0.5 (1 + u + abs(u - 1))`: unsaturated `1` within two roundings with the
+    /// derivative exactly `0` (the two `du` cancel), saturated `u` within two roundings.
+    pub WheelsetModel {
+        states { x, y, z, theta, phi, xd, yd, zd, thetad, phid, beta }
+        algebraic { psir, xir, psil, xil, laml, lamr }
+        let mr = 16.08;
+        let g = 9.81;
+        let v0 = 30.0;
+        let rn0 = 0.1;
+        let li1 = 0.0605;
+        let li2 = 0.366;
+        let mu = 0.12;
+        let xl = 0.19;
+        let cx = 6400.0;
+        let cz = 6400.0;
+        let ek = 1.3537956;
+        let gg = 0.7115218;
+        let sigma = 0.28;
+        let gm = 7.92e10;
+        let pi_ts = 3.1415926;
+        let c11 = 4.72772197;
+        let c22 = 4.27526987;
+        let c23 = 1.97203505;
+        let delta0 = 0.0262;
+        let ar = 0.1506;
+        let rs = 0.06;
+        let omega = v0 / rn0;
+        let sit = sin(theta);
+        let cot = cos(theta);
+        let sip = sin(phi);
+        let cop = cos(phi);
+        let sisl = sin(psil);
+        let cosl = cos(psil);
+        let sisr = sin(psir);
+        let cosr = cos(psir);
+        let e1 = laml * 1e4;
+        let e2 = lamr * 1e4;
+        // Wheel profiles (cones) at the contact points: value, slope (curvature 0).
+        let ta = tan(delta0);
+        let rxl = rn0 + ta * (ar - abs(xil));
+        let drxl = -ta * (xil / abs(xil));
+        let rxr = rn0 + ta * (ar - abs(xir));
+        let drxr = -ta * (xir / abs(xir));
+        // Rail profiles (circles): slope and curvature at the contact points.
+        let sir = sin(delta0) * rs;
+        let xgl = x + xil * cot * cop + rxl * (cot * sip * cosl - sit * sisl);
+        let agl = abs(xgl);
+        let hl = sqrt(rs * rs - (agl - ar - sir).powi(2));
+        let dgxl = (xgl / agl) * (-agl + ar + sir) / hl;
+        let d2gxl = -rs * rs / (hl * hl * hl);
+        let xgr = x + xir * cot * cop + rxr * (cot * sip * cosr - sit * sisr);
+        let agr = abs(xgr);
+        let hr = sqrt(rs * rs - (agr - ar - sir).powi(2));
+        let dgxr = (xgr / agr) * (-agr + ar + sir) / hr;
+        let d2gxr = -rs * rs / (hr * hr * hr);
+        // Constraint rows G (constm); entries 1 and 2 are -1 and 0.
+        let ql0 = dgxl;
+        let ql3 = dgxl * (rxl * (-cot * sisl - cosl * sip * sit) - cop * sit * xil);
+        let ql4 = -(cosl * rxl * sip) - cop * xil + dgxl * (cop * cosl * cot * rxl - cot * sip * xil);
+        let qr0 = dgxr;
+        let qr3 = dgxr * (rxr * (-cot * sisr - cosr * sip * sit) - cop * sit * xir);
+        let qr4 = -(cosr * rxr * sip) - cop * xir + dgxr * (cop * cosr * cot * rxr - cot * sip * xir);
+        // Angles of the contact planes.
+        let deltal = atan(((drxl * cop - sip * cosl) * cot + sisl * sit) / (-drxl * sip - cosl * cop));
+        let deltar = atan(((drxr * cop - sip * cosr) * cot + sisr * sit) / (drxr * sip + cosr * cop));
+        let sidl = sin(deltal);
+        let codl = cos(deltal);
+        let sidr = sin(deltar);
+        let codr = cos(deltar);
+        // Normal forces.
+        let deter = -sidl * codr - sidr * codl;
+        let wn1 = ql0 * e1 + qr0 * e2;
+        let wn2 = -e1 - e2;
+        let fnl = (codr * wn1 - sidr * wn2) / deter;
+        let fnr = (-codl * wn1 - sidl * wn2) / deter;
+        let w = omega + beta;
+        // Left creep force (creep, s = 1).
+        let sitl = sin(theta / codl);
+        let cotl = cos(theta / codl);
+        let rrl = rxl * sqrt(1.0 + drxl * drxl);
+        let rhogl = -d2gxl / (1.0 + dgxl * dgxl).powf(1.5);
+        let ccl = ((abs(fnl) * 3.0 * (1.0 - sigma) * ek)
+            / (2.0 * pi_ts * (0.5 / rrl + 0.5 * rhogl) * gm * sqrt(gg))).powf(1.0 / 3.0);
+        let vk1l = -w * rxl * (sitl * cosl + cotl * sip * sisl) + xd
+            - thetad * (rxl * (sitl * sip * cosl + cotl * sisl) + xil * sitl * cop)
+            - phid * cotl * (xil * sip - rxl * cop * cosl);
+        let vk2l = w * rxl * cop * sisl + yd + phid * (xil * cop + rxl * sip * cosl);
+        let vk3l = -w * rxl * (cotl * cosl - sitl * sip * sisl) + v0 + zd
+            - thetad * (xil * cotl * cop + rxl * (cotl * sip * cosl - sitl * sisl))
+            + phid * sitl * (xil * sip - rxl * cop * cosl);
+        let vrl = 0.5 * sqrt((vk1l - 2.0 * xd).powi(2) + (vk2l - 2.0 * yd).powi(2)
+            + (vk3l - 2.0 * zd - 2.0 * v0).powi(2));
+        let nuxl = (sitl * vk1l + cotl * vk3l) / vrl;
+        let nuyl = (cotl * codl * vk1l + sidl * vk2l - sitl * codl * vk3l) / vrl;
+        let phisl = (-sidl * w + codl * thetad) / vrl;
+        let wtl = mu * fnl;
+        let tx0l = -wtl * tanh(gm * ccl * ccl * c11 * nuxl / wtl);
+        let ty0l = -wtl * tanh(gm * ccl * ccl * c22 * nuyl / wtl + gm * ccl * ccl * ccl * c23 * phisl / wtl);
+        let ul = sqrt(tx0l * tx0l + ty0l * ty0l) / abs(wtl);
+        let satl = 0.5 * (1.0 + ul + abs(ul - 1.0));
+        let txl = tx0l / satl;
+        let tyl = ty0l / satl;
+        let tl0 = sitl * txl + cotl * codl * tyl;
+        let tl1 = sidl * tyl;
+        let tl2 = cotl * txl - sitl * codl * tyl;
+        // Right creep force (creep, s = -1).
+        let sitr = sin(theta / codr);
+        let cotr = cos(theta / codr);
+        let rrr = rxr * sqrt(1.0 + drxr * drxr);
+        let rhogr = -d2gxr / (1.0 + dgxr * dgxr).powf(1.5);
+        let ccr = ((abs(fnr) * 3.0 * (1.0 - sigma) * ek)
+            / (2.0 * pi_ts * (0.5 / rrr + 0.5 * rhogr) * gm * sqrt(gg))).powf(1.0 / 3.0);
+        let vk1r = -w * rxr * (sitr * cosr + cotr * sip * sisr) + xd
+            - thetad * (rxr * (sitr * sip * cosr + cotr * sisr) + xir * sitr * cop)
+            - phid * cotr * (xir * sip - rxr * cop * cosr);
+        let vk2r = w * rxr * cop * sisr + yd + phid * (xir * cop + rxr * sip * cosr);
+        let vk3r = -w * rxr * (cotr * cosr - sitr * sip * sisr) + v0 + zd
+            - thetad * (xir * cotr * cop + rxr * (cotr * sip * cosr - sitr * sisr))
+            + phid * sitr * (xir * sip - rxr * cop * cosr);
+        let vrr = 0.5 * sqrt((vk1r - 2.0 * xd).powi(2) + (vk2r - 2.0 * yd).powi(2)
+            + (vk3r - 2.0 * zd - 2.0 * v0).powi(2));
+        let nuxr = (sitr * vk1r + cotr * vk3r) / vrr;
+        let nuyr = (cotr * codr * vk1r - sidr * vk2r - sitr * codr * vk3r) / vrr;
+        let phisr = (sidr * w + codr * thetad) / vrr;
+        let wtr = mu * fnr;
+        let tx0r = -wtr * tanh(gm * ccr * ccr * c11 * nuxr / wtr);
+        let ty0r = -wtr * tanh(gm * ccr * ccr * c22 * nuyr / wtr + gm * ccr * ccr * ccr * c23 * phisr / wtr);
+        let ur = sqrt(tx0r * tx0r + ty0r * ty0r) / abs(wtr);
+        let satr = 0.5 * (1.0 + ur + abs(ur - 1.0));
+        let txr = tx0r / satr;
+        let tyr = ty0r / satr;
+        let tr0 = sitr * txr + cotr * codr * tyr;
+        let tr1 = -sidr * tyr;
+        let tr2 = cotr * txr - sitr * codr * tyr;
+        // Spring forces of the (massless) chassis.
+        let lm2 = -2.0 * xl * xl * cz * theta;
+        equations {
+            der(x) = xd;
+            der(y) = yd;
+            der(z) = zd;
+            der(theta) = thetad;
+            der(phi) = phid;
+            mr * der(xd) == tl0 + tr0 + ql0 * e1 + qr0 * e2 - 2.0 * cx * x;
+            mr * der(yd) == tl1 + tr1 - mr * g - e1 - e2;
+            mr * der(zd) == tl2 + tr2 - 2.0 * cz * z;
+            li2 * cop * der(thetad) == li2 * thetad * phid * sip - li1 * w * phid
+                - (li1 - li2) * thetad * sip * phid
+                - (xil * sit + rxl * sisl * cot * cop) * tl0 - rxl * sisl * sip * tl1
+                + (-xil * cot + rxl * sisl * sit * cop) * tl2
+                - (xir * sit + rxr * sisr * cot * cop) * tr0 - rxr * sisr * sip * tr1
+                + (-xir * cot + rxr * sisr * sit * cop) * tr2
+                + cop * lm2 + ql3 * e1 + qr3 * e2;
+            li2 * der(phid) == li1 * w * thetad * cop + (li1 - li2) * thetad * sip * thetad * cop
+                - (xil * cot * sip - rxl * cosl * cot * cop) * tl0
+                + (xil * cop + rxl * cosl * sip) * tl1
+                + (xil * sit * sip - rxl * cosl * sit * cop) * tl2
+                - (xir * cot * sip - rxr * cosr * cot * cop) * tr0
+                + (xir * cop + rxr * cosr * sip) * tr1
+                + (xir * sit * sip - rxr * cosr * sit * cop) * tr2
+                + ql4 * e1 + qr4 * e2;
+            li1 * sip * der(thetad) + li1 * der(beta) == -li1 * thetad * phid * cop
+                - rxl * (cosl * sit + sisl * cot * sip) * tl0 + rxl * sisl * cop * tl1
+                - rxl * (cosl * cot - sisl * sit * sip) * tl2
+                - rxr * (cosr * sit + sisr * cot * sip) * tr0 + rxr * sisr * cop * tr1
+                - rxr * (cosr * cot - sisr * sit * sip) * tr2
+                + sip * lm2;
+            0.0 == ql0 * xd - yd + ql3 * thetad + ql4 * phid;
+            0.0 == qr0 * xd - yd + qr3 * thetad + qr4 * phid;
+            0.0 == dgxl * (drxl * sip + cop * cosl) + drxl * cot * cop - cot * sip * cosl + sit * sisl;
+            0.0 == drxl * sit * cop - sit * sip * cosl - cot * sisl;
+            0.0 == dgxr * (drxr * sip + cop * cosr) + drxr * cot * cop - cot * sip * cosr + sit * sisr;
+            0.0 == drxr * sit * cop - sit * sip * cosr - cot * sisr;
         }
-        for i in 5..8 {
-            m.add(i, i, MR);
-        }
-        m.add(8, 8, LI2 * cop);
-        m.add(9, 9, LI2);
-        m.add(10, 8, LI1 * sip);
-        m.add(10, 10, LI1);
-        true
     }
 }
