@@ -71,7 +71,8 @@ dpc::model! {
                 + asin(a * y.tanh()) + x.cos().acos() * 0.1 + atan(u) + x.sinh() - cosh(y) / 3.0;
             der(y) = atan2(y, 1.5 + x.abs()) + x.hypot(y) + (1.0 + y.powi(2)).powf(a + u)
                 - z + std::f64::consts::PI * t + E;
-            0.0 == z - y.powf(2.0) - abs(x) * z.tanh() - 3.0;
+            0.0 == z - y.powf(2.0) - abs(x) * z.tanh() - 3.0 + 0.1 * (x + 2.0).signum() * y
+                + signum(u - 2.0) * x;
         }
         outputs { r = hypot(x, y) }
     }
@@ -133,5 +134,52 @@ proptest! {
     #[test]
     fn all_functions_jacobians(v in prop::collection::vec(0.1..0.9f64, dims::<Functions>())) {
         check_model::<Functions>(&v);
+    }
+}
+
+dpc::model! {
+    /// Coulomb friction on a mass, the sign taken with `signum`: `m v' = u - mu g signum(v)`.
+    pub Coulomb {
+        params { m = 2.0, mu = 0.3, g = 9.81 }
+        states { x, v }
+        inputs { u }
+        equations {
+            der(x) = v;
+            m * der(v) == u - mu * m * g * v.signum();
+        }
+    }
+}
+
+#[test]
+fn signum_is_the_sign_with_derivative_zero_compiled_and_read_from_a_file() {
+    let text = r#"
+        pub Coulomb {
+            params { m = 2.0, mu = 0.3, g = 9.81 }
+            states { x, v }
+            inputs { u }
+            equations {
+                der(x) = v;
+                m * der(v) == u - mu * m * g * signum(v);
+            }
+        }
+    "#;
+    let file = dpc::runtime::parse("coulomb.dpc", text).unwrap();
+    let plant = file.plant();
+    let compiled = Coulomb::default();
+    for v in [-1.5, -1e-300, 0.0, -0.0, 2.0] {
+        let (x, xdot, u) = ([0.1, v], [v, 0.4], [1.0]);
+        let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
+        compiled.residual(0.0, &x, &xdot, &[], &u, &mut a);
+        plant.residual(0.0, &x, &xdot, &[], &u, &mut b);
+        let expected = 2.0 * 0.4 - (1.0 - 0.3 * 2.0 * 9.81 * f64::signum(v));
+        assert_eq!(a[1], expected, "v = {v}");
+        assert_eq!(b[1], expected, "v = {v}");
+        // d/dv of the friction term is 0: the entry is the mass matrix's `c m` alone.
+        let mut m = dpc::nalgebra::DMatrix::<f64>::zeros(2, 2);
+        compiled.iteration_matrix(0.0, &x, &xdot, &[], &u, 5.0, &mut m);
+        assert_eq!(m[(1, 1)], 10.0);
+        let mut m = dpc::nalgebra::DMatrix::<f64>::zeros(2, 2);
+        plant.iteration_matrix(0.0, &x, &xdot, &[], &u, 5.0, &mut m);
+        assert_eq!(m[(1, 1)], 10.0);
     }
 }

@@ -40,7 +40,8 @@ const BINARY_FUNCTIONS: &[&str] = &["atan2", "hypot", "powi", "powf"];
 
 /// Functions of one argument.
 const UNARY_FUNCTIONS: &[&str] = &[
-    "sqrt", "exp", "ln", "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "abs",
+    "sqrt", "exp", "ln", "sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh",
+    "abs", "signum",
 ];
 
 fn supported_functions() -> String {

@@ -433,10 +433,8 @@ dpc::model! {
     /// The wheelset of [the module](self) declared in the DSL: the same equations as
     /// [`forces`] and [`Wheelset`]'s residual, in the same rows and unknowns' order (states
     /// `y1..y11`, algebraic unknowns `y12..y17`), so that the macro differentiates them exactly.
-    /// Written without branches: the profiles' slopes `signum(x)` (the DSL has no `signum`)
-    /// as `x / abs(x)`, exactly `+-1` for `x != 0` and `0 / 0` at `x = 0` (off both profiles
-    /// in the transcription too), its derivative `(1 - (x / |x|) signum(x)) / |x|` exactly `0`
-    /// in floating point; the friction saturation (`T *= |mu N| / |T|` where `|T| > |mu N|`) as
+    /// Written without branches: the profiles' slopes with `signum` (derivative 0, as the
+    /// transcription's constant sign); the friction saturation (`T *= |mu N| / |T|` where `|T| > |mu N|`) as
     /// a division by `max(1, u)`, `u = |T| / |mu N| = sqrt(tanh_x^2 + tanh_y^2) <= sqrt(2)`,
     /// written `0.5 (1 + u + abs(u - 1))`: unsaturated `1` within two roundings with the
     /// derivative exactly `0` (the two `du` cancel), saturated `u` within two roundings.
@@ -478,20 +476,20 @@ dpc::model! {
         // Wheel profiles (cones) at the contact points: value, slope (curvature 0).
         let ta = tan(delta0);
         let rxl = rn0 + ta * (ar - abs(xil));
-        let drxl = -ta * (xil / abs(xil));
+        let drxl = -ta * signum(xil);
         let rxr = rn0 + ta * (ar - abs(xir));
-        let drxr = -ta * (xir / abs(xir));
+        let drxr = -ta * signum(xir);
         // Rail profiles (circles): slope and curvature at the contact points.
         let sir = sin(delta0) * rs;
         let xgl = x + xil * cot * cop + rxl * (cot * sip * cosl - sit * sisl);
         let agl = abs(xgl);
         let hl = sqrt(rs * rs - (agl - ar - sir).powi(2));
-        let dgxl = (xgl / agl) * (-agl + ar + sir) / hl;
+        let dgxl = signum(xgl) * (-agl + ar + sir) / hl;
         let d2gxl = -rs * rs / (hl * hl * hl);
         let xgr = x + xir * cot * cop + rxr * (cot * sip * cosr - sit * sisr);
         let agr = abs(xgr);
         let hr = sqrt(rs * rs - (agr - ar - sir).powi(2));
-        let dgxr = (xgr / agr) * (-agr + ar + sir) / hr;
+        let dgxr = signum(xgr) * (-agr + ar + sir) / hr;
         let d2gxr = -rs * rs / (hr * hr * hr);
         // Constraint rows G (constm); entries 1 and 2 are -1 and 0.
         let ql0 = dgxl;
