@@ -364,6 +364,49 @@ static int andrews_ggl_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, vo
   return 0;
 }
 
+/* The index-2 and index-1 forms of Hairer & Wanner and the Test Set's description: rows 22..27
+ * are the velocity constraints G(q) v = 0 (index 2) or the acceleration constraints
+ * G(q) w + g_qq(q)(v, v) = 0 (index 1), as AndrewsForm in
+ * dpc-core/tests/common/testset_index3.rs; the other rows as the index-3 form. */
+static void andrews_form_residual(const double *y, const double *p, double *r, int index) {
+  const double *q = y, *v = y + 7, *w = y + 14;
+  double g[6][7];
+  andrews_residual(y, p, r, 0);
+  andrews_gq(q, g);
+  const double *x = index == 2 ? v : w;
+  for (int k = 0; k < 6; k++) {
+    double s = 0.0;
+    for (int j = 0; j < 7; j++) s += g[k][j] * x[j];
+    r[21 + k] = s;
+  }
+  if (index == 1) {
+    double b = q[0], t = q[1], ga = q[2], ph = q[3], d = q[4], o = q[5], ep = q[6];
+    double v0 = v[0] * v[0], v01 = (v[0] + v[1]) * (v[0] + v[1]), v2 = v[2] * v[2];
+    double v34 = (v[3] + v[4]) * (v[3] + v[4]), v4 = v[4] * v[4];
+    double v56 = (v[5] + v[6]) * (v[5] + v[6]), v6 = v[6] * v[6];
+    double hx = -A_RR * cos(b) * v0 + A_D * cos(b + t) * v01;
+    double hy = -A_RR * sin(b) * v0 + A_D * sin(b + t) * v01;
+    r[21] += hx + A_SS * sin(ga) * v2;
+    r[22] += hy - A_SS * cos(ga) * v2;
+    r[23] += hx + A_E * sin(ph + d) * v34 + A_ZT * cos(d) * v4;
+    r[24] += hy - A_E * cos(ph + d) * v34 + A_ZT * sin(d) * v4;
+    r[25] += hx + A_ZF * cos(o + ep) * v56 + A_U * sin(ep) * v6;
+    r[26] += hy + A_ZF * sin(o + ep) * v56 - A_U * cos(ep) * v6;
+  }
+}
+
+static int andrews2_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  (void)t; (void)ud;
+  andrews_form_residual(N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), N_VGetArrayPointer(rr), 2);
+  return 0;
+}
+
+static int andrews1_res(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void *ud) {
+  (void)t; (void)ud;
+  andrews_form_residual(N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), N_VGetArrayPointer(rr), 1);
+  return 0;
+}
+
 /* The car axis (Test Set caraxis.F): y = (xl, yl, xr, yr, ul, vl, ur, vr, lambda1, lambda2),
  * eps = 1e-2, M = 10, L = 1, L0 = 1/2, r = 0.1, omega = 10, g = 1; with ggl, the positions'
  * rows get G^T mu and rows 10, 11 the velocity constraints G v + g_t = 0 (mu = y10, y11). */
@@ -2455,7 +2498,9 @@ enum { ROBERTSON, AMPLIFIER, PENDULUM, ANDREWS, ANDREWS_GGL, CAR, CAR_GGL, AKZO,
        /* SUNDIALS' dense example idaSlCrank_dns. */
        SLCRANK,
        /* The Test Set's Medical Akzo Nobel problem (IDA's band LU). */
-       MEDAKZO, PROBLEMS };
+       MEDAKZO,
+       /* Andrews' mechanism in the index-2 and index-1 forms (IDA's difference quotients). */
+       ANDREWS2, ANDREWS1, PROBLEMS };
 static const char *NAMES[PROBLEMS] = {
     "Robertson (index 1)", "transistor amplifier (index 1)", "pendulum (index 3; x, y)",
     "Andrews (index 3; y1..y7)", "Andrews (stabilised index 2; y1..y7)",
@@ -2469,18 +2514,20 @@ static const char *NAMES[PROBLEMS] = {
     "ring modulator (ODE; all)", "heat 2-D, idaHeat2D_bnd (index 1; interior)",
     "food web, idaFoodWeb_bnd (index 1; all)",
     "slider crank, idaSlCrank_dns (index 2; q, v)",
-    "medical Akzo Nobel (ODE; all, mixed error)"};
+    "medical Akzo Nobel (ODE; all, mixed error)",
+    "Andrews (index 2 form; y1..y7)", "Andrews (index 1 form; y1..y7)"};
 static const int DIM[PROBLEMS] = {3, 8, 5, 27, 33, 10, 12, 6, 8, 3, 160, 24, 14, 9, 49, 17, TB_N,
-                                  2, 3, 20, 15, HT_N, FW_N, 10, MA_DIM};
+                                  2, 3, 20, 15, HT_N, FW_N, 10, MA_DIM, 27, 27};
 /* Leading unknowns of index 1 (the rest are excluded from the error test); 0: none excluded. */
 static const int DIFFERENTIAL[PROBLEMS] = {0, 0, 2, 14, 14, 8, 8, 0, 0, 2, 120, 14, 0, 8, 38, 15, 0,
-                                           0, 0, 0, 0, 0, 0, 6, 0};
+                                           0, 0, 0, 0, 0, 0, 6, 0, 14, 0};
 /* Half-bandwidths of the problems solved with IDA's band LU (upper = lower); 0: dense LU. */
 static const int HALF_BANDWIDTH[PROBLEMS] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
-                                             0, 0, 0, 0, HT_M, 2 * FW_MX, 0, 2};
+                                             0, 0, 0, 0, HT_M, 2 * FW_MX, 0, 2, 0, 0};
 static const double T_END[PROBLEMS] = {1e11, 0.2, 3.0, 0.03, 0.03, 3.0, 3.0, 180.0, 321.8122, 1.0,
                                         1000.0, 0.1, 80.0, 1200e-9, 17.0 * 3600.0, 10.0, 320.0,
-                                        2.0, 360.0, 60.0, 1e-3, 0.16, 1.0, 10.0, 20.0};
+                                        2.0, 360.0, 60.0, 1e-3, 0.16, 1.0, 10.0, 20.0,
+                                        0.03, 0.03};
 /* The relative digits over the first n unknowns (every problem but the NAND gate, scored on
  * y5 alone, scores a leading block). */
 static double score(int problem, const double *y, const double *ref, int n) {
@@ -2556,6 +2603,8 @@ static void initial(int problem, double rtol, double *y, double *p, double *a) {
     break;
   case ANDREWS:
   case ANDREWS_GGL:
+  case ANDREWS2:
+  case ANDREWS1:
     y[0] = -0.0617138900142764496358948458001;
     y[2] = 0.455279819163070380255912382449;
     y[3] = 0.222668390165885884674473185609;
@@ -2712,12 +2761,14 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
                                          hires_res, ap_res, fekete_res, crank_res,
                                          nand_res, pump_res, water_res,
                                          wheel_res, tba_res, ode_res, ode_res, ode_res,
-                                         ode_res, heat_res, web_res, slcrank_res, medakzo_res};
+                                         ode_res, heat_res, web_res, slcrank_res, medakzo_res,
+                                         andrews2_res, andrews1_res};
   static IDALsJacFn const JAC[PROBLEMS] = {rober_jac, amp_jac, pend_jac, NULL, NULL,
                                            NULL, NULL, akzo_jac, hires_jac, ap_jac, fekete_jac,
                                            crank_jac, nand_jac, pump_jac, water_jac,
                                            NULL, tba_jac, ode_jac, ode_jac, ode_jac,
-                                           ode_jac, heat_jac, web_jac, slcrank_jac, medakzo_jac};
+                                           ode_jac, heat_jac, web_jac, slcrank_jac, medakzo_jac,
+                                           NULL, NULL};
   int n = DIM[problem];
   Run run = {0};
   N_Vector yy = N_VNew_Serial(n, ctx), yp = N_VNew_Serial(n, ctx), atol = N_VNew_Serial(n, ctx);
@@ -2810,8 +2861,13 @@ static Run solve(SUNContext ctx, int problem, double rtol) {
 }
 
 /* The row's problem number in the merged table: the order above, except the Medical Akzo Nobel
- * problem, row 28 of dpc-core's table (its rows 25-27, index-3 mechanisms, have no IDA rows). */
-static int key(int problem) { return problem == MEDAKZO ? 28 : problem + 1; }
+ * problem, row 28 of dpc-core's table (its rows 25-27, index-3 mechanisms, have no IDA rows), and
+ * Andrews' index-2 and index-1 forms after it (rows 29, 30). */
+static int key(int problem) {
+  if (problem == MEDAKZO) return 28;
+  if (problem == ANDREWS2 || problem == ANDREWS1) return 29 + (problem - ANDREWS2);
+  return problem + 1;
+}
 
 int main(int argc, char **argv) {
   SUNContext ctx;
@@ -2949,9 +3005,10 @@ int main(int argc, char **argv) {
                                   car_ref, car_ref, akzo_ref, hires_ref, ap_ref, fekete_ref,
                                   crank_ref, nand_ref, pump_ref, water_ref,
                                   wheel_ref, tba_ref, vdpol_ref, orego_ref, pollu_ref,
-                                  ringmod_ref, heat_ref, web_ref, slcrank_ref, medakzo_ref};
+                                  ringmod_ref, heat_ref, web_ref, slcrank_ref, medakzo_ref,
+                                  andrews_ref, andrews_ref};
   const int scored[PROBLEMS] = {3, 8, 2, 7, 7, 10, 10, 6, 8, 2, 60, 7, 5, 1, 49, 17, 3,
-                                2, 3, 20, 15, HT_N, 2 * FW_N, 6, MA_DIM};
+                                2, 3, 20, 15, HT_N, 2 * FW_N, 6, MA_DIM, 7, 7};
   const char *only = argc > 1 ? argv[1] : NULL;
   if (only && strncmp(only, "dq:", 3) == 0) {
     use_dq = 1;

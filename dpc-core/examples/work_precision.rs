@@ -10,6 +10,8 @@
 //! * Andrews' squeezing mechanism (scored on `y1..y7`) and the car axis (all ten scored), each
 //!   in the Test Set's index-3 form and in the stabilised index-2 form of
 //!   [`dpc_core::stabilised::Stabilised`],
+//!   and Andrews' mechanism also in the index-2 and index-1 forms of Hairer & Wanner (the
+//!   velocity or the acceleration constraints in rows 22..27, `AndrewsForm`; rows 29 and 30),
 //! * the Test Set's chemical Akzo Nobel problem (index 1, to `t = 180`) and HIRES (an ODE, to
 //!   `t = 321.8122`), all components scored, and Ascher and Petzold's linear index-2 problem
 //!   (`a = 50`, to `t = 1`, scored on `u1, u2` against the exact solution, `w` of index 2),
@@ -244,11 +246,14 @@ enum Problem {
     SphericalPendulum,
     // The Test Set's Medical Akzo Nobel problem (`medakzo_rows`).
     Medakzo,
+    // Andrews' mechanism in the index-2 and index-1 forms (`andrews_form_rows`).
+    AndrewsIndex2,
+    AndrewsIndex1,
 }
 
 impl Problem {
     /// Every problem, in the table's order.
-    const ALL: [Self; 28] = [
+    const ALL: [Self; 30] = [
         Self::Robertson,
         Self::Amplifier,
         Self::Pendulum,
@@ -277,6 +282,8 @@ impl Problem {
         Self::FourBar,
         Self::SphericalPendulum,
         Self::Medakzo,
+        Self::AndrewsIndex2,
+        Self::AndrewsIndex1,
     ];
 
     /// The row label (the same in `bench/ida_peer.c` and `bench/diffsol_peer`).
@@ -310,6 +317,8 @@ impl Problem {
             Self::FourBar => "four-bar linkage (index 3; q, v)",
             Self::SphericalPendulum => "spherical pendulum (index 3; q, v)",
             Self::Medakzo => "medical Akzo Nobel (ODE; all, mixed error)",
+            Self::AndrewsIndex2 => "Andrews (index 2 form; y1..y7)",
+            Self::AndrewsIndex1 => "Andrews (index 1 form; y1..y7)",
         }
     }
 }
@@ -873,6 +882,33 @@ fn main() {
         difference_rows(k, tol);
         mechanism_rows(k, tol, &scalar);
         medakzo_rows(k, tol);
+        andrews_form_rows(k, tol, &scalar);
+    }
+}
+
+/// The rows of Andrews' mechanism in the index-2 and index-1 forms ([`AndrewsForm`]: rows
+/// 22..27 the velocity or the acceleration constraints, exact iteration matrices) from the
+/// Test Set's start, scored on `y1..y7`: Radau and the BDF (the table's `scalar` options), each
+/// told the form's index per unknown (the BDF excludes those of index 2 from its error test).
+fn andrews_form_rows(k: i32, tol: f64, scalar: &bdf::Options) {
+    let (y0, yp0) = Andrews::initial();
+    for (problem, form) in [
+        (Problem::AndrewsIndex2, AndrewsForm::Index2),
+        (Problem::AndrewsIndex1, AndrewsForm::Index1),
+    ] {
+        for code in [Code::Radau, Code::Bdf] {
+            row(problem, k, code, &ANDREWS_REF, &ANDREWS_SCORED, || {
+                indexed_run::<27, _>(
+                    code,
+                    form,
+                    (&y0, &yp0),
+                    form.index(),
+                    tol,
+                    scalar,
+                    ANDREWS_T_END,
+                )
+            });
+        }
     }
 }
 

@@ -423,6 +423,42 @@ impl Andrews {
         dq[6][6] += h56 + U * (la[4] * sep - la[5] * cep);
         (dq, dv)
     }
+
+    /// Rows `0..21` of the iteration matrix, the same in every formulation: `c I` and `-I` of
+    /// the kinematic rows `q' = v`, `v' = w`; `M(q)`, `G(q)^T` and the derivatives in `q` and
+    /// `v` ([`Self::dynamics_derivatives`]) of the dynamic rows.
+    fn kinematic_and_dynamic_rows<S: MatrixSink + ?Sized>(y: &[f64], c: f64, m: &mut S) {
+        for i in 0..14 {
+            m.set(i, i, c);
+            m.set(i, i + 7, -1.0);
+        }
+        let q = &y[0..7];
+        let mass = Self::mass(q);
+        let g = Self::constraint_jacobian(q);
+        for i in 0..7 {
+            for j in 0..7 {
+                if mass[i][j] != 0.0 {
+                    m.set(14 + i, 14 + j, mass[i][j]);
+                }
+            }
+            for r in 0..6 {
+                if g[r][i] != 0.0 {
+                    m.set(14 + i, 21 + r, g[r][i]);
+                }
+            }
+        }
+        let (dq, dv) = Self::dynamics_derivatives(y);
+        for i in 0..7 {
+            for j in 0..7 {
+                if dq[i][j] != 0.0 {
+                    m.set(14 + i, j, dq[i][j]);
+                }
+                if dv[i][j] != 0.0 {
+                    m.set(14 + i, 7 + j, dv[i][j]);
+                }
+            }
+        }
+    }
 }
 
 impl ImplicitDae for Andrews {
@@ -447,37 +483,8 @@ impl ImplicitDae for Andrews {
         c: f64,
         m: &mut S,
     ) {
-        for i in 0..14 {
-            m.set(i, i, c);
-            m.set(i, i + 7, -1.0);
-        }
-        let q = &y[0..7];
-        let mass = Self::mass(q);
-        let g = Self::constraint_jacobian(q);
-        for i in 0..7 {
-            for j in 0..7 {
-                if mass[i][j] != 0.0 {
-                    m.set(14 + i, 14 + j, mass[i][j]);
-                }
-            }
-            for r in 0..6 {
-                if g[r][i] != 0.0 {
-                    m.set(14 + i, 21 + r, g[r][i]);
-                    m.set(21 + r, i, g[r][i]);
-                }
-            }
-        }
-        let (dq, dv) = Self::dynamics_derivatives(y);
-        for i in 0..7 {
-            for j in 0..7 {
-                if dq[i][j] != 0.0 {
-                    m.set(14 + i, j, dq[i][j]);
-                }
-                if dv[i][j] != 0.0 {
-                    m.set(14 + i, 7 + j, dv[i][j]);
-                }
-            }
-        }
+        Self::kinematic_and_dynamic_rows(y, c, m);
+        write_rows(21, &Self::constraint_jacobian(&y[0..7]), m);
     }
     /// The identity on the positions and velocities (`q' = v`, `v' = w`; the dynamic and
     /// constraint rows have no derivatives).
@@ -505,6 +512,222 @@ impl ImplicitDae for Andrews {
     ) -> bool {
         write_rows(21, &Self::constraint_curvature(&y[0..7], &v[0..7]), out);
         true
+    }
+    fn is_differential(&self, i: usize) -> bool {
+        i < 14
+    }
+    fn unknown_name(&self, i: usize) -> String {
+        format!("y{}", i + 1)
+    }
+}
+
+/// The formulations of Andrews' mechanism (Hairer & Wanner, *Solving ODEs II*, Section VII.7;
+/// the Test Set's problem description): the same 27 unknowns `y = (q, v, w, lambda)` and the
+/// same rows `1..21`; rows `22..27` are the position constraints `g(q) = 0` (index 3), the
+/// velocity constraints `G(q) v = 0` (index 2) or the acceleration constraints
+/// `G(q) w + g_qq(q)(v, v) = 0` (index 1). The index-3 start ([`Andrews::initial`]) is
+/// consistent for each: it satisfies `g = 0`, has `v = 0` and `G(q) w = 0`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AndrewsForm {
+    /// The position constraints: [`Andrews`].
+    Index3,
+    /// The velocity constraints `G(q) v = 0`.
+    Index2,
+    /// The acceleration constraints `G(q) w + g_qq(q)(v, v) = 0`.
+    Index1,
+}
+
+impl AndrewsForm {
+    /// The three formulations, index 3 first.
+    pub const ALL: [Self; 3] = [Self::Index3, Self::Index2, Self::Index1];
+
+    /// The differential index of the formulation.
+    pub fn dae_index(self) -> u8 {
+        match self {
+            Self::Index3 => 3,
+            Self::Index2 => 2,
+            Self::Index1 => 1,
+        }
+    }
+
+    /// Index per unknown, as Hairer & Wanner's codes count it (RADAU5's `nind1, nind2, nind3`):
+    /// index 3: `q` 1, `v` 2, `w` and `lambda` 3 ([`andrews_index`]); index 2: `q` and `v` 1,
+    /// `w` and `lambda` 2; index 1: all 27 of index 1.
+    pub fn index(self) -> Vec<u8> {
+        match self {
+            Self::Index3 => andrews_index(),
+            Self::Index2 => {
+                let mut v = vec![1u8; 14];
+                v.extend([2u8; 13]);
+                v
+            }
+            Self::Index1 => vec![1u8; 27],
+        }
+    }
+
+    /// The unknowns of index 1 (those of larger index follow them).
+    pub fn differential(self) -> usize {
+        match self {
+            Self::Index3 => 7,
+            Self::Index2 => 14,
+            Self::Index1 => 27,
+        }
+    }
+
+    /// The curvature terms `g_qq(q)(v, v)` of the acceleration constraints: row `r` is
+    /// `sum_k C_rk v_k` with `C` = [`Andrews::constraint_curvature`]`(q, v)` (the second time
+    /// derivative of `g` along `q' = v`, `v' = w` is `G(q) w + C(q, v) v`).
+    fn curvature_terms(q: &[f64], v: &[f64]) -> [f64; 6] {
+        let c = Andrews::constraint_curvature(q, v);
+        c.map(|row| (0..7).map(|k| row[k] * v[k]).sum())
+    }
+
+    /// The derivatives of [`Self::curvature_terms`] in `q` (row `r`, column `k`), by hand from
+    /// the terms written out: `-RR cos(b) v0^2 + D cos(b + t) (v0 + v1)^2 + SS sin(g) v2^2`
+    /// (row 1) and so on; in `v` they are `2 C(q, v)` (the constraints' Hessians are symmetric).
+    fn curvature_terms_dq(q: &[f64], v: &[f64]) -> [[f64; 7]; 6] {
+        use andrews_constants::*;
+        let (b, t, g, p, d, o, ep) = (q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
+        let (sb, cb) = b.sin_cos();
+        let (sbt, cbt) = (b + t).sin_cos();
+        let (sg, cg) = g.sin_cos();
+        let (spd, cpd) = (p + d).sin_cos();
+        let (sd, cd) = d.sin_cos();
+        let (soe, coe) = (o + ep).sin_cos();
+        let (sep, cep) = ep.sin_cos();
+        let v0 = v[0] * v[0];
+        let v01 = (v[0] + v[1]) * (v[0] + v[1]);
+        let v2 = v[2] * v[2];
+        let v34 = (v[3] + v[4]) * (v[3] + v[4]);
+        let v4 = v[4] * v[4];
+        let v56 = (v[5] + v[6]) * (v[5] + v[6]);
+        let v6 = v[6] * v[6];
+        let mut m = [[0.0; 7]; 6];
+        // The crank's terms, -RR cos(b) v0^2 + D cos(b + t) v01^2 in the x rows (even) and
+        // -RR sin(b) v0^2 + D sin(b + t) v01^2 in the y rows (odd).
+        for r in [0, 2, 4] {
+            m[r][0] = RR * sb * v0 - D * sbt * v01;
+            m[r][1] = -D * sbt * v01;
+            m[r + 1][0] = -RR * cb * v0 + D * cbt * v01;
+            m[r + 1][1] = D * cbt * v01;
+        }
+        // SS sin(g) v2^2, -SS cos(g) v2^2.
+        m[0][2] = SS * cg * v2;
+        m[1][2] = SS * sg * v2;
+        // E sin(p + d) v34^2 + ZT cos(d) v4^2, -E cos(p + d) v34^2 + ZT sin(d) v4^2.
+        m[2][3] = E * cpd * v34;
+        m[2][4] = E * cpd * v34 - ZT * sd * v4;
+        m[3][3] = E * spd * v34;
+        m[3][4] = E * spd * v34 + ZT * cd * v4;
+        // ZF cos(o + ep) v56^2 + U sin(ep) v6^2, ZF sin(o + ep) v56^2 - U cos(ep) v6^2.
+        m[4][5] = -ZF * soe * v56;
+        m[4][6] = -ZF * soe * v56 + U * cep * v6;
+        m[5][5] = ZF * coe * v56;
+        m[5][6] = ZF * coe * v56 + U * sep * v6;
+        m
+    }
+}
+
+impl ImplicitDae for AndrewsForm {
+    fn dimension(&self) -> usize {
+        27
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        Andrews.residual(t, y, yp, out);
+        let (q, v, w) = (&y[0..7], &y[7..14], &y[14..21]);
+        let g = Andrews::constraint_jacobian(q);
+        match self {
+            Self::Index3 => {}
+            Self::Index2 => {
+                for r in 0..6 {
+                    out[21 + r] = (0..7).map(|j| g[r][j] * v[j]).sum();
+                }
+            }
+            Self::Index1 => {
+                let h = Self::curvature_terms(q, v);
+                for r in 0..6 {
+                    out[21 + r] = (0..7).map(|j| g[r][j] * w[j]).sum::<f64>() + h[r];
+                }
+            }
+        }
+    }
+    /// Exact: rows `1..21` as [`Andrews`]; rows `22..27` of the index-2 form `C(q, v)` in `q`
+    /// and `G(q)` in `v`, of the index-1 form `C(q, w)` plus the curvature terms' derivative in
+    /// `q`, `2 C(q, v)` in `v` and `G(q)` in `w`.
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        c: f64,
+        m: &mut S,
+    ) {
+        let (q, v, w) = (&y[0..7], &y[7..14], &y[14..21]);
+        match self {
+            Self::Index3 => Andrews.iteration_matrix(t, y, yp, c, m),
+            Self::Index2 => {
+                Andrews::kinematic_and_dynamic_rows(y, c, m);
+                let g = Andrews::constraint_jacobian(q);
+                let cv = Andrews::constraint_curvature(q, v);
+                for r in 0..6 {
+                    for j in 0..7 {
+                        if cv[r][j] != 0.0 {
+                            m.set(21 + r, j, cv[r][j]);
+                        }
+                        if g[r][j] != 0.0 {
+                            m.set(21 + r, 7 + j, g[r][j]);
+                        }
+                    }
+                }
+            }
+            Self::Index1 => {
+                Andrews::kinematic_and_dynamic_rows(y, c, m);
+                let g = Andrews::constraint_jacobian(q);
+                let cv = Andrews::constraint_curvature(q, v);
+                let cw = Andrews::constraint_curvature(q, w);
+                let hq = Self::curvature_terms_dq(q, v);
+                for r in 0..6 {
+                    for j in 0..7 {
+                        let dq = cw[r][j] + hq[r][j];
+                        if dq != 0.0 {
+                            m.set(21 + r, j, dq);
+                        }
+                        if cv[r][j] != 0.0 {
+                            m.set(21 + r, 7 + j, 2.0 * cv[r][j]);
+                        }
+                        if g[r][j] != 0.0 {
+                            m.set(21 + r, 14 + j, g[r][j]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    fn mass_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        m: &mut S,
+    ) -> bool {
+        Andrews.mass_matrix(t, y, yp, m)
+    }
+    /// The position constraints of the index-3 form; the other forms have none (their rows
+    /// `22..27` depend on `v` and `w`).
+    fn constraint_gradient<S: MatrixSink + ?Sized>(&self, t: f64, y: &[f64], out: &mut S) -> bool {
+        *self == Self::Index3 && Andrews.constraint_gradient(t, y, out)
+    }
+    fn constraint_time_derivative(&self, t: f64, y: &[f64], out: &mut [f64]) -> bool {
+        *self == Self::Index3 && Andrews.constraint_time_derivative(t, y, out)
+    }
+    fn constraint_curvature<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        y: &[f64],
+        v: &[f64],
+        out: &mut S,
+    ) -> bool {
+        *self == Self::Index3 && Andrews.constraint_curvature(t, y, v, out)
     }
     fn is_differential(&self, i: usize) -> bool {
         i < 14
