@@ -391,48 +391,8 @@ fn problem_jacobians_match_finite_differences() {
     check_jacobian(&p, 0.7, &CAR_AXIS_REF, &yp);
 }
 
-/// Andrews' iteration matrix is exact: every entry against a central difference of the
-/// residual, to `1e-7` of the largest entry of its own row (the global scale of
-/// `check_jacobian` is set by the multipliers' entries, up to 1e6, and would hide an error in
-/// the derivatives of the forces), at the reference end state (velocities, accelerations and
-/// multipliers all non-zero) and at points near it.
-#[test]
-fn andrews_iteration_matrix_is_exact_row_by_row() {
-    let yp = [0.0; 27];
-    for shift in [0.0, 0.13, -0.41] {
-        let y: Vec<f64> = ANDREWS_REF
-            .iter()
-            .enumerate()
-            .map(|(i, v)| v * (1.0 + shift * ((i % 5) as f64 - 2.0) / 10.0))
-            .collect();
-        let mut m = faer::Mat::<f64>::zeros(27, 27);
-        Andrews.iteration_matrix(0.0, &y, &yp, 0.0, &mut m);
-        let (mut fp, mut fm) = (vec![0.0; 27], vec![0.0; 27]);
-        let mut fd = faer::Mat::<f64>::zeros(27, 27);
-        for j in 0..27 {
-            let mut y1 = y.clone();
-            let d = 1e-6 * (1.0 + y[j].abs());
-            y1[j] += d;
-            Andrews.residual(0.0, &y1, &yp, &mut fp);
-            y1[j] -= 2.0 * d;
-            Andrews.residual(0.0, &y1, &yp, &mut fm);
-            for i in 0..27 {
-                fd[(i, j)] = (fp[i] - fm[i]) / (2.0 * d);
-            }
-        }
-        for i in 0..27 {
-            let scale = (0..27).map(|j| fd[(i, j)].abs()).fold(0.0, f64::max);
-            for j in 0..27 {
-                assert!(
-                    (fd[(i, j)] - m[(i, j)]).abs() <= 1e-7 * scale,
-                    "shift {shift}: entry ({i}, {j}) {} vs finite difference {} (row scale {scale})",
-                    m[(i, j)],
-                    fd[(i, j)]
-                );
-            }
-        }
-    }
-}
+// Andrews' iteration matrix is checked entry by entry against differences of the residual, row
+// by row, at two values of `c`, in `tests/andrews_forms.rs` (`AndrewsForm::Index3` is `Andrews`).
 
 /// The exact constraint derivatives `dae` supplies for its constraint `rows` at `(t, y)` with
 /// velocities `v` (zero off the positions) against central differences: the gradient against
