@@ -505,3 +505,99 @@ fn a_wrong_iteration_matrix_is_named_as_a_possible_cause() {
         .to_string()
         .contains("not the derivative of its residual"));
 }
+
+/// 38 coupled decays and two algebraic unknowns `a(t) z1 + z2 = 1 + (a - 1) / 2`,
+/// `z1 + z2 = 1` with `a = 1 + max(0, 1 - t)`: regular until `t = 1`, then the two rows are
+/// equal (no zero row or column: elimination cancels a pivot exactly). 40 unknowns with a
+/// declared pattern of density 0.05, so `FaerLu::for_dae` takes the sparse LU.
+struct CancellingRows;
+
+const CANCEL_N: usize = 40;
+
+impl CancellingRows {
+    fn a(t: f64) -> f64 {
+        1.0 + (1.0 - t).max(0.0)
+    }
+    fn coupled(i: usize) -> usize {
+        (7 * i + 3) % (CANCEL_N - 2)
+    }
+}
+
+impl ImplicitDae for CancellingRows {
+    fn dimension(&self) -> usize {
+        CANCEL_N
+    }
+    fn residual(&self, t: f64, y: &[f64], yp: &[f64], out: &mut [f64]) {
+        let n = CANCEL_N;
+        for i in 0..n - 2 {
+            out[i] = yp[i] + y[i] - 0.01 * y[Self::coupled(i)];
+        }
+        let a = Self::a(t);
+        out[n - 2] = a * y[n - 2] + y[n - 1] - 1.0 - 0.5 * (a - 1.0);
+        out[n - 1] = y[n - 2] + y[n - 1] - 1.0;
+    }
+    fn iteration_matrix<S: MatrixSink + ?Sized>(
+        &self,
+        t: f64,
+        _: &[f64],
+        _: &[f64],
+        c: f64,
+        m: &mut S,
+    ) {
+        let n = CANCEL_N;
+        for i in 0..n - 2 {
+            m.set(i, i, c + 1.0);
+            m.add(i, Self::coupled(i), -0.01);
+        }
+        m.set(n - 2, n - 2, Self::a(t));
+        m.set(n - 2, n - 1, 1.0);
+        m.set(n - 1, n - 2, 1.0);
+        m.set(n - 1, n - 1, 1.0);
+    }
+    fn iteration_pattern(&self) -> Option<Vec<(usize, usize)>> {
+        let n = CANCEL_N;
+        let mut p: Vec<(usize, usize)> = (0..n).map(|i| (i, i)).collect();
+        p.extend((0..n - 2).map(|i| (i, Self::coupled(i))));
+        p.extend([(n - 2, n - 1), (n - 1, n - 2)]);
+        Some(p)
+    }
+}
+
+#[test]
+fn a_pivot_cancelled_in_the_sparse_lu_is_named_as_in_the_dense_one() {
+    use dpc_core::linear_solver::FaerLu;
+    let n = CANCEL_N;
+    let mut y0 = vec![1.0; n];
+    y0[n - 2] = 0.5;
+    y0[n - 1] = 0.5;
+    let mut yp0 = vec![0.0; n];
+    let mut r = vec![0.0; n];
+    CancellingRows.residual(0.0, &y0, &yp0, &mut r);
+    for i in 0..n - 2 {
+        yp0[i] = -r[i];
+    }
+    fn run<L: dpc_core::linear_solver::LinearSolver>(ls: L, y0: &[f64], yp0: &[f64]) -> BdfError {
+        let opts = Options::with_tolerances(1e-6, 1e-6);
+        let mut s = Bdf::new(CancellingRows, ls, opts, 0.0, y0, yp0).unwrap();
+        s.set_stop_time(2.0).unwrap();
+        let mut y = vec![0.0; CANCEL_N];
+        s.solve_to(2.0, &mut y, None).unwrap_err()
+    }
+    let ls = FaerLu::for_dae(&CancellingRows);
+    assert!(ls.is_sparse());
+    let sparse = run(ls, &y0, &yp0);
+    let dense = run(FaerDenseLu::new(n), &y0, &yp0);
+    for e in [&sparse, &dense] {
+        match e {
+            BdfError::SingularMatrix {
+                t,
+                unknown: Some(u),
+                equation: None,
+            } => {
+                assert!(*t >= 1.0 && *t < 1.1, "{e}");
+                assert!(u == "y[38]" || u == "y[39]", "{e}");
+            }
+            other => panic!("{other}"),
+        }
+    }
+}

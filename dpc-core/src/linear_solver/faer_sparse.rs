@@ -1,8 +1,10 @@
 //! Sparse LU (faer) for iteration matrices with a known structural pattern.
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
-use faer::sparse::linalg::LuError;
+use faer::perm::PermRef;
+use faer::sparse::linalg::lu::simplicial::{self, SimplicialLu};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuSymbolicParams, SymbolicLu};
+use faer::sparse::linalg::{LuError, SupernodalThreshold};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par};
@@ -147,18 +149,54 @@ impl MatrixSink for PatternMatrix {
     }
 }
 
-/// faer's sparse LU with partial pivoting over `T` (real or complex), its symbolic analysis
-/// (the fill-reducing column order, the choice of the simplicial or supernodal kernel) done
-/// once, and the numeric factors, the row permutation and the work space kept from one
-/// factorisation to the next: after the first factorisation (and any later one whose pivots
-/// grow the fill beyond every earlier one's) neither factorising nor solving allocates. faer's
+/// The magnitude of a real or complex entry, for [`ReusedSparseLu`]'s pivot test.
+pub(crate) trait Magnitude {
+    /// `|self|`.
+    fn magnitude(&self) -> f64;
+}
+
+impl Magnitude for f64 {
+    fn magnitude(&self) -> f64 {
+        self.abs()
+    }
+}
+
+impl Magnitude for faer::c64 {
+    fn magnitude(&self) -> f64 {
+        self.norm()
+    }
+}
+
+/// Why [`ReusedSparseLu::factor`] failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum SparseLuFailure {
+    /// The pivot of this column (the unknown's index) vanished: no row left to pivot on
+    /// (structurally singular), or every candidate is exactly zero (numerically singular: the
+    /// elimination cancelled the column), or it is not finite.
+    ZeroPivot(usize),
+    /// faer could not allocate its factors.
+    OutOfMemory,
+}
+
+/// faer's sparse LU with partial pivoting over `T` (real or complex): faer's fill-reducing
+/// column order (COLAMD) computed once, and its left-looking simplicial kernel run on the
+/// numeric factors, row permutation and work space kept from one factorisation to the next,
+/// so that after the first factorisation (and any later one whose pivots grow the fill beyond
+/// every earlier one's) neither factorising nor solving allocates (faer's
 /// `Lu::try_new_with_symbolic` allocates new factors and work space at every factorisation,
-/// and its solve a work space at every solve. The real LU ([`FaerSparseLu`]) and Radau's
+/// and its solve a work space at every solve). The simplicial kernel is the one faer itself
+/// picks for every sparse iteration matrix of the tests (the two bit adding unit, the food
+/// web, the chains of up to 80 links); with it the factors are at hand, so a numerically zero
+/// pivot is reported with its column (faer's own check finds only a column without any
+/// candidate row, and divides by a zero pivot). The real LU ([`FaerSparseLu`]) and Radau's
 /// complex one share it.
 pub(crate) struct ReusedSparseLu<T> {
     pattern: SymbolicSparseColMat<usize>,
+    /// The fill-reducing column order.
     symbolic: SymbolicLu<usize>,
-    numeric: NumericLu<usize, T>,
+    numeric: SimplicialLu<usize, T>,
+    row_perm: Vec<usize>,
+    row_perm_inv: Vec<usize>,
     /// The last factorisation succeeded (`numeric` holds its factors).
     factored: bool,
     /// Work space for a factorisation and for a solve with one right-hand side.
@@ -175,21 +213,27 @@ impl<T> std::fmt::Debug for ReusedSparseLu<T> {
     }
 }
 
-impl<T: ComplexField> ReusedSparseLu<T> {
+impl<T: ComplexField + Magnitude> ReusedSparseLu<T> {
     /// For `n x n` matrices with entries at the compressed-column pattern `(col_ptr,
     /// row_idx)`, which must be well formed (rows ascending within each column, in range);
-    /// `None` when faer's symbolic analysis fails.
+    /// `None` when faer's ordering fails.
     pub(crate) fn new(n: usize, col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Option<Self> {
         let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let symbolic = factorize_symbolic_lu(pattern.as_ref(), Default::default()).ok()?;
+        let params = LuSymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_lu(pattern.as_ref(), params).ok()?;
         let work = MemBuffer::new(StackReq::any_of(&[
-            symbolic.factorize_numeric_lu_scratch::<T>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<T>(1, Par::Seq),
+            simplicial::factorize_simplicial_numeric_lu_scratch::<usize, T>(n, n),
+            simplicial::solve_in_place_scratch::<usize, T>(n, 1, Par::Seq),
         ]));
         Some(Self {
             pattern,
             symbolic,
-            numeric: NumericLu::new(),
+            numeric: SimplicialLu::new(),
+            row_perm: vec![0; n],
+            row_perm_inv: vec![0; n],
             factored: false,
             work,
         })
@@ -209,18 +253,44 @@ impl<T: ComplexField> ReusedSparseLu<T> {
     /// Factorise the matrix whose values, in the pattern's order, are `values`.
     ///
     /// # Errors
-    /// faer's: a column without any possible pivot (`LuError::SymbolicSingular`), or out of
-    /// memory. A numerically zero pivot is not reported (faer divides by it).
-    pub(crate) fn factor(&mut self, values: &[T]) -> Result<(), LuError> {
+    /// [`SparseLuFailure::ZeroPivot`] naming the (original) column whose pivot vanished,
+    /// [`SparseLuFailure::OutOfMemory`].
+    pub(crate) fn factor(&mut self, values: &[T]) -> Result<(), SparseLuFailure> {
         self.factored = false;
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
-        self.symbolic.factorize_numeric_lu(
+        let col_perm = self.symbolic.col_perm();
+        let (forward, _) = col_perm.arrays();
+        match simplicial::factorize_simplicial_numeric_lu(
+            &mut self.row_perm,
+            &mut self.row_perm_inv,
             &mut self.numeric,
             a,
-            Par::Seq,
+            col_perm,
             MemStack::new(&mut self.work),
-            Default::default(),
-        )?;
+        ) {
+            Ok(()) => {}
+            Err(LuError::SymbolicSingular { index }) => {
+                return Err(SparseLuFailure::ZeroPivot(forward[index]))
+            }
+            Err(LuError::Generic(_)) => return Err(SparseLuFailure::OutOfMemory),
+        }
+        // Column `j` of `U` (in the factorisation's column order) holds its pivot in row `j`.
+        // Only an exactly zero (or non-finite) pivot counts: faer has divided by it, and every
+        // solve would be NaN. A relative test (`n eps max |a_ij|`, the dense LUs') refused the
+        // stage matrices of a stabilised 80-link chain at the first steps, whose `gamma / h M`
+        // entries exceed the multipliers' by 13 decades; a small pivot is Newton's to judge.
+        let u = self.numeric.u_factor_unsorted();
+        for (j, &column) in forward.iter().enumerate() {
+            let pivot = u
+                .row_idx_of_col_raw(j)
+                .iter()
+                .zip(u.val_of_col(j))
+                .find(|(&i, _)| i == j)
+                .map_or(0.0, |(_, v)| v.magnitude());
+            if !(pivot > 0.0 && pivot.is_finite()) {
+                return Err(SparseLuFailure::ZeroPivot(column));
+            }
+        }
         self.factored = true;
         Ok(())
     }
@@ -230,7 +300,10 @@ impl<T: ComplexField> ReusedSparseLu<T> {
     pub(crate) fn solve_in_place(&mut self, b: &mut [T]) {
         if self.factored {
             let n = b.len();
-            LuRef::new_unchecked(&self.symbolic, &self.numeric).solve_in_place_with_conj(
+            let row_perm = PermRef::new_checked(&self.row_perm, &self.row_perm_inv, n);
+            self.numeric.solve_in_place_with_conj(
+                row_perm,
+                self.symbolic.col_perm(),
                 Conj::No,
                 MatMut::from_column_major_slice_mut(b, n, 1),
                 Par::Seq,
@@ -345,11 +418,13 @@ impl LinearSolver for FaerSparseLu {
                 }
                 Ok(())
             }
-            Err(LuError::SymbolicSingular { index }) => Err(FactorError::Singular {
-                column: Some(index),
+            Err(SparseLuFailure::ZeroPivot(column)) => Err(FactorError::Singular {
+                column: Some(column),
                 row: zero_row,
             }),
-            Err(LuError::Generic(_)) => Err(FactorError::Singular {
+            // As before faer's factors were kept: its only other failure, reported without a
+            // column (the factors could not grow; the process is then short of memory).
+            Err(SparseLuFailure::OutOfMemory) => Err(FactorError::Singular {
                 column: None,
                 row: zero_row,
             }),
@@ -372,8 +447,6 @@ impl LinearSolver for FaerSparseLu {
     }
 
     fn solve_in_place(&mut self, b: &mut [f64]) {
-        // faer does not report numerically zero pivots; a non-finite solution is caught by the
-        // integrator's Newton iteration and reported as a failure.
         self.lu.solve_in_place(b);
     }
 }
@@ -381,6 +454,41 @@ impl LinearSolver for FaerSparseLu {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_numerically_zero_pivot_is_named() {
+        // Rows 3 and 4 of a 6 x 6 cyclic bidiagonal matrix made equal (ones in columns 3 and
+        // 4, zeros elsewhere): no zero row or column, but elimination cancels one of the two pivots
+        // exactly (faer alone divides by it and every solve is NaN).
+        let n = 6;
+        let pattern: Vec<(usize, usize)> = (0..n)
+            .flat_map(|i| [(i, i), (i, (i + 1) % n)])
+            .chain([(4, 3)])
+            .collect();
+        let mut ls = FaerSparseLu::new(n, &pattern).expect("pattern");
+        let m = ls.matrix_mut();
+        for i in 0..n {
+            m.set(i, i, 2.0);
+            m.set(i, (i + 1) % n, 0.5);
+        }
+        ls.factor().expect("regular");
+        let m = ls.matrix_mut();
+        for (r, c) in [(3, 3), (3, 4), (4, 3), (4, 4)] {
+            m.set(r, c, 1.0);
+        }
+        m.set(4, 5, 0.0);
+        match ls.factor() {
+            Err(FactorError::Singular {
+                column: Some(c),
+                row: None,
+            }) => assert!(c == 3 || c == 4, "column {c}"),
+            other => panic!("{other:?}"),
+        }
+        // The refused factors are not used: a solve leaves its right-hand side as it is.
+        let mut b = vec![1.0; n];
+        ls.solve_in_place(&mut b);
+        assert_eq!(b, vec![1.0; n]);
+    }
 
     #[test]
     fn a_non_finite_entry_is_named() {

@@ -33,13 +33,12 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
-use faer::sparse::linalg::LuError;
 use faer::{c64, Mat, MatMut, Par};
 
 use super::band::ComplexBandLu;
 use super::error::StageSystem;
 use crate::linear_solver::faer_sparse::{
-    first_column_without_pivot, first_empty_row, ReusedSparseLu,
+    first_column_without_pivot, first_empty_row, ReusedSparseLu, SparseLuFailure,
 };
 use crate::linear_solver::{
     BandMatrix, FactorError, LinearSolver, PatternMatrix, UNBLOCKED_MAX_DIMENSION,
@@ -380,9 +379,8 @@ impl ComplexSparseLu {
     }
 
     /// Factorise the values; an error names a column without a usable pivot when one is
-    /// known (a column entirely zero, one holding a non-finite entry, or faer's structurally
-    /// singular column). As with the real sparse LU, a numerically zero pivot is not
-    /// reported by faer: the non-finite solution it gives fails the Newton iteration.
+    /// known (a column entirely zero, one holding a non-finite entry, or one whose pivot
+    /// vanished, structurally or numerically: `ReusedSparseLu`'s test).
     fn factor(&mut self) -> Result<(), Option<usize>> {
         let irregular = |v: &c64| !(v.re.is_finite() && v.im.is_finite());
         if let Some(col) = first_column_without_pivot(self.lu.col_ptr(), &self.values, |column| {
@@ -393,8 +391,8 @@ impl ComplexSparseLu {
         }
         match self.lu.factor(&self.values) {
             Ok(()) => Ok(()),
-            Err(LuError::SymbolicSingular { index }) => Err(Some(index)),
-            Err(LuError::Generic(_)) => Err(None),
+            Err(SparseLuFailure::ZeroPivot(column)) => Err(Some(column)),
+            Err(SparseLuFailure::OutOfMemory) => Err(None),
         }
     }
 
