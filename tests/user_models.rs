@@ -246,7 +246,13 @@ fn min_and_max_saturate_exactly_compiled_and_read_from_a_file() {
             1e20,
             0.0,
             0.0,
-            &[(1.0, 1.0), (-1.0, 1.0), (1e30, 0.0), (-1e30, 0.0), (1e20, 0.5)],
+            &[
+                (1.0, 1.0),
+                (-1.0, 1.0),
+                (1e30, 0.0),
+                (-1e30, 0.0),
+                (1e20, 0.5),
+            ],
         ),
     ];
     let (m, k, damping, c) = (2.0, 2.0, 0.5, 5.0);
@@ -273,7 +279,11 @@ fn min_and_max_saturate_exactly_compiled_and_read_from_a_file() {
             plant.iteration_matrix(0.0, &x, &xdot, &[], &u, c, &mut mb);
             for mat in [ma, mb] {
                 assert_eq!(mat[(1, 0)], k * weight, "umax = {umax}, demand = {demand}");
-                assert_eq!(mat[(1, 1)], damping + c * m, "umax = {umax}, demand = {demand}");
+                assert_eq!(
+                    mat[(1, 1)],
+                    damping + c * m,
+                    "umax = {umax}, demand = {demand}"
+                );
             }
         }
     }
