@@ -223,7 +223,8 @@ fn min_and_max_saturate_exactly_compiled_and_read_from_a_file() {
     let eps = 2f64.powi(-20);
     // (umax, v, v', actuator demand u - k x, the weight of the unsaturated branch in the
     // derivative: 1 inside, 0 saturated, 1/2 on a corner)
-    let cases: [(f64, f64, f64, &[(f64, f64)]); 2] = [
+    type Case<'a> = (f64, f64, f64, &'a [(f64, f64)]);
+    let cases: [Case<'_>; 2] = [
         (
             1.5,
             0.25,
