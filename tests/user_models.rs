@@ -71,8 +71,11 @@ dpc::model! {
                 + asin(a * y.tanh()) + x.cos().acos() * 0.1 + atan(u) + x.sinh() - cosh(y) / 3.0;
             der(y) = atan2(y, 1.5 + x.abs()) + x.hypot(y) + (1.0 + y.powi(2)).powf(a + u)
                 - z + std::f64::consts::PI * t + E;
+            // On the sampled range (0.1, 0.9) the order of each min/max's operands is fixed:
+            // the second operand wins in the free forms, the receiver in the method forms.
             0.0 == z - y.powf(2.0) - abs(x) * z.tanh() - 3.0 + 0.1 * (x + 2.0).signum() * y
-                + signum(u - 2.0) * x;
+                + signum(u - 2.0) * x + 0.2 * max(x, y + 2.0) * (x + 1.0).max(y * y)
+                - min(x * z, y - 1.0) * (z - 2.0).min(u * x);
         }
         outputs { r = hypot(x, y) }
     }
@@ -181,5 +184,108 @@ fn signum_is_the_sign_with_derivative_zero_compiled_and_read_from_a_file() {
         let mut m = dpc::nalgebra::DMatrix::<f64>::zeros(2, 2);
         plant.iteration_matrix(0.0, &x, &xdot, &[], &u, 5.0, &mut m);
         assert_eq!(m[(1, 1)], 10.0);
+    }
+}
+
+dpc::model! {
+    /// A mass pushed by a saturated proportional actuator, with viscous damping:
+    /// `m v' = max(-umax, min(umax, u - k x)) - damping v`.
+    pub Saturation {
+        params { m = 2.0, umax = 1.5, k = 2.0, damping = 0.5 }
+        states { x, v }
+        inputs { u }
+        equations {
+            der(x) = v;
+            m * der(v) == max(-umax, min(umax, u - k * x)) - damping * v;
+        }
+    }
+}
+
+/// The same plant as a plant file, with the method forms.
+fn saturation_file(umax: f64) -> String {
+    format!(
+        r#"
+        pub Saturation {{
+            params {{ m = 2.0, umax = {umax:?}, k = 2.0, damping = 0.5 }}
+            states {{ x, v }}
+            inputs {{ u }}
+            equations {{
+                der(x) = v;
+                m * der(v) == (u - k * x).min(umax).max(-umax) - damping * v;
+            }}
+        }}
+    "#
+    )
+}
+
+#[test]
+fn min_and_max_saturate_exactly_compiled_and_read_from_a_file() {
+    let eps = 2f64.powi(-20);
+    // (umax, v, v', actuator demand u - k x, the weight of the unsaturated branch in the
+    // derivative: 1 inside, 0 saturated, 1/2 on a corner)
+    type Case<'a> = (f64, f64, f64, &'a [(f64, f64)]);
+    let cases: [Case<'_>; 2] = [
+        (
+            1.5,
+            0.25,
+            0.5,
+            &[
+                (-3.0, 0.0),
+                (-1.5 - eps, 0.0),
+                (-1.5, 0.5),
+                (-1.5 + eps, 1.0),
+                (0.0, 1.0),
+                (1.5 - eps, 1.0),
+                (1.5, 0.5),
+                (1.5 + eps, 0.0),
+                (3.0, 0.0),
+            ],
+        ),
+        // Very different magnitudes: `0.5 (a + b - |a - b|)` would make min(1e20, 1) zero.
+        // v = v' = 0, so the residual is exactly minus the actuator force.
+        (
+            1e20,
+            0.0,
+            0.0,
+            &[
+                (1.0, 1.0),
+                (-1.0, 1.0),
+                (1e30, 0.0),
+                (-1e30, 0.0),
+                (1e20, 0.5),
+            ],
+        ),
+    ];
+    let (m, k, damping, c) = (2.0, 2.0, 0.5, 5.0);
+    for (umax, v, vdot, points) in cases {
+        let file = dpc::runtime::parse("saturation.dpc", &saturation_file(umax)).unwrap();
+        let plant = file.plant();
+        let mut compiled = Saturation::default();
+        compiled.params.umax = umax;
+        for &(demand, weight) in points {
+            // x = 1/4: the demand u - k x is u - 1/2, exactly
+            let (x, xdot, u) = ([0.25, v], [v, vdot], [demand + 0.5]);
+            assert_eq!(u[0] - k * x[0], demand, "demand {demand} is exact");
+            let force = demand.min(umax).max(-umax);
+            let expected = m * vdot - force + damping * v;
+            let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
+            compiled.residual(0.0, &x, &xdot, &[], &u, &mut a);
+            plant.residual(0.0, &x, &xdot, &[], &u, &mut b);
+            assert_eq!(a[1], expected, "umax = {umax}, demand = {demand}");
+            assert_eq!(b[1], expected, "umax = {umax}, demand = {demand}");
+            // dF/dx = k * weight, dF/dv + c dF/dv' = damping + c m
+            let mut ma = dpc::nalgebra::DMatrix::<f64>::zeros(2, 2);
+            compiled.iteration_matrix(0.0, &x, &xdot, &[], &u, c, &mut ma);
+            let mut mb = dpc::nalgebra::DMatrix::<f64>::zeros(2, 2);
+            plant.iteration_matrix(0.0, &x, &xdot, &[], &u, c, &mut mb);
+            for mat in [ma, mb] {
+                assert_eq!(mat[(1, 0)], k * weight, "umax = {umax}, demand = {demand}");
+                assert_eq!(
+                    mat[(1, 1)],
+                    damping + c * m,
+                    "umax = {umax}, demand = {demand}"
+                );
+            }
+        }
     }
 }

@@ -36,7 +36,7 @@ pub const CONSTANTS: &[(&str, f64)] = &[
 ];
 
 /// Functions of two arguments (free form `f(a, b)`, method form `a.f(b)`).
-const BINARY_FUNCTIONS: &[&str] = &["atan2", "hypot", "powi", "powf"];
+const BINARY_FUNCTIONS: &[&str] = &["atan2", "hypot", "min", "max", "powi", "powf"];
 
 /// Functions of one argument.
 const UNARY_FUNCTIONS: &[&str] = &[
@@ -1200,6 +1200,8 @@ impl Lowerer<'_> {
                 Some(match name.as_str() {
                     "atan2" => self.graph.atan2(lowered[0], lowered[1]),
                     "hypot" => self.graph.hypot(lowered[0], lowered[1]),
+                    "min" => self.graph.min(lowered[0], lowered[1]),
+                    "max" => self.graph.max(lowered[0], lowered[1]),
                     "powf" => self.graph.powf(lowered[0], lowered[1]),
                     _ => {
                         let f = Func::from_name(&name)?;

@@ -23,6 +23,8 @@ fn contract_signatures() {
     let _: fn(&mut Graph, Func, ExprId) -> ExprId = Graph::func;
     let _: fn(&mut Graph, ExprId, ExprId) -> ExprId = Graph::atan2;
     let _: fn(&mut Graph, ExprId, ExprId) -> ExprId = Graph::hypot;
+    let _: fn(&mut Graph, ExprId, ExprId) -> ExprId = Graph::max;
+    let _: fn(&mut Graph, ExprId, ExprId) -> ExprId = Graph::min;
     let _: fn(&Graph, ExprId) -> Option<f64> = Graph::as_constant;
     let _: fn(&Graph, ExprId) -> bool = Graph::is_zero;
     let _: fn(&mut Graph, ExprId, Var) -> ExprId = Graph::diff;

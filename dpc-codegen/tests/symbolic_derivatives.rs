@@ -10,7 +10,8 @@
 //! Points where any intermediate value of the tree is not finite are skipped: there the
 //! graph's identities (`0 * a = 0`, `a / a = 1`) deliberately differ from IEEE evaluation.
 //! So are points on discontinuities (`abs`/`signum` at 0, the `atan2` branch cut), where
-//! `0 * a = +0` may differ from IEEE's `-0` and pick the other side.
+//! `0 * a = +0` may differ from IEEE's `-0` and pick the other side, and ties of `max`/`min`
+//! whose operands' derivatives differ (the kink, where the rule takes their mean).
 
 use std::collections::HashMap;
 
@@ -113,6 +114,19 @@ fn dual(t: &T, x: &[f64], wrt: u32) -> Option<Dual> {
             let h = a.v.hypot(b.v);
             d(h, (a.v * a.d + b.v * b.d) / h)
         }
+        T::Max(a, b) | T::Min(a, b) => {
+            let (a, b) = (dual(a, x, wrt)?, dual(b, x, wrt)?);
+            if a.v == b.v && a.d != b.d {
+                return None; // the kink
+            }
+            let a_wins = (a.v > b.v) == matches!(t, T::Max(..));
+            let v = if matches!(t, T::Max(..)) {
+                a.v.max(b.v)
+            } else {
+                a.v.min(b.v)
+            };
+            d(v, if a_wins { a.d } else { b.d })
+        }
     }
 }
 
@@ -131,7 +145,9 @@ fn operands(t: &T) -> Vec<&T> {
         | T::Div(a, b)
         | T::Powf(a, b)
         | T::Atan2(a, b)
-        | T::Hypot(a, b) => vec![a, b],
+        | T::Hypot(a, b)
+        | T::Max(a, b)
+        | T::Min(a, b) => vec![a, b],
     }
 }
 
@@ -289,6 +305,9 @@ proptest! {
         prop_assert_eq!(g.add(ea, eb), g.add(eb, ea));
         prop_assert_eq!(g.mul(ea, eb), g.mul(eb, ea));
         prop_assert_eq!(g.hypot(ea, eb), g.hypot(eb, ea));
+        prop_assert_eq!(g.max(ea, eb), g.max(eb, ea));
+        prop_assert_eq!(g.min(ea, eb), g.min(eb, ea));
+        prop_assert_eq!(g.max(ea, ea), ea);
         let d = g.sub(ea, ea);
         prop_assert!(g.is_zero(d));
         let n = g.neg(ea);
@@ -359,4 +378,68 @@ proptest! {
             }
         }
     }
+}
+
+/// `d max(a, b)` is exactly `a'` where `a > b` and `b'` where `a < b`, whatever the
+/// magnitudes, and the mean of the two at a tie; `min` the other way round. The weights are
+/// built from `signum`, so second derivatives are the chosen branch's.
+#[test]
+fn max_and_min_derivatives_pick_a_branch_exactly() {
+    let mut g = Graph::new();
+    let (x, y) = (g.var(Var(0)), g.var(Var(1)));
+    let big = g.constant(1e20);
+    let bx = g.mul(big, x);
+    let hi = g.max(bx, y);
+    let lo = g.min(bx, y);
+    let at = |p: [f64; 2]| move |v: Var| p[v.0 as usize];
+    let grad = |g: &mut Graph, e: ExprId, p: [f64; 2]| {
+        let dx = g.diff(e, Var(0));
+        let dy = g.diff(e, Var(1));
+        [g.eval(dx, &at(p)), g.eval(dy, &at(p))]
+    };
+    // a = 1e20 x against b = y: above, below and at the tie (and across a sign change)
+    for (p, a_above) in [
+        ([1.0, 1.0], true),
+        ([-1e-30, 1.0], false),
+        ([1e-20, 1.0], false),
+    ] {
+        let (ga, gb) = ([1e20, 0.0], [0.0, 1.0]);
+        if p == [1e-20, 1.0] {
+            // 1e20 * 1e-20 rounds to exactly 1: a tie
+            assert_eq!(g.eval(bx, &at(p)), 1.0);
+            assert_eq!(grad(&mut g, hi, p), [0.5e20, 0.5]);
+            assert_eq!(grad(&mut g, lo, p), [0.5e20, 0.5]);
+            continue;
+        }
+        let (gh, gl) = if a_above { (ga, gb) } else { (gb, ga) };
+        assert_eq!(grad(&mut g, hi, p), gh, "max at {p:?}");
+        assert_eq!(grad(&mut g, lo, p), gl, "min at {p:?}");
+    }
+    // values of very different magnitude: no cancellation
+    let one = g.constant(1.0);
+    let e = g.min(bx, one);
+    assert_eq!(g.eval(e, &at([1.0, 0.0])), 1.0);
+    let e = g.max(bx, one);
+    assert_eq!(g.eval(e, &at([1.0, 0.0])), 1e20);
+    // second derivatives: of max(x^3, y) in x, 6 x above and 0 below
+    let x3 = g.powi(x, 3);
+    let e = g.max(x3, y);
+    let d1 = g.diff(e, Var(0));
+    let d2 = g.diff(d1, Var(0));
+    assert_eq!(g.eval(d2, &at([2.0, 1.0])), 12.0);
+    assert_eq!(g.eval(d2, &at([0.5, 1.0])), 0.0);
+    let dxy = g.diff(d1, Var(1));
+    assert!(
+        g.is_zero(dxy),
+        "the weights' derivatives vanish structurally"
+    );
+    // and the total derivative d/dt max(x^3, y) = 3 x^2 x' or y'
+    let (xd, yd) = (g.var(Var(2)), g.var(Var(3)));
+    let dt = g.directional_derivative(e, &[(Var(0), xd), (Var(1), yd)]);
+    let at4 = |p: [f64; 4]| move |v: Var| p[v.0 as usize];
+    assert_eq!(g.eval(dt, &at4([2.0, 1.0, 0.5, 7.0])), 6.0);
+    assert_eq!(g.eval(dt, &at4([0.5, 1.0, 0.5, 7.0])), 7.0);
+    // a NaN operand is ignored by the value, as by f64::max
+    let nan = g.eval(e, &at([f64::NAN, 1.0]));
+    assert_eq!(nan, 1.0);
 }

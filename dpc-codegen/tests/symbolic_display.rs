@@ -106,6 +106,8 @@ impl Parser<'_> {
             match w.as_str() {
                 "atan2" => a.atan2(b),
                 "hypot" => a.hypot(b),
+                "max" => a.max(b),
+                "min" => a.min(b),
                 _ => panic!("unknown binary function {w}"),
             }
         } else {

@@ -26,6 +26,8 @@ enum Op {
     Func(Func, u32),
     Atan2(u32, u32),
     Hypot(u32, u32),
+    Max(u32, u32),
+    Min(u32, u32),
 }
 
 /// A symbol the layout of a routine has no place for (the model checks exclude it, so this
@@ -153,6 +155,8 @@ impl Tape {
                 Node::Func(f, a) => Op::Func(f, r(a)),
                 Node::Atan2(y, x) => Op::Atan2(r(y), r(x)),
                 Node::Hypot(a, b) => Op::Hypot(r(a), r(b)),
+                Node::Max(a, b) => Op::Max(r(a), r(b)),
+                Node::Min(a, b) => Op::Min(r(a), r(b)),
             };
             register[e.index()] = (first + ops.len()) as u32;
             ops.push(op);
@@ -217,6 +221,8 @@ impl Tape {
                 Op::Func(f, a) => f.apply(g(a)),
                 Op::Atan2(y, x) => g(y).atan2(g(x)),
                 Op::Hypot(a, b) => g(a).hypot(g(b)),
+                Op::Max(a, b) => g(a).max(g(b)),
+                Op::Min(a, b) => g(a).min(g(b)),
             };
             regs[self.first + k] = v;
         }

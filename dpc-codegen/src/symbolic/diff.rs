@@ -6,16 +6,21 @@
 //! (a whole Jacobian, higher derivatives) reuse earlier work. A node whose operands all have a
 //! zero derivative gets zero without building anything, so derivatives do not litter the graph.
 //! The rules reuse the node itself where it appears in its derivative (`exp`, `sqrt`, `tan`,
-//! `tanh`, `hypot`, `powf`, `/`), which CSE then shares with the residual.
+//! `tanh`, `hypot`, `powf`, `/`), which CSE then shares with the residual. `max` and `min`
+//! are differentiated through exact weights built from `signum` (see [`Graph::diff`]).
 
 use std::collections::HashSet;
 
+use super::func::Func;
 use super::graph::{ExprId, Graph, Node, Var};
 
 impl Graph {
     /// Partial derivative `∂e/∂wrt`, folded and hash-consed like any other expression.
-    /// Memoised across calls. Conventions: `d|a|/da = signum(a)` (so `±1` at `a = ±0`), and
-    /// `d signum(a)/da = 0`.
+    /// Memoised across calls. Conventions: `d|a|/da = signum(a)` (so `±1` at `a = ±0`),
+    /// `d signum(a)/da = 0`, and `d max(a, b) = s a' + (1 - s) b'` (`min` with the weights
+    /// swapped) where `s` is exactly `1` for `a > b`, `0` for `a < b` and `1/2` at a tie, the
+    /// mean of the one-sided derivatives; `s` is built from `signum`, so its own derivative
+    /// is `0` and second derivatives are `s a'' + (1 - s) b''`.
     pub fn diff(&mut self, e: ExprId, wrt: Var) -> ExprId {
         if let Some(&d) = self.diff_memo.get(&(e, wrt)) {
             return d;
@@ -168,7 +173,37 @@ impl Graph {
                 let num = self.add(l, r);
                 self.div(num, e)
             }
+            // s a' + (1 - s) b' for max, (1 - s) a' + s b' for min
+            Node::Max(a, b) | Node::Min(a, b) => {
+                let (s, r) = self.max_weights(a, b);
+                let (wa, wb) = if matches!(node, Node::Max(..)) {
+                    (s, r)
+                } else {
+                    (r, s)
+                };
+                let l = self.mul(wa, d(a));
+                let r = self.mul(wb, d(b));
+                self.add(l, r)
+            }
         }
+    }
+
+    /// The weights `(s, 1 - s)` of `a'` and `b'` in the derivative of `max(a, b)`:
+    /// `s = 1/2 + (signum(a - b) - signum(b - a)) / 4`. Both `a - b` and `b - a` are `+0` at
+    /// a tie and `signum(+0) = 1`, so `s` is exactly `1`, `0` or `1/2` (the mean of the
+    /// one-sided derivatives), with no rounding: `s a' + (1 - s) b'` is exactly `a'` or `b'`
+    /// away from ties, whatever their magnitudes. (`(1 + signum(a - b)) / 2` would be `1` at
+    /// a tie.) A NaN operand makes both weights NaN.
+    fn max_weights(&mut self, a: ExprId, b: ExprId) -> (ExprId, ExprId) {
+        let ab = self.sub(a, b);
+        let ba = self.sub(b, a);
+        let sab = self.func(Func::Sign, ab);
+        let sba = self.func(Func::Sign, ba);
+        let k = self.sub(sab, sba);
+        let quarter = self.constant(0.25);
+        let qk = self.mul(quarter, k);
+        let half = self.constant(0.5);
+        (self.add(half, qk), self.sub(half, qk))
     }
 }
 

@@ -144,7 +144,12 @@ impl Printer<'_> {
             Node::Const(_) => 0,
             Node::Var(_) => 1,
             Node::Powi(a, _) if matches!(self.g.node(a), Node::Var(_)) => 2,
-            Node::Func(..) | Node::Atan2(..) | Node::Hypot(..) | Node::Powi(..) => 3,
+            Node::Func(..)
+            | Node::Atan2(..)
+            | Node::Hypot(..)
+            | Node::Max(..)
+            | Node::Min(..)
+            | Node::Powi(..) => 3,
             _ => 4,
         }
     }
@@ -231,6 +236,8 @@ impl Printer<'_> {
                 format!("hypot({}, {})", self.expr(a).0, self.expr(b).0),
                 ATOM,
             ),
+            Node::Max(a, b) => (format!("max({}, {})", self.expr(a).0, self.expr(b).0), ATOM),
+            Node::Min(a, b) => (format!("min({}, {})", self.expr(a).0, self.expr(b).0), ATOM),
         }
     }
 }
@@ -288,6 +295,10 @@ mod tests {
         assert_eq!(show(&g, e), "-x^3");
         let e = g.atan2(y, nx);
         assert_eq!(show(&g, e), "atan2(y, -x)");
+        let e = g.max(x, nx);
+        assert_eq!(show(&g, e), "max(x, -x)");
+        let e = g.min(s, two);
+        assert_eq!(show(&g, e), "min(2, x + y)");
         let half = g.constant(0.5);
         let e = g.powf(s, half);
         assert_eq!(show(&g, e), "(x + y)^0.5");

@@ -39,6 +39,8 @@ pub(super) fn eval_node(
         Node::Func(f, a) => f.apply(val(a)),
         Node::Atan2(y, x) => val(y).atan2(val(x)),
         Node::Hypot(a, b) => val(a).hypot(val(b)),
+        Node::Max(a, b) => val(a).max(val(b)),
+        Node::Min(a, b) => val(a).min(val(b)),
     }
 }
 
@@ -58,8 +60,12 @@ mod tests {
         let q = g.div(s, h);
         let m = g.mul(q, a);
         let e = g.sub(m, p);
+        let hi = g.max(x, y);
+        let lo = g.min(x, y);
+        let e = g.add(e, hi);
+        let e = g.sub(e, lo);
         let (xv, yv) = (0.7_f64, 1.3_f64);
-        let want = xv.sin() / xv.hypot(yv) * yv.atan2(xv) - xv.powf(yv);
+        let want = xv.sin() / xv.hypot(yv) * yv.atan2(xv) - xv.powf(yv) + yv - xv;
         let got = g.eval(e, &|v| if v == Var(0) { xv } else { yv });
         assert!((got - want).abs() < 1e-14, "{got} vs {want}");
     }

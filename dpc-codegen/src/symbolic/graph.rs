@@ -59,6 +59,10 @@ pub enum Node {
     Atan2(ExprId, ExprId),
     /// `sqrt(a^2 + b^2)` without overflow (`a.hypot(b)`).
     Hypot(ExprId, ExprId),
+    /// The larger of `a` and `b`, ignoring a NaN operand (`a.max(b)`, `f64::max`).
+    Max(ExprId, ExprId),
+    /// The smaller of `a` and `b`, ignoring a NaN operand (`a.min(b)`, `f64::min`).
+    Min(ExprId, ExprId),
 }
 
 /// The bit standing for `v` in dependency masks (variables share bits modulo 64).
@@ -83,6 +87,8 @@ impl Node {
             Node::Func(f, a) => (7, id(a), f as u64),
             Node::Atan2(a, b) => (8, id(a), id(b)),
             Node::Hypot(a, b) => (9, id(a), id(b)),
+            Node::Max(a, b) => (10, id(a), id(b)),
+            Node::Min(a, b) => (11, id(a), id(b)),
         }
     }
 
@@ -96,7 +102,9 @@ impl Node {
             | Node::Div(a, b)
             | Node::Powf(a, b)
             | Node::Atan2(a, b)
-            | Node::Hypot(a, b) => (Some(a), Some(b)),
+            | Node::Hypot(a, b)
+            | Node::Max(a, b)
+            | Node::Min(a, b) => (Some(a), Some(b)),
         };
         a.into_iter().chain(b)
     }
@@ -517,6 +525,37 @@ impl Graph {
         self.intern(Node::Hypot(a, b))
     }
 
+    /// `max(a, b)` with the semantics of `f64::max` (emitted `a.max(b)`): a NaN operand is
+    /// ignored, so the value is NaN only if both are, and which zero `max(-0, +0)` gives is
+    /// unspecified, as in Rust. Symmetric, so operands are sorted; `max(a, a) = a`; constants
+    /// fold.
+    pub fn max(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        self.extremum(true, a, b)
+    }
+
+    /// `min(a, b)` with the semantics of `f64::min` (emitted `a.min(b)`); see [`Graph::max`].
+    pub fn min(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        self.extremum(false, a, b)
+    }
+
+    /// [`Graph::max`] (`is_max`) or [`Graph::min`].
+    fn extremum(&mut self, is_max: bool, a: ExprId, b: ExprId) -> ExprId {
+        if let (Some(x), Some(y)) = (self.as_constant(a), self.as_constant(b)) {
+            if let Some(e) = self.folded(if is_max { x.max(y) } else { x.min(y) }) {
+                return e;
+            }
+        }
+        if a == b {
+            return a;
+        }
+        let (a, b) = if a <= b { (a, b) } else { (b, a) };
+        self.intern(if is_max {
+            Node::Max(a, b)
+        } else {
+            Node::Min(a, b)
+        })
+    }
+
     /// Rebuild `n` through the constructors with every child replaced by `f(child)`
     /// (so the result is folded and canonical again).
     pub(super) fn rebuild(&mut self, n: Node, f: impl Fn(ExprId) -> ExprId) -> ExprId {
@@ -531,6 +570,8 @@ impl Graph {
             Node::Func(g, a) => self.func(g, f(a)),
             Node::Atan2(a, b) => self.atan2(f(a), f(b)),
             Node::Hypot(a, b) => self.hypot(f(a), f(b)),
+            Node::Max(a, b) => self.max(f(a), f(b)),
+            Node::Min(a, b) => self.min(f(a), f(b)),
         }
     }
 
@@ -620,6 +661,9 @@ mod tests {
         assert_eq!(g.mul(x, y), g.mul(y, x));
         assert_eq!(g.hypot(x, y), g.hypot(y, x));
         assert_ne!(g.atan2(x, y), g.atan2(y, x));
+        assert_eq!(g.max(x, y), g.max(y, x));
+        assert_eq!(g.min(x, y), g.min(y, x));
+        assert_ne!(g.max(x, y), g.min(x, y));
         assert_ne!(g.div(x, y), g.div(y, x));
         assert_eq!(g.var(Var(0)), x);
         assert_eq!(g.constant(-0.0), g.constant(0.0));
@@ -705,6 +749,29 @@ mod tests {
         let ex = g.func(Func::Exp, x);
         assert_eq!(g.func(Func::Ln, ex), x);
         assert_eq!(g.hypot(x, zero), ax);
+        assert_eq!(g.max(x, x), x);
+        assert_eq!(g.min(x, x), x);
+    }
+
+    #[test]
+    fn max_and_min_fold_constants_of_any_magnitude() {
+        let mut g = Graph::new();
+        let (big, one, m1) = (g.constant(1e20), g.constant(1.0), g.constant(-1.0));
+        // `0.5 (a + b - |a - b|)` gives 0 here: the 1 is lost next to 1e20.
+        let e = g.min(big, one);
+        assert_eq!(g.as_constant(e), Some(1.0));
+        let e = g.max(one, big);
+        assert_eq!(g.as_constant(e), Some(1e20));
+        let e = g.max(m1, one);
+        assert_eq!(g.as_constant(e), Some(1.0));
+        let e = g.min(one, m1);
+        assert_eq!(g.as_constant(e), Some(-1.0));
+        // an infinite operand stays symbolic, as other non-finite results do
+        let zero = g.constant(0.0);
+        let inf = g.div(one, zero);
+        let e = g.max(inf, one);
+        assert_eq!(g.as_constant(e), None);
+        assert_eq!(g.eval(e, &|_| 0.0), f64::INFINITY);
     }
 
     #[test]

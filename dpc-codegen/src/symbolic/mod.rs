@@ -19,6 +19,9 @@
 //!   expression and produce inf/NaN at run time.
 //! - `d|a|/da = signum(a)` (`±1` at `±0`), `d signum(a)/da = 0`; `atan2` and `hypot`
 //!   derivatives are singular at the origin, as the functions are.
+//! - `max` and `min` are `f64::max` and `f64::min` in every layer (a NaN operand is ignored);
+//!   `d max(a, b)` is exactly `a'` where `a > b`, `b'` where `a < b` and `(a' + b') / 2` at a
+//!   tie (NaN if an operand is NaN), and so for `min` with the roles swapped.
 //! - Sums and products are binary with sorted operands, not flattened n-ary terms, so
 //!   `(a + b) + c` and `a + (b + c)` are different nodes (both are correct, only sharing is
 //!   lost); like terms `k a + l a` and powers of one base are combined, one level deep.

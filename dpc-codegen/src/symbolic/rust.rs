@@ -2,7 +2,7 @@
 //! then one expression per root.
 //!
 //! Only `f64` operators and inherent methods are used (`a.sin()`, `a.powi(3)`,
-//! `y.atan2(x)`, `a.hypot(b)`, `a.signum()`), so the code needs no imports and does not
+//! `y.atan2(x)`, `a.hypot(b)`, `a.signum()`, `a.max(b)`), so the code needs no imports and does not
 //! allocate. Parentheses follow Rust precedence exactly and keep the DAG's evaluation order
 //! (`a + (b + c)` stays), so the emitted code computes the same bits as [`Graph::eval`]
 //! (checked by compiling emitted code for random expressions: identical without
@@ -229,6 +229,16 @@ impl Emitter<'_> {
                 let b = self.expr(b).0;
                 (quote!(#a.hypot(#b)), POSTFIX)
             }
+            Node::Max(a, b) => {
+                let a = self.operand(a, POSTFIX);
+                let b = self.expr(b).0;
+                (quote!(#a.max(#b)), POSTFIX)
+            }
+            Node::Min(a, b) => {
+                let a = self.operand(a, POSTFIX);
+                let b = self.expr(b).0;
+                (quote!(#a.min(#b)), POSTFIX)
+            }
         }
     }
 }
@@ -305,5 +315,10 @@ mod tests {
         let code = g.emit_rust(&[inv], &xv);
         assert_eq!(code.roots[0].to_string(), "x [0] . powi (- 2)");
         assert!(t.contains("=> (- 2.0_f64) . ln ()\n"), "{t}");
+        let hi = g.max(nx, y);
+        let lo = g.min(yz, x);
+        let code = g.emit_rust(&[hi, lo], &xv);
+        assert_eq!(code.roots[0].to_string(), "x [1] . max (- x [0])");
+        assert_eq!(code.roots[1].to_string(), "x [0] . min (x [1] + x [2])");
     }
 }

@@ -23,6 +23,8 @@ pub enum T {
     F(Func, Box<T>),
     Atan2(Box<T>, Box<T>),
     Hypot(Box<T>, Box<T>),
+    Max(Box<T>, Box<T>),
+    Min(Box<T>, Box<T>),
 }
 
 fn bx(t: T) -> Box<T> {
@@ -69,6 +71,8 @@ pub fn tree() -> impl Strategy<Value = T> {
             }),
             pair.clone().prop_map(|(a, b)| T::Atan2(bx(a), bx(b))),
             pair.clone().prop_map(|(a, b)| T::Hypot(bx(a), bx(b))),
+            pair.clone().prop_map(|(a, b)| T::Max(bx(a), bx(b))),
+            pair.clone().prop_map(|(a, b)| T::Min(bx(a), bx(b))),
             // the same subtree used twice: a shared node in the DAG
             inner
                 .clone()
@@ -128,6 +132,14 @@ pub fn build(g: &mut Graph, t: &T) -> ExprId {
         T::Hypot(a, b) => {
             let (a, b) = (build(g, a), build(g, b));
             g.hypot(a, b)
+        }
+        T::Max(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.max(a, b)
+        }
+        T::Min(a, b) => {
+            let (a, b) = (build(g, a), build(g, b));
+            g.min(a, b)
         }
     }
 }
