@@ -90,8 +90,8 @@ impl PatternMatrix {
 }
 
 /// The first column of a compressed-column matrix (`col_ptr`, `values` in pattern order) whose
-/// values `no_pivot` says cannot give a pivot (all zero, or not finite): the check before a
-/// sparse LU, which names no such column itself.
+/// values `no_pivot` says cannot give a pivot (all zero, or not finite): the column a singular
+/// sparse matrix is reported with.
 pub(crate) fn first_column_without_pivot<T>(
     col_ptr: &[usize],
     values: &[T],
@@ -102,8 +102,7 @@ pub(crate) fn first_column_without_pivot<T>(
 
 /// The first of the rows that has no value for which `nonzero(k)` holds (`k` indexing the
 /// values, whose rows are `row_idx`): the zero row a singular sparse matrix is reported with.
-/// `filled` has one slot per row (its contents on entry do not matter): the caller's storage,
-/// so that the check before every factorisation allocates nothing.
+/// `filled` has one slot per row (its contents on entry do not matter): the caller's storage.
 pub(crate) fn first_empty_row(
     filled: &mut [bool],
     row_idx: &[usize],
@@ -323,7 +322,7 @@ impl<T: ComplexField + Magnitude> ReusedSparseLu<T> {
 pub struct FaerSparseLu {
     matrix: PatternMatrix,
     lu: ReusedSparseLu<f64>,
-    /// Per row, whether it holds a non-zero value (the check before each factorisation).
+    /// Per row, whether it holds a non-zero value (the zero row a failed factorisation names).
     row_filled: Vec<bool>,
 }
 
@@ -398,36 +397,24 @@ impl LinearSolver for FaerSparseLu {
                 col,
             });
         }
-        let zero_row = first_empty_row(&mut self.row_filled, &m.row_idx, |k| m.values[k] != 0.0);
-        if let Some(col) =
-            first_column_without_pivot(&m.col_ptr, &m.values, |c| c.iter().all(|v| *v == 0.0))
-        {
-            return Err(FactorError::Singular {
-                column: Some(col),
-                row: zero_row,
-            });
-        }
         match self.lu.factor(&m.values) {
-            Ok(()) => {
-                if zero_row.is_some() {
-                    self.lu.discard();
-                    return Err(FactorError::Singular {
-                        column: None,
-                        row: zero_row,
-                    });
-                }
-                Ok(())
+            Ok(()) => Ok(()),
+            // Named on the error path only: the first all-zero column when there is one (else
+            // the column whose pivot vanished) and an all-zero row. A zero row or column always
+            // ends in a zero pivot (its entries stay exactly zero through the elimination).
+            Err(failure) => {
+                let zero_column = first_column_without_pivot(&m.col_ptr, &m.values, |c| {
+                    c.iter().all(|v| *v == 0.0)
+                });
+                let column = match failure {
+                    SparseLuFailure::ZeroPivot(column) => zero_column.or(Some(column)),
+                    // faer's only other failure: its factors could not grow (the process is
+                    // short of memory), reported without a column as before.
+                    SparseLuFailure::OutOfMemory => zero_column,
+                };
+                let row = first_empty_row(&mut self.row_filled, &m.row_idx, |k| m.values[k] != 0.0);
+                Err(FactorError::Singular { column, row })
             }
-            Err(SparseLuFailure::ZeroPivot(column)) => Err(FactorError::Singular {
-                column: Some(column),
-                row: zero_row,
-            }),
-            // As before faer's factors were kept: its only other failure, reported without a
-            // column (the factors could not grow; the process is then short of memory).
-            Err(SparseLuFailure::OutOfMemory) => Err(FactorError::Singular {
-                column: None,
-                row: zero_row,
-            }),
         }
     }
 
